@@ -1,0 +1,169 @@
+// Statement execution: one dispatch over the statement kinds, and the trap point.
+#include <iostream>
+
+#include "interp/frame.h"
+#include "interp/hook.h"
+#include "interp/interpreter.h"
+#include "interp/printing.h"
+
+namespace simit::interp {
+
+namespace ast = frontend::ast;
+using frontend::Type;
+
+void Interpreter::exec_block(const ast::Block& b) {
+  for (const auto& s : b) exec(*s);
+}
+
+void Interpreter::exec(const ast::Stmt& s) {
+  // The one trap point of the evaluation loop.
+  if (options_.hook) [[unlikely]]
+    options_.hook->before_statement(s, *frame().func, depth_ - 1, *this);
+  exec_node(s);
+}
+
+void Interpreter::exec_node(const ast::Stmt& s) {
+  switch (s.kind) {
+    case ast::NodeKind::VarDecl: return exec_var_decl(static_cast<const ast::VarDecl&>(s));
+    case ast::NodeKind::IvarDecl: return;
+    case ast::NodeKind::Assign: {
+      const auto& a = static_cast<const ast::Assign&>(s);
+      return a.index_notation ? exec_index_assign(a) : exec_assign(a);
+    }
+    case ast::NodeKind::ExprStmt: {
+      const ast::Expr& e = *static_cast<const ast::ExprStmt&>(s).expr;
+      HoistScope hoisted(*this, e);
+      if (e.type && e.type->kind == Type::Kind::Multi)
+        eval_multi(e);
+      else
+        eval(e);
+      return;
+    }
+    case ast::NodeKind::If: return exec_if(static_cast<const ast::If&>(s));
+    case ast::NodeKind::While: {
+      const auto& w = static_cast<const ast::While&>(s);
+      while (condition(*w.condition)) exec_block(w.body);
+      return;
+    }
+    case ast::NodeKind::DoWhile: {
+      const auto& d = static_cast<const ast::DoWhile&>(s);
+      do exec_block(d.body);
+      while (condition(*d.condition));
+      return;
+    }
+    case ast::NodeKind::ForRange: return exec_for_range(static_cast<const ast::ForRange&>(s));
+    case ast::NodeKind::ForSet: return exec_for_set(static_cast<const ast::ForSet&>(s));
+    case ast::NodeKind::Print: return exec_print(static_cast<const ast::Print&>(s));
+    case ast::NodeKind::Apply: unsupported(s.span, "apply statements");
+    default: break;
+  }
+  fail(s.span, std::string("cannot execute a ") + ast::node_kind_name(s.kind) + " node");
+}
+
+// `var x : T = e;`, `const x = e;` and global constants. Every execution starts afresh
+// (Q21): no value survives from an earlier execution of the declaration.
+void Interpreter::exec_var_decl(const ast::VarDecl& d) {
+  Value& slot = var(*d.var);
+  const Type& t = *d.var->type;
+  if (!d.init) {
+    slot = zero_of(t, d.span);
+    return;
+  }
+  Value v = eval_root(*d.init);
+  if (t.kind != Type::Kind::Tensor) {
+    slot = std::move(v);
+    return;
+  }
+  Shape shape = shape_of(t, d.span);
+  if (v.is_scalar()) {  // a scalar initialiser fills every component
+    Value filled = Value::zero(v.component_kind(), shape);
+    v.fill_into(filled.tensor(), 0, shape.size());
+    slot = std::move(filled);
+    return;
+  }
+  if (v.tensor().shape() != shape) {
+    // `const m : tensor[1,3](float) = [1.0, 2.0, 3.0];` (§10.3): same components.
+    if (v.tensor().size() != shape.size())
+      fail(d.init->span, "initialiser of shape " + v.tensor().shape().str() +
+                             " does not fit a variable of shape " + shape.str());
+    v.tensor().reshape(shape);
+  }
+  slot = std::move(v);
+}
+
+// The right side is evaluated completely before any target is touched (§7.1).
+void Interpreter::exec_assign(const ast::Assign& a) {
+  if (a.targets.size() == 1 && !(a.value->type && a.value->type->kind == Type::Kind::Multi)) {
+    store(a, 0, eval_root(*a.value));
+    return;
+  }
+  std::vector<Value> values;
+  {
+    HoistScope hoisted(*this, *a.value);
+    values = eval_multi(*a.value);
+  }
+  if (values.size() != a.targets.size())
+    fail(a.span, "expected " + std::to_string(a.targets.size()) + " values but got " +
+                     std::to_string(values.size()));
+  for (size_t i = 0; i < values.size(); ++i) store(a, i, std::move(values[i]));
+}
+
+void Interpreter::store(const ast::Assign& a, size_t i, Value value) {
+  if (i < a.declares.size() && a.declares[i]) {
+    var(*a.declares[i]) = std::move(value);
+    return;
+  }
+  const ast::Expr& target = *a.targets[i];
+  HoistScope hoisted(*this, target);
+  write_place(resolve_place(target), std::move(value), target.span);
+}
+
+void Interpreter::exec_if(const ast::If& s) {
+  for (size_t i = 0; i < s.conditions.size(); ++i) {
+    if (condition(*s.conditions[i])) {
+      exec_block(s.branches[i]);
+      return;
+    }
+  }
+  if (s.has_else) exec_block(s.else_branch);
+}
+
+bool Interpreter::condition(const ast::Expr& e) {
+  Value v = eval_root(e);
+  if (v.kind() != Value::Kind::Bool) fail(e.span, "condition is not a boolean");
+  return v.as_bool();
+}
+
+// Bounds are evaluated once; the upper bound is exclusive (§7.5).
+void Interpreter::exec_for_range(const ast::ForRange& s) {
+  const int64_t lo = eval_root(*s.lo).as_int(), hi = eval_root(*s.hi).as_int();
+  for (int64_t i = lo; i < hi; ++i) {
+    var(*s.var) = Value::of_int(static_cast<int32_t>(i));
+    exec_block(s.body);
+  }
+}
+
+void Interpreter::exec_for_set(const ast::ForSet& s) {
+  const ast::Variable* domain = s.domain_var;
+  if (!domain || domain->kind != ast::Variable::Kind::Generic)
+    unsupported(s.span, "loops over sets");
+  // A generic parameter bound to a size n: the loop runs over 0 .. n-1.
+  const int32_t n = var(*domain).kind() == Value::Kind::Int ? var(*domain).as_int() : -1;
+  if (n < 0) unsupported(s.span, "loops over sets");
+  for (int32_t i = 0; i < n; ++i) {
+    var(*s.var) = Value::of_int(i);
+    exec_block(s.body);
+  }
+}
+
+void Interpreter::exec_print(const ast::Print& p) {
+  std::ostream& out = options_.out ? *options_.out : std::cout;
+  for (const auto& arg : p.args) {
+    Value v = eval_root(*arg);
+    const Type& t = *arg->type;
+    print_value(out, v, t.kind == Type::Kind::Tensor && t.dims.size() == 1 && t.row);
+  }
+  if (p.newline) out << "\n";
+}
+
+}  // namespace simit::interp

@@ -1,0 +1,194 @@
+// The interpreter's core: construction, entry calls, variables and types at run time.
+#include "interp/interpreter.h"
+
+#include <cmath>
+
+#include "interp/frame.h"
+#include "interp/operators.h"
+#include "runtime/fault.h"
+
+namespace simit::interp {
+
+using frontend::IndexSet;
+using frontend::ScalarKind;
+using frontend::SourceSpan;
+using frontend::Type;
+namespace ast = frontend::ast;
+
+namespace {
+
+ComponentKind component_of(ScalarKind k) {
+  switch (k) {
+    case ScalarKind::Int: return ComponentKind::Int;
+    case ScalarKind::Float: return ComponentKind::Float;
+    case ScalarKind::Bool: return ComponentKind::Bool;
+    case ScalarKind::Complex: return ComponentKind::Complex;
+    case ScalarKind::String: return ComponentKind::String;
+  }
+  return ComponentKind::Float;
+}
+
+}  // namespace
+
+Interpreter::Interpreter(const ast::Program& program, Options options)
+    : program_(program), options_(options) {
+  post_process_ = options_.float32 || options_.check_finite;
+  globals_.resize(program.globals.size());
+  frames_.push_back(std::make_unique<Frame>());
+  plan_hoisting();
+  for (const auto& decl : program.decls) {
+    const auto* c = decl->as<ast::ConstDecl>();
+    if (!c || !c->decl || !c->decl->var) continue;
+    exec_var_decl(*c->decl);
+  }
+}
+
+Interpreter::~Interpreter() = default;
+
+std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Value> args) {
+  if (args.size() != func.params.size())
+    fail(func.name_span, "'" + func.name + "' expects " + std::to_string(func.params.size()) +
+                             " arguments but got " + std::to_string(args.size()));
+  for (size_t i = 0; i < args.size(); ++i) check_argument(func.params[i], args[i]);
+  const int base_depth = depth_;
+  const size_t arg_base = arg_stack_.size(), inout_base = inout_stack_.size();
+  try {
+    for (size_t i = 0; i < args.size(); ++i) {
+      if (func.params[i].inout)
+        inout_stack_.push_back(InoutArg{nullptr, {}, false, func.params[i].var->slot});
+      arg_stack_.push_back(std::move(args[i]));
+    }
+    Frame& callee = enter(func, arg_base, inout_base, nullptr);
+    inout_stack_.resize(inout_base);
+    execute_body(func);
+    std::vector<Value> results;
+    for (const ast::Param& r : func.results)
+      results.push_back(std::move(callee.slots[r.var->slot]));
+    return results;
+  } catch (...) {
+    // Leave the interpreter usable for the next call.
+    depth_ = base_depth;
+    arg_stack_.resize(arg_base);
+    inout_stack_.resize(inout_base);
+    hoisted_.clear();
+    hoist_base_ = 0;
+    throw;
+  }
+}
+
+namespace {
+
+// Whether a value of `shape` with `kind` components fits `t` (generic dimensions fit any
+// size; the call binds them).
+bool fits(const Type& t, ComponentKind kind, const Shape& shape) {
+  if (t.kind == Type::Kind::Scalar) return shape.is_scalar() && component_of(t.scalar) == kind;
+  if (t.kind != Type::Kind::Tensor || shape.is_scalar()) return false;
+  if (static_cast<int>(t.dims.size()) != shape.order()) return false;
+  for (size_t k = 0; k < t.dims.size(); ++k)
+    if (t.dims[k].kind == IndexSet::Kind::Fixed && t.dims[k].size != shape.dim(static_cast<int>(k)))
+      return false;
+  return t.block && fits(*t.block, kind, shape.block());
+}
+
+}  // namespace
+
+void Interpreter::check_argument(const ast::Param& p, const Value& v) const {
+  const Type& t = *p.var->type;
+  if (!t.is_tensor()) unsupported(p.span, "arguments of element, set, tuple or opaque type");
+  if (v.empty() || !fits(t, v.component_kind(), v.shape()))
+    fail(p.span, "the value passed for '" + p.name + "' does not have its type '" +
+                     frontend::to_string(t) + "'");
+}
+
+Value Interpreter::evaluate_constant(const ast::Expr& expr) { return eval(expr); }
+
+void Interpreter::set_global(const ast::Variable& v, Value value) {
+  globals_.at(v.slot) = std::move(value);
+}
+
+const Value& Interpreter::global(const ast::Variable& v) const { return globals_.at(v.slot); }
+
+const Value* Interpreter::local(const ast::Variable& v) const {
+  const Frame& f = frame();
+  if (v.func != f.func || v.slot < 0 || static_cast<size_t>(v.slot) >= f.refs.size())
+    return nullptr;
+  const Value* value = f.refs[v.slot];
+  return value->empty() ? nullptr : value;
+}
+
+Value& Interpreter::var(const ast::Variable& v) {
+  if (v.kind == ast::Variable::Kind::Extern || v.kind == ast::Variable::Kind::GlobalConst)
+    return globals_[v.slot];
+  return *frame().refs[v.slot];
+}
+
+Value& Interpreter::read_var(const ast::Variable& v, const ast::Expr& at) {
+  Value& value = var(v);
+  if (value.empty()) [[unlikely]] {
+    if (v.kind == ast::Variable::Kind::Extern)
+      fail(at.span, "extern '" + v.name + "' has no value (the host did not bind it)");
+    if (v.kind == ast::Variable::Kind::Generic)
+      fail(at.span, "generic parameter '" + v.name + "' is bound to a set, not to a size");
+    fail(at.span, "'" + v.name + "' is read before it has a value");
+  }
+  return value;
+}
+
+int Interpreter::dim_size(const IndexSet& d, const SourceSpan& at) {
+  switch (d.kind) {
+    case IndexSet::Kind::Fixed: return d.size;
+    case IndexSet::Kind::Generic: {
+      const Value& v = *frame().refs[d.var->slot];
+      if (v.kind() == Value::Kind::Int) return v.as_int();
+      break;
+    }
+    case IndexSet::Kind::Set: break;
+  }
+  unsupported(at, "tensors with set dimensions");
+}
+
+Shape Interpreter::shape_of(const Type& t, const SourceSpan& at) {
+  if (t.kind == Type::Kind::Scalar) return Shape();
+  if (t.kind != Type::Kind::Tensor) unsupported(at, "values of element, set, tuple or opaque type");
+  int dims[Shape::kMaxRank];
+  int n = 0;
+  for (const IndexSet& d : t.dims) {
+    if (n == Shape::kMaxRank) fail(at, "tensor has too many dimensions");
+    dims[n++] = dim_size(d, at);
+  }
+  Shape block = t.block ? shape_of(*t.block, at) : Shape();
+  try {
+    return Shape::blocked(dims, n, block);
+  } catch (const runtime::Fault& f) {
+    fail(at, f.what());
+  }
+}
+
+Value Interpreter::zero_of(const Type& t, const SourceSpan& at) {
+  return Value::zero(component_of(t.component()), shape_of(t, at));
+}
+
+void Interpreter::fail(const SourceSpan& at, std::string message) const {
+  throw RuntimeError(at, std::move(message));
+}
+
+void Interpreter::unsupported(const SourceSpan& at, const char* what) const {
+  fail(at, std::string(what) + " are not supported by the interpreter yet");
+}
+
+void Interpreter::check_result(Value& v, const ast::Expr& at) {
+  if (options_.float32) round_to_float32(v);
+  if (options_.check_finite && !is_finite(v)) {
+    if (v.kind() == Value::Kind::Float)
+      fail(at.span, std::isnan(v.as_float()) ? "the operation produced NaN"
+                                             : "the operation produced an infinity");
+    fail(at.span, "the operation produced a NaN or an infinity");
+  }
+}
+
+void Interpreter::finish(Value& v, const ast::Expr& at) {
+  if (post_process_) [[unlikely]]
+    check_result(v, at);
+}
+
+}  // namespace simit::interp

@@ -1,0 +1,158 @@
+// The reference interpreter: executes a checked program by walking its typed AST. Every
+// variable lives in a frame slot that the checker assigned, so nothing is looked up by name
+// while running. Run-time errors stop the run with a RuntimeError (file:line:col and the
+// call stack).
+#pragma once
+
+#include <memory>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "frontend/ast.h"
+#include "interp/options.h"
+#include "interp/runtime_error.h"
+#include "interp/value.h"
+
+namespace simit::interp {
+
+// Where a write lands: a whole variable, or a component / block inside its tensor.
+struct Place {
+  Value* root = nullptr;
+  bool whole = true;
+  size_t offset = 0;  // first component of the addressed part (when not whole)
+  Shape shape;        // shape of the addressed part: scalar for one component
+};
+
+class Interpreter {
+ public:
+  // `program` must have checked without diagnostics and must outlive the interpreter.
+  // Global constants are evaluated here; externs start unbound.
+  explicit Interpreter(const frontend::ast::Program& program, Options options = {});
+  ~Interpreter();
+  Interpreter(const Interpreter&) = delete;
+  Interpreter& operator=(const Interpreter&) = delete;
+
+  // Runs `func` with one value per parameter (in order) and returns its results in order.
+  // Generic parameters are bound from the arguments' sizes. Throws RuntimeError.
+  std::vector<Value> call(const frontend::ast::FuncDecl& func, std::vector<Value> args);
+  // Evaluates an expression that reads no variables (a literal, possibly signed or
+  // transposed), e.g. the arguments of a `%!` test. Throws RuntimeError.
+  Value evaluate_constant(const frontend::ast::Expr& expr);
+
+  // Binds an extern tensor (the host's job; sets come later).
+  void set_global(const frontend::ast::Variable& var, Value value);
+  const Value& global(const frontend::ast::Variable& var) const;
+  // The value of a parameter, result or local of the innermost active call (for hooks);
+  // null when `var` has no value there.
+  const Value* local(const frontend::ast::Variable& var) const;
+
+  const Options& options() const { return options_; }
+
+ private:
+  struct Frame;
+  struct InoutArg;
+
+  // interpreter.cpp: frames, variables, types at run time
+  Frame& frame() { return *frames_[depth_]; }
+  const Frame& frame() const { return *frames_[depth_]; }
+  Value& var(const frontend::ast::Variable& v);
+  Value& read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at);
+  int dim_size(const frontend::IndexSet& d, const frontend::SourceSpan& at);
+  Shape shape_of(const frontend::Type& t, const frontend::SourceSpan& at);
+  Value zero_of(const frontend::Type& t, const frontend::SourceSpan& at);
+  [[noreturn]] void fail(const frontend::SourceSpan& at, std::string message) const;
+  [[noreturn]] void unsupported(const frontend::SourceSpan& at, const char* what) const;
+  void finish(Value& v, const frontend::ast::Expr& at);
+  void check_result(Value& v, const frontend::ast::Expr& at);
+  void check_argument(const frontend::ast::Param& p, const Value& v) const;
+
+  // eval_expr.cpp: expressions
+  Value eval(const frontend::ast::Expr& e);
+  Value eval_node(const frontend::ast::Expr& e);
+  const Value& operand(const frontend::ast::Expr& e, Value& scratch);
+  Value eval_dense(const frontend::ast::DenseLit& d);
+  Value eval_binary(const frontend::ast::Binary& b);
+  Value eval_unary(const frontend::ast::Unary& u);
+  Value eval_compare(const frontend::ast::Compare& c);
+  Value eval_tensor_read(const frontend::ast::TensorRead& r);
+  Value eval_slice(const frontend::ast::TensorRead& r, const Value& base);
+  size_t index_value(const frontend::ast::Expr& index, int size);
+
+  // calls.cpp: user functions; intrinsic_calls.cpp: intrinsics
+  Value eval_call(const frontend::ast::Call& c);
+  Value eval_user_call(const frontend::ast::Call& c);
+  std::vector<Value> eval_multi(const frontend::ast::Expr& e);
+  Frame& run_call(const frontend::ast::Call& c);
+  Frame& enter(const frontend::ast::FuncDecl& f, size_t arg_base, size_t inout_base,
+               const frontend::ast::Call* c);
+  void bind_generics(const frontend::ast::FuncDecl& f, Frame& callee, const frontend::ast::Call* c);
+  void deduce(const frontend::Type& param, const Shape& arg, Frame& callee,
+              const frontend::SourceSpan& at);
+  void execute_body(const frontend::ast::FuncDecl& f);
+  void push_inout_arg(const frontend::ast::Expr& arg, int slot);
+  void write_back_inout(size_t inout_base, Frame& callee, const frontend::SourceSpan& at);
+  Value call_intrinsic(const frontend::ast::Call& c);
+
+  // hoisting.cpp: calls nested in an expression run first (§6.10)
+  class HoistScope {
+   public:
+    HoistScope(Interpreter& in, const frontend::ast::Expr& root);
+    ~HoistScope();
+    HoistScope(const HoistScope&) = delete;
+    HoistScope& operator=(const HoistScope&) = delete;
+
+   private:
+    Interpreter& in_;
+    size_t saved_base_ = 0;
+    bool active_ = false;
+  };
+  void plan_hoisting();
+  void plan_block(const frontend::ast::Block& block);
+  void plan_root(const frontend::ast::Expr& root);
+  bool take_hoisted(const frontend::ast::Call& c, Value& out);
+  Value eval_root(const frontend::ast::Expr& e);
+
+  // places.cpp: assignment targets
+  Place resolve_place(const frontend::ast::Expr& target, Value* root_override = nullptr);
+  Value read_place(const Place& p) const;
+  void write_place(const Place& p, Value value, const frontend::SourceSpan& at);
+
+  // exec_stmt.cpp: statements
+  void exec_block(const frontend::ast::Block& b);
+  void exec(const frontend::ast::Stmt& s);
+  void exec_node(const frontend::ast::Stmt& s);
+  void exec_var_decl(const frontend::ast::VarDecl& d);
+  void exec_assign(const frontend::ast::Assign& a);
+  void store(const frontend::ast::Assign& a, size_t i, Value value);
+  void exec_if(const frontend::ast::If& s);
+  void exec_for_range(const frontend::ast::ForRange& s);
+  void exec_for_set(const frontend::ast::ForSet& s);
+  void exec_print(const frontend::ast::Print& p);
+  bool condition(const frontend::ast::Expr& e);
+
+  // index_notation.cpp: `C(i, j) = A(i, k) * B(k, j);` by definition (§7.2)
+  struct IndexVars;
+  void exec_index_assign(const frontend::ast::Assign& a);
+  IndexVars index_vars(const frontend::ast::Assign& a);
+  Shape ivar_ranges(const frontend::ast::TensorRead& r,
+                    std::vector<std::pair<const frontend::ast::Variable*, int>>& sizes);
+  void set_ivars(const std::vector<const frontend::ast::Variable*>& vars,
+                 const std::vector<int>& values);
+  Value reduce(const frontend::ast::Assign& a, const IndexVars& vars);
+
+  const frontend::ast::Program& program_;
+  Options options_;
+  bool post_process_ = false;  // float32 or check_finite: results need a second look
+  std::vector<Value> globals_;
+  std::vector<std::unique_ptr<Frame>> frames_;  // reused by depth; index 0 is a base frame
+  int depth_ = 0;
+  std::vector<Value> arg_stack_;       // arguments being evaluated for pending calls
+  std::vector<InoutArg> inout_stack_;  // inout arguments of pending calls
+  // Root expressions with nested calls, and those calls in the order they run.
+  std::unordered_map<const frontend::ast::Expr*, std::vector<const frontend::ast::Call*>> hoists_;
+  std::vector<std::pair<const frontend::ast::Call*, Value>> hoisted_;  // results waiting
+  size_t hoist_base_ = 0;  // the innermost root's results start here
+};
+
+}  // namespace simit::interp

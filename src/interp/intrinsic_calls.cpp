@@ -1,0 +1,147 @@
+// Calls of the intrinsic functions of LANGUAGE.md §9.1-9.4 (the sparse solvers of §9.5
+// need system matrices and come with sets).
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "interp/interpreter.h"
+#include "runtime/dense_linalg.h"
+#include "runtime/fault.h"
+
+namespace simit::interp {
+
+namespace ast = frontend::ast;
+using frontend::Intrinsic;
+
+namespace {
+
+double float_math(Intrinsic id, double x) {
+  switch (id) {
+    case Intrinsic::Sin: return std::sin(x);
+    case Intrinsic::Cos: return std::cos(x);
+    case Intrinsic::Tan: return std::tan(x);
+    case Intrinsic::Asin: return std::asin(x);
+    case Intrinsic::Acos: return std::acos(x);
+    case Intrinsic::Sqrt: return std::sqrt(x);
+    case Intrinsic::Cbrt: return std::cbrt(x);
+    case Intrinsic::Log: return std::log(x);
+    case Intrinsic::Exp: return std::exp(x);
+    case Intrinsic::Abs: return std::fabs(x);
+    default: return x;
+  }
+}
+
+double float_math2(Intrinsic id, double x, double y) {
+  switch (id) {
+    case Intrinsic::Atan2: return std::atan2(x, y);
+    case Intrinsic::Pow: return std::pow(x, y);
+    case Intrinsic::Max: return std::fmax(x, y);
+    case Intrinsic::Min: return std::fmin(x, y);
+    default: return x;
+  }
+}
+
+double microseconds_now() {
+  using namespace std::chrono;
+  return static_cast<double>(
+             duration_cast<nanoseconds>(steady_clock::now().time_since_epoch()).count()) /
+         1000.0;
+}
+
+// Components of a float tensor (all of them, for blocked vectors too).
+const double* floats_of(const Value& v, size_t& n) {
+  n = v.tensor().size();
+  return v.tensor().floats();
+}
+
+Value norm(const Value& v) {
+  size_t n;
+  const double* x = floats_of(v, n);
+  double s = 0.0;
+  for (size_t i = 0; i < n; ++i) s += x[i] * x[i];
+  return Value::of_float(std::sqrt(s));
+}
+
+Value dot(const Value& a, const Value& b) {
+  size_t n, m;
+  const double* x = floats_of(a, n);
+  const double* y = floats_of(b, m);
+  if (n != m) throw runtime::Fault("dot of vectors of different lengths");
+  double s = 0.0;
+  for (size_t i = 0; i < n; ++i) s += x[i] * y[i];
+  return Value::of_float(s);
+}
+
+Value cross(const Value& a, const Value& b) {
+  const double* x = a.tensor().floats();
+  const double* y = b.tensor().floats();
+  Tensor out(ComponentKind::Float, Shape{3});
+  double* o = out.mutable_floats();
+  o[0] = x[1] * y[2] - x[2] * y[1];
+  o[1] = x[2] * y[0] - x[0] * y[2];
+  o[2] = x[0] * y[1] - x[1] * y[0];
+  return Value::of_tensor(std::move(out));
+}
+
+}  // namespace
+
+Value Interpreter::call_intrinsic(const ast::Call& c) {
+  const Intrinsic id = c.intrinsic;
+  Value a0, a1;
+  if (!c.args.empty()) a0 = eval(*c.args[0]);
+  if (c.args.size() > 1) a1 = eval(*c.args[1]);
+  switch (id) {
+    case Intrinsic::Mod: {
+      int32_t x = a0.as_int(), y = a1.as_int();
+      if (y == 0) fail(c.span, "mod by zero");
+      if (y == -1) return Value::of_int(0);  // also INT_MIN mod -1, which would trap in C
+      return Value::of_int(x % y);
+    }
+    case Intrinsic::Sin:
+    case Intrinsic::Cos:
+    case Intrinsic::Tan:
+    case Intrinsic::Asin:
+    case Intrinsic::Acos:
+    case Intrinsic::Sqrt:
+    case Intrinsic::Cbrt:
+    case Intrinsic::Log:
+    case Intrinsic::Exp:
+    case Intrinsic::Abs: return Value::of_float(float_math(id, a0.as_float()));
+    case Intrinsic::Atan2:
+    case Intrinsic::Pow:
+    case Intrinsic::Max:
+    case Intrinsic::Min: return Value::of_float(float_math2(id, a0.as_float(), a1.as_float()));
+    case Intrinsic::Clock: return Value::of_float(microseconds_now());
+    case Intrinsic::StoreTime: return Value::of_float(0.0);
+    case Intrinsic::Det:
+    case Intrinsic::Det2:
+    case Intrinsic::Det4: return Value::of_float(runtime::determinant(a0.tensor()));
+    case Intrinsic::Inv:
+    case Intrinsic::Inv2:
+    case Intrinsic::Inv4: return Value::of_tensor(runtime::inverse(a0.tensor()));
+    case Intrinsic::Cross: return cross(a0, a1);
+    case Intrinsic::Norm: return norm(a0);
+    case Intrinsic::Dot: return dot(a0, a1);
+    case Intrinsic::CreateComplex: return Value::of_complex({a0.as_float(), a1.as_float()});
+    case Intrinsic::ComplexGetReal: return Value::of_float(a0.as_complex().real());
+    case Intrinsic::ComplexGetImag: return Value::of_float(a0.as_complex().imag());
+    case Intrinsic::ComplexNorm: return Value::of_float(std::abs(a0.as_complex()));
+    case Intrinsic::ComplexConj: return Value::of_complex(std::conj(a0.as_complex()));
+    case Intrinsic::TriangularSolve:
+      if (a0.is_tensor() && a1.is_tensor())
+        return Value::of_tensor(runtime::lower_triangular_solve(a0.tensor(), a1.tensor()));
+      break;
+    case Intrinsic::Lu:
+    case Intrinsic::LuSolve:
+    case Intrinsic::LuMatSolve:
+    case Intrinsic::LuFree:
+    case Intrinsic::Chol:
+    case Intrinsic::LltSolve:
+    case Intrinsic::LltMatSolve:
+    case Intrinsic::CholFree:
+    case Intrinsic::None: break;
+  }
+  unsupported(c.span, "sparse solver intrinsics");
+}
+
+}  // namespace simit::interp

@@ -1,0 +1,313 @@
+// Small dense linear algebra on runtime tensors, through Eigen.
+#include "runtime/dense_linalg.h"
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+
+#include "runtime/fault.h"
+
+namespace simit::runtime {
+
+namespace {
+
+template <class T>
+using RowMajor = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+template <class T>
+using ConstMap = Eigen::Map<const RowMajor<T>>;
+template <class T>
+using MutMap = Eigen::Map<RowMajor<T>>;
+
+// Calls f(blocked offset, logical offset) for every component of a uniform blocked shape.
+template <class F>
+void for_each_component(const Shape& s, F f) {
+  const Shape logical = s.logical();
+  const int order = s.order(), rank = s.rank();
+  std::array<size_t, Shape::kMaxRank> lstride{};
+  size_t stride = 1;
+  for (int k = order - 1; k >= 0; --k) {
+    lstride[k] = stride;
+    stride *= static_cast<size_t>(logical.dim(k));
+  }
+  // Position p (level p / order, dimension p % order) moves the logical index of its
+  // dimension by the product of the same dimension's sizes in deeper levels.
+  std::array<size_t, Shape::kMaxRank> contrib{};
+  for (int p = 0; p < rank; ++p) {
+    size_t scale = 1;
+    for (int q = p + order; q < rank; q += order) scale *= static_cast<size_t>(s.dim(q));
+    contrib[p] = scale * lstride[p % order];
+  }
+  std::array<int, Shape::kMaxRank> idx{};
+  const size_t n = s.size();
+  size_t loff = 0;
+  for (size_t off = 0; off < n; ++off) {
+    f(off, loff);
+    for (int p = rank - 1; p >= 0; --p) {
+      loff += contrib[p];
+      if (++idx[p] < s.dim(p)) break;
+      loff -= contrib[p] * static_cast<size_t>(idx[p]);
+      idx[p] = 0;
+    }
+  }
+}
+
+template <class T>
+void permute(const T* src, T* dst, const Shape& blocked, bool to_logical) {
+  for_each_component(blocked, [&](size_t off, size_t loff) {
+    if (to_logical)
+      dst[loff] = src[off];
+    else
+      dst[off] = src[loff];
+  });
+}
+
+void permute_tensor(const Tensor& src, Tensor& dst, const Shape& blocked, bool to_logical) {
+  switch (src.kind()) {
+    case ComponentKind::Int: return permute(src.ints(), dst.mutable_ints(), blocked, to_logical);
+    case ComponentKind::Float:
+      return permute(src.floats(), dst.mutable_floats(), blocked, to_logical);
+    case ComponentKind::Bool: return permute(src.bools(), dst.mutable_bools(), blocked, to_logical);
+    case ComponentKind::Complex:
+      return permute(src.complexes(), dst.mutable_complexes(), blocked, to_logical);
+    case ComponentKind::String:
+      return permute(src.strings(), dst.mutable_strings(), blocked, to_logical);
+  }
+}
+
+void require(bool ok, const char* what) {
+  if (!ok) throw Fault(what);
+}
+
+int32_t wrap(uint32_t v) { return static_cast<int32_t>(v); }
+
+// C = A (m x k) * B (k x n), all row-major.
+void gemm(const Tensor& a, const Tensor& b, Tensor& c, int m, int k, int n) {
+  switch (a.kind()) {
+    case ComponentKind::Float:
+      MutMap<double>(c.mutable_floats(), m, n).noalias() =
+          ConstMap<double>(a.floats(), m, k) * ConstMap<double>(b.floats(), k, n);
+      return;
+    case ComponentKind::Complex:
+      MutMap<Complex>(c.mutable_complexes(), m, n).noalias() =
+          ConstMap<Complex>(a.complexes(), m, k) * ConstMap<Complex>(b.complexes(), k, n);
+      return;
+    case ComponentKind::Int: {
+      // Integer arithmetic wraps (LANGUAGE.md §5.1); unsigned arithmetic makes that defined.
+      int32_t* out = c.mutable_ints();
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < n; ++j) {
+          uint32_t s = 0;
+          for (int l = 0; l < k; ++l)
+            s += static_cast<uint32_t>(a.ints()[i * k + l]) *
+                 static_cast<uint32_t>(b.ints()[l * n + j]);
+          out[i * n + j] = wrap(s);
+        }
+      return;
+    }
+    default: throw Fault("product of non-numeric tensors");
+  }
+}
+
+void check_product(const Tensor& a, const Tensor& b) {
+  require(a.kind() == b.kind(), "product of tensors of different component kinds");
+  require(!a.shape().is_blocked() && !b.shape().is_blocked(), "product of blocked tensors");
+}
+
+template <int N>
+Eigen::Matrix<double, N, N, Eigen::RowMajor> fixed(const Tensor& m) {
+  return Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(m.floats());
+}
+
+template <int N>
+Tensor inverse_fixed(const Tensor& m) {
+  auto a = fixed<N>(m);
+  if (a.determinant() == 0.0) throw Fault("inverse of a singular matrix (determinant is 0)");
+  Tensor out(ComponentKind::Float, m.shape());
+  Eigen::Map<Eigen::Matrix<double, N, N, Eigen::RowMajor>>(out.mutable_floats()) = a.inverse();
+  return out;
+}
+
+int square_size(const Tensor& m) {
+  const Shape& s = m.shape();
+  require(s.levels() == 1 && s.order() == 2 && s.dim(0) == s.dim(1), "expected a square matrix");
+  return s.dim(0);
+}
+
+template <class T>
+Tensor solve_typed(const Tensor& a, const Tensor& b, const T* ad, const T* bd,
+                   T* (Tensor::*out)()) {
+  int n = square_size(a);
+  require(b.size() == static_cast<size_t>(n), "solve: vector length does not match the matrix");
+  Eigen::FullPivLU<Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>> lu(ConstMap<T>(ad, n, n));
+  if (!lu.isInvertible()) throw Fault("solve with a singular matrix");
+  Tensor x(a.kind(), Shape{n});
+  Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>>((x.*out)(), n) =
+      lu.solve(Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>>(bd, n));
+  return x;
+}
+
+}  // namespace
+
+Tensor unblock(const Tensor& t) {
+  if (!t.shape().is_blocked()) return t;
+  Tensor out(t.kind(), t.shape().logical());
+  permute_tensor(t, out, t.shape(), true);
+  return out;
+}
+
+Tensor reblock(const Tensor& logical, const Shape& blocked) {
+  if (!blocked.is_blocked()) {
+    Tensor out = logical;
+    out.reshape(blocked);
+    return out;
+  }
+  require(logical.size() == blocked.size(), "reblock: sizes differ");
+  Tensor out(logical.kind(), blocked);
+  permute_tensor(logical, out, blocked, false);
+  return out;
+}
+
+Tensor matrix_product(const Tensor& a, const Tensor& b) {
+  check_product(a, b);
+  const Shape &sa = a.shape(), &sb = b.shape();
+  require(sa.order() == 2 && sb.order() == 2 && sa.dim(1) == sb.dim(0),
+          "matrix product: dimensions do not match");
+  Tensor c(a.kind(), Shape{sa.dim(0), sb.dim(1)});
+  gemm(a, b, c, sa.dim(0), sa.dim(1), sb.dim(1));
+  return c;
+}
+
+Tensor matrix_vector_product(const Tensor& a, const Tensor& x) {
+  check_product(a, x);
+  const Shape& sa = a.shape();
+  require(sa.order() == 2 && x.shape().order() == 1 && sa.dim(1) == x.shape().dim(0),
+          "matrix-vector product: dimensions do not match");
+  Tensor c(a.kind(), Shape{sa.dim(0)});
+  gemm(a, x, c, sa.dim(0), sa.dim(1), 1);
+  return c;
+}
+
+Tensor vector_matrix_product(const Tensor& x, const Tensor& a) {
+  check_product(x, a);
+  const Shape& sa = a.shape();
+  require(sa.order() == 2 && x.shape().order() == 1 && sa.dim(0) == x.shape().dim(0),
+          "vector-matrix product: dimensions do not match");
+  Tensor c(a.kind(), Shape{sa.dim(1)});
+  gemm(x, a, c, 1, sa.dim(0), sa.dim(1));
+  return c;
+}
+
+Tensor outer_product(const Tensor& u, const Tensor& v) {
+  check_product(u, v);
+  int m = static_cast<int>(u.size()), n = static_cast<int>(v.size());
+  Tensor c(u.kind(), Shape{m, n});
+  gemm(u, v, c, m, 1, n);
+  return c;
+}
+
+Tensor inner_product(const Tensor& u, const Tensor& v) {
+  require(u.kind() == v.kind() && u.size() == v.size(), "inner product: sizes do not match");
+  int n = static_cast<int>(u.size());
+  Tensor c(u.kind(), Shape{1});
+  gemm(u, v, c, 1, n, 1);
+  return c;
+}
+
+Tensor transpose(const Tensor& m) {
+  const Shape& s = m.shape();
+  require(s.order() == 2 && s.uniform(), "transpose of a tensor that is not a matrix");
+  Tensor logical = unblock(m);
+  int r = logical.shape().dim(0), c = logical.shape().dim(1);
+  Tensor t(m.kind(), Shape{c, r});
+  for (int i = 0; i < r; ++i)
+    for (int j = 0; j < c; ++j) {
+      size_t from = static_cast<size_t>(i) * c + j, to = static_cast<size_t>(j) * r + i;
+      switch (m.kind()) {
+        case ComponentKind::Int: t.mutable_ints()[to] = logical.ints()[from]; break;
+        case ComponentKind::Float: t.mutable_floats()[to] = logical.floats()[from]; break;
+        case ComponentKind::Bool: t.mutable_bools()[to] = logical.bools()[from]; break;
+        case ComponentKind::Complex: t.mutable_complexes()[to] = logical.complexes()[from]; break;
+        case ComponentKind::String: t.mutable_strings()[to] = logical.strings()[from]; break;
+      }
+    }
+  if (!s.is_blocked()) return t;
+  // Each level's two dimensions swap places.
+  Shape swapped;
+  std::vector<Shape> levels;
+  for (Shape cur = s; !cur.is_scalar(); cur = cur.block()) levels.push_back(cur);
+  for (auto it = levels.rbegin(); it != levels.rend(); ++it)
+    swapped = Shape::blocked({it->dim(1), it->dim(0)}, swapped);
+  return reblock(t, swapped);
+}
+
+double determinant(const Tensor& m) {
+  require(m.kind() == ComponentKind::Float, "determinant of a non-float matrix");
+  switch (square_size(m)) {
+    case 2: return fixed<2>(m).determinant();
+    case 3: return fixed<3>(m).determinant();
+    case 4: return fixed<4>(m).determinant();
+    default: throw Fault("determinant of a matrix that is not 2x2, 3x3 or 4x4");
+  }
+}
+
+Tensor inverse(const Tensor& m) {
+  require(m.kind() == ComponentKind::Float, "inverse of a non-float matrix");
+  switch (square_size(m)) {
+    case 2: return inverse_fixed<2>(m);
+    case 3: return inverse_fixed<3>(m);
+    case 4: return inverse_fixed<4>(m);
+    default: throw Fault("inverse of a matrix that is not 2x2, 3x3 or 4x4");
+  }
+}
+
+Tensor solve(const Tensor& a, const Tensor& b) {
+  require(a.kind() == b.kind(), "solve with operands of different component kinds");
+  if (a.kind() == ComponentKind::Float)
+    return solve_typed<double>(a, b, a.floats(), b.floats(), &Tensor::mutable_floats);
+  if (a.kind() == ComponentKind::Complex)
+    return solve_typed<Complex>(a, b, a.complexes(), b.complexes(), &Tensor::mutable_complexes);
+  throw Fault(std::string("solve with ") + component_name(a.kind()) +
+              " components is not supported (use float)");
+}
+
+Tensor lower_triangular_solve(const Tensor& a, const Tensor& b) {
+  require(a.kind() == ComponentKind::Float && b.kind() == ComponentKind::Float,
+          "triangular solve of non-float tensors");
+  int n = square_size(a);
+  require(b.size() == static_cast<size_t>(n), "triangular solve: vector length does not match");
+  Tensor x(ComponentKind::Float, Shape{n});
+  const double* l = a.floats();
+  double* xs = x.mutable_floats();
+  for (int i = 0; i < n; ++i) {
+    double s = b.floats()[i];
+    for (int j = 0; j < i; ++j) s -= l[i * n + j] * xs[j];
+    if (l[i * n + i] == 0.0) throw Fault("triangular solve with a zero on the diagonal");
+    xs[i] = s / l[i * n + i];
+  }
+  return x;
+}
+
+void round_to_float32(Tensor& t) {
+  if (t.kind() == ComponentKind::Float) {
+    double* d = t.mutable_floats();
+    for (size_t i = 0; i < t.size(); ++i) d[i] = static_cast<float>(d[i]);
+  } else if (t.kind() == ComponentKind::Complex) {
+    Complex* c = t.mutable_complexes();
+    for (size_t i = 0; i < t.size(); ++i)
+      c[i] = Complex(static_cast<float>(c[i].real()), static_cast<float>(c[i].imag()));
+  }
+}
+
+bool all_finite(const Tensor& t) {
+  if (t.kind() == ComponentKind::Float) {
+    for (size_t i = 0; i < t.size(); ++i)
+      if (!std::isfinite(t.floats()[i])) return false;
+  } else if (t.kind() == ComponentKind::Complex) {
+    for (size_t i = 0; i < t.size(); ++i)
+      if (!std::isfinite(t.complexes()[i].real()) || !std::isfinite(t.complexes()[i].imag()))
+        return false;
+  }
+  return true;
+}
+
+}  // namespace simit::runtime

@@ -1,0 +1,43 @@
+// Small dense linear algebra on runtime tensors (Eigen underneath): blocked/unblocked
+// conversion, products, transpose, determinants, inverses and dense solves. Every function
+// throws Fault for a run-time condition (singular matrix, mismatched shapes).
+#pragma once
+
+#include "runtime/tensor.h"
+
+namespace simit::runtime {
+
+// The logical unblocked form of a tensor whose levels all have the same order: component
+// (i, j) of a matrix of r x c blocks is entry (i / r, j / c) of block (i % r, j % c).
+// Unblocked tensors are returned unchanged.
+Tensor unblock(const Tensor& t);
+// The inverse of unblock: `logical` laid out with the blocking of `blocked`.
+Tensor reblock(const Tensor& logical, const Shape& blocked);
+
+// Products of unblocked operands (Int, Float or Complex components of one kind).
+Tensor matrix_product(const Tensor& a, const Tensor& b);         // (m x k)(k x n) -> m x n
+Tensor matrix_vector_product(const Tensor& a, const Tensor& x);  // (m x n)(n) -> m
+Tensor vector_matrix_product(const Tensor& x, const Tensor& a);  // (m)(m x n) -> n
+Tensor outer_product(const Tensor& u, const Tensor& v);          // (m)(n) -> m x n
+// Sum over all components of u_i * v_i (same size, any shape); a 1-component tensor.
+Tensor inner_product(const Tensor& u, const Tensor& v);
+
+// Swaps the two dimensions of a matrix, and of each of its blocks.
+Tensor transpose(const Tensor& m);
+
+// Determinant and inverse of an n x n float matrix, n in {2, 3, 4}.
+double determinant(const Tensor& m);
+// Throws Fault when the matrix is singular (zero determinant).
+Tensor inverse(const Tensor& m);
+
+// Solution x of A x = b for a square unblocked Float or Complex matrix; Fault if singular.
+Tensor solve(const Tensor& a, const Tensor& b);
+// Forward substitution with the lower triangle of square A (diagonal included).
+Tensor lower_triangular_solve(const Tensor& a, const Tensor& b);
+
+// Rounds every float (and complex part) to the nearest binary32 value.
+void round_to_float32(Tensor& t);
+// True when every float (and complex part) is finite.
+bool all_finite(const Tensor& t);
+
+}  // namespace simit::runtime

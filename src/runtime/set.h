@@ -1,0 +1,187 @@
+// Sets of the hypergraph: elements, struct-of-arrays fields, edge endpoints and grid lattices.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "runtime/fault.h"
+#include "runtime/tensor.h"
+
+namespace simit::runtime {
+
+// What one element of a field holds: a dense tensor of `dims` (none for a scalar) whose
+// components have `kind`. `single` stores float components as binary32 (and complex ones as
+// two binary32), for hosts that run with float size 4; the language value stays binary64.
+struct FieldType {
+  ComponentKind kind = ComponentKind::Float;
+  std::vector<int> dims;
+  bool single = false;
+
+  size_t components() const;  // per element
+  size_t component_bytes() const;
+  std::string str() const;  // e.g. "float 3x3", "int", "float32 3"
+  bool operator==(const FieldType& o) const = default;
+};
+
+// One field: a contiguous array with the tensor of element 0, then element 1, ..., each
+// stored row-major. The array moves when the set grows, so keep the field, not the pointer.
+class Field {
+ public:
+  Field(std::string name, FieldType type) : name_(std::move(name)), type_(std::move(type)) {}
+
+  const std::string& name() const { return name_; }
+  const FieldType& type() const { return type_; }
+  size_t components() const { return type_.components(); }
+  size_t element_bytes() const { return components() * type_.component_bytes(); }
+  std::byte* bytes() { return storage_.data(); }
+  const std::byte* bytes() const { return storage_.data(); }
+
+  // Typed view of the whole array; T must be the storage type of the components
+  // (int32_t, double, float, bool, std::complex<double>, std::complex<float>).
+  template <class T>
+  T* data() {
+    check_storage(storage_tag<T>());
+    return reinterpret_cast<T*>(storage_.data());
+  }
+  template <class T>
+  const T* data() const {
+    check_storage(storage_tag<T>());
+    return reinterpret_cast<const T*>(storage_.data());
+  }
+  // The components of one element (no bounds check: use Set::get for checked access).
+  template <class T>
+  T* at(int element) {
+    return data<T>() + static_cast<size_t>(element) * components();
+  }
+  template <class T>
+  const T* at(int element) const {
+    return data<T>() + static_cast<size_t>(element) * components();
+  }
+
+ private:
+  friend class Set;
+  enum class Tag { Int, Double, Single, Bool, ComplexDouble, ComplexSingle, Other };
+  template <class T>
+  static constexpr Tag storage_tag() {
+    if constexpr (std::is_same_v<T, int32_t>) return Tag::Int;
+    if constexpr (std::is_same_v<T, double>) return Tag::Double;
+    if constexpr (std::is_same_v<T, float>) return Tag::Single;
+    if constexpr (std::is_same_v<T, bool>) return Tag::Bool;
+    if constexpr (std::is_same_v<T, std::complex<double>>) return Tag::ComplexDouble;
+    if constexpr (std::is_same_v<T, std::complex<float>>) return Tag::ComplexSingle;
+    return Tag::Other;
+  }
+  void check_storage(Tag requested) const;
+  void resize(size_t elements) { storage_.resize(elements * element_bytes()); }
+
+  std::string name_;
+  FieldType type_;
+  std::vector<std::byte> storage_;
+};
+
+enum class SetKind : uint8_t { Vertex, Edge, Grid };
+
+// A set of elements numbered 0..size-1 in insertion order. An edge set also holds, per element,
+// one endpoint in each of its endpoint sets (which must outlive it). A grid set is an edge set
+// whose links and points (its single endpoint set) were generated from lattice extents.
+// Sets are neither copyable nor movable: edge sets and patterns refer to them by address.
+// Elements are only ever appended (removal would renumber what endpoints point at).
+class Set {
+ public:
+  explicit Set(std::string name = "");
+  Set(std::string name, std::vector<const Set*> endpoint_sets);
+  // A periodic grid over the empty vertex set `points` (LANGUAGE.md §8.7): fills `points` with
+  // the product of `extents` elements and this set with one link per point and axis.
+  Set(std::string name, Set& points, std::vector<int> extents);
+  Set(const Set&) = delete;
+  Set& operator=(const Set&) = delete;
+
+  const std::string& name() const { return name_; }
+  std::string describe() const;  // "set 'name'" for messages
+  SetKind kind() const { return kind_; }
+  bool is_grid() const { return kind_ == SetKind::Grid; }
+  int size() const { return size_; }
+  // Identity and topology stamp: caches of derived structure (matrix patterns) compare these
+  // to notice that a set was replaced or grew.
+  uint64_t id() const { return id_; }
+  uint64_t topology_version() const { return version_; }
+
+  // --- elements -------------------------------------------------------------------------
+  int add();                                    // vertex sets
+  int add(std::span<const int32_t> endpoints);  // edge sets: one index per endpoint set
+  int add(std::initializer_list<int32_t> endpoints) { return add(std::span(endpoints)); }
+  int add_many(int count);                       // vertex sets; returns the first new index
+  int add_edges(std::span<const int32_t> flat);  // edge sets: arity indices per edge
+  void reserve(int elements);
+
+  // --- fields ---------------------------------------------------------------------------
+  int add_field(const std::string& name, FieldType type);  // zero for every element
+  int field_count() const { return static_cast<int>(fields_.size()); }
+  int field_index(std::string_view name) const;  // -1 if absent
+  Field& field(int index) { return *fields_[index]; }
+  const Field& field(int index) const { return *fields_[index]; }
+  Field& field(std::string_view name);  // Fault if absent
+  const Field& field(std::string_view name) const;
+  // Fault unless the field exists with exactly this type (binding a program to host data).
+  int require_field(std::string_view name, const FieldType& type) const;
+
+  // Element values as runtime tensors (float kind for float32 storage too).
+  Tensor get(int field, int element) const;
+  void set(int field, int element, const Tensor& value);
+
+  // --- endpoints ------------------------------------------------------------------------
+  int arity() const { return static_cast<int>(endpoint_sets_.size()); }
+  const Set& endpoint_set(int k) const { return *endpoint_sets_[k]; }
+  const std::vector<const Set*>& endpoint_sets() const { return endpoint_sets_; }
+  bool homogeneous() const;
+  const int32_t* endpoints() const { return endpoints_.data(); }  // size × arity, edge-major
+  std::span<const int32_t> endpoints_of(int element) const {
+    return {endpoints_.data() + static_cast<size_t>(element) * arity(),
+            static_cast<size_t>(arity())};
+  }
+  int32_t endpoint(int element, int k) const {
+    return endpoints_[static_cast<size_t>(element) * arity() + k];
+  }
+
+  // --- grids (kind() == Grid) --------------------------------------------------------------
+  const std::vector<int>& extents() const { return extents_; }
+  int dimensions() const { return static_cast<int>(extents_.size()); }
+  const Set& points() const { return endpoint_set(0); }
+  // The point with these coordinates, each wrapped periodically.
+  int grid_point(std::span<const int> coords) const;
+  std::vector<int> grid_coords(int point) const;
+  // The point at `offset` from `point` (periodic).
+  int grid_point_at(int point, std::span<const int> offset) const;
+  // The link leaving `point` in the + direction of `axis`.
+  int grid_link(int point, int axis) const;
+  // The link between the points at offsets `from` and `to` of `point`: they must differ by
+  // exactly 1 along exactly one axis; the link starts at the smaller one (before wrapping).
+  int grid_link_between(int point, std::span<const int> from, std::span<const int> to) const;
+
+ private:
+  void check_element(int element, std::string_view what) const;
+  void check_field(int field) const;
+  void check_endpoints(int element, std::span<const int32_t> endpoints) const;
+  void grow(int count);
+  void require_grid() const;
+
+  std::string name_;
+  SetKind kind_ = SetKind::Vertex;
+  int size_ = 0;
+  uint64_t id_;
+  uint64_t version_ = 0;
+  std::vector<std::unique_ptr<Field>> fields_;  // unique_ptr: Field references stay valid
+  std::vector<const Set*> endpoint_sets_;
+  std::vector<int32_t> endpoints_;
+  std::vector<int> extents_;
+};
+
+}  // namespace simit::runtime

@@ -1,0 +1,57 @@
+// The dimensions of a dense tensor: an outer level of dimensions and, for blocked tensors,
+// further levels describing the blocks (LANGUAGE.md §5.2.1), outermost first.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+namespace simit::runtime {
+
+class Shape {
+ public:
+  static constexpr int kMaxRank = 8;    // dimensions over all levels
+  static constexpr int kMaxLevels = 4;  // outer level plus nested blocks
+
+  Shape() = default;  // a scalar
+  Shape(std::initializer_list<int> dims);
+  static Shape of(const std::vector<int>& dims);
+  // `outer` dimensions whose entries are blocks of shape `block`.
+  static Shape blocked(const std::vector<int>& outer, const Shape& block);
+  static Shape blocked(const int* outer, int count, const Shape& block);
+
+  bool is_scalar() const { return levels_ == 0; }
+  int levels() const { return levels_; }
+  int rank() const { return rank_; }
+  int order() const { return levels_ ? level_order_[0] : 0; }  // outer dimensions
+  int level_order(int level) const { return level_order_[level]; }
+  int dim(int i) const { return dims_[i]; }  // over all levels, outermost level first
+  std::vector<int> outer_dims() const;
+  // The shape of one block (a scalar shape when unblocked).
+  Shape block() const;
+  bool is_blocked() const { return levels_ > 1; }
+  // Every level has the same order, so the tensor has a logical unblocked form.
+  bool uniform() const;
+  // The logical unblocked shape: dimension i is the product of dimension i of every level.
+  Shape logical() const;
+
+  size_t size() const;         // number of components
+  size_t outer_count() const;  // number of blocks (components when unblocked)
+  size_t block_size() const { return size() / outer_count(); }
+
+  bool operator==(const Shape& o) const;
+  bool operator!=(const Shape& o) const { return !(*this == o); }
+  // e.g. "3x3", "2x2 of 3x3", "scalar"
+  std::string str() const;
+
+ private:
+  std::array<int32_t, kMaxRank> dims_{};
+  std::array<uint8_t, kMaxLevels> level_order_{};
+  uint8_t rank_ = 0;
+  uint8_t levels_ = 0;
+};
+
+}  // namespace simit::runtime

@@ -1,0 +1,95 @@
+// Dense tensors shared by every executor: a component kind, a (possibly blocked) shape and
+// contiguous row-major storage in which each block is stored whole, one after another.
+// Small tensors live inline (no heap allocation); large storage is shared copy-on-write.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/shape.h"
+
+namespace simit::runtime {
+
+// Component (scalar) kinds: int is 32-bit, float is binary64 storage, bool one byte.
+enum class ComponentKind : uint8_t { Int, Float, Bool, Complex, String };
+const char* component_name(ComponentKind k);
+size_t component_bytes(ComponentKind k);  // 0 for String (stored out of line)
+
+using Complex = std::complex<double>;
+
+// Raw bytes: inline up to kInlineBytes, otherwise a shared heap block cloned before writes.
+class Storage {
+ public:
+  static constexpr size_t kInlineBytes = 128;
+
+  Storage() = default;
+  explicit Storage(size_t bytes);  // zero-filled
+  Storage(const Storage& o) { copy_from(o); }
+  Storage(Storage&& o) noexcept { move_from(o); }
+  Storage& operator=(const Storage& o);
+  Storage& operator=(Storage&& o) noexcept;
+  ~Storage() = default;
+
+  size_t bytes() const { return bytes_; }
+  const std::byte* data() const { return heap_ ? heap_.get() : inline_; }
+  std::byte* mutable_data();  // unshares heap storage first
+
+ private:
+  void copy_from(const Storage& o);
+  void move_from(Storage& o) noexcept;
+
+  alignas(16) std::byte inline_[kInlineBytes];
+  std::shared_ptr<std::byte[]> heap_;
+  size_t bytes_ = 0;
+};
+
+class Tensor {
+ public:
+  Tensor() : storage_(sizeof(double)) {}           // the float scalar 0.0
+  Tensor(ComponentKind kind, const Shape& shape);  // all components zero / empty
+
+  ComponentKind kind() const { return kind_; }
+  const Shape& shape() const { return shape_; }
+  size_t size() const { return shape_.size(); }
+
+  // Typed views of the components; the kind must match.
+  const int32_t* ints() const { return reinterpret_cast<const int32_t*>(storage_.data()); }
+  const double* floats() const { return reinterpret_cast<const double*>(storage_.data()); }
+  const bool* bools() const { return reinterpret_cast<const bool*>(storage_.data()); }
+  const Complex* complexes() const { return reinterpret_cast<const Complex*>(storage_.data()); }
+  const std::string* strings() const { return strings_ ? strings_->data() : nullptr; }
+  int32_t* mutable_ints() { return reinterpret_cast<int32_t*>(storage_.mutable_data()); }
+  double* mutable_floats() { return reinterpret_cast<double*>(storage_.mutable_data()); }
+  bool* mutable_bools() { return reinterpret_cast<bool*>(storage_.mutable_data()); }
+  Complex* mutable_complexes() { return reinterpret_cast<Complex*>(storage_.mutable_data()); }
+  std::string* mutable_strings();
+
+  // The components [offset, offset + shape.size()) as a tensor of `shape` (a block).
+  Tensor range(size_t offset, const Shape& shape) const;
+  // Overwrites the components from `offset` with all of `src` (same kind).
+  void write_range(size_t offset, const Tensor& src);
+  // Sets components [offset, offset + count) to one value.
+  void fill(size_t offset, size_t count, int32_t v);
+  void fill(size_t offset, size_t count, double v);
+  void fill(size_t offset, size_t count, bool v);
+  void fill(size_t offset, size_t count, Complex v);
+  void fill(size_t offset, size_t count, const std::string& v);
+  // Same components, another shape of the same size.
+  void reshape(const Shape& shape);
+
+  // Exact equality of kind, shape and components (float components compared with ==).
+  bool operator==(const Tensor& o) const;
+
+ private:
+  ComponentKind kind_ = ComponentKind::Float;
+  Shape shape_;
+  Storage storage_;
+  std::shared_ptr<std::vector<std::string>> strings_;  // String kind only
+};
+
+}  // namespace simit::runtime

@@ -1,0 +1,189 @@
+// Matrix and vector operations on assembled system matrices, against dense Eigen references.
+#include "runtime/system_ops.h"
+
+#include <gtest/gtest.h>
+
+#include "runtime/sparse_convert.h"
+#include "runtime_fixtures.h"
+
+namespace simit::runtime {
+namespace {
+
+using namespace simit::runtime::testing;
+
+double max_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).cwiseAbs().maxCoeff();
+}
+
+class TetMatrices : public ::testing::Test {
+ protected:
+  TetMatrices() : tets("tets", {&verts, &verts, &verts, &verts}) {
+    build_cube_tets(2, verts, tets);
+  }
+  // A blocked matrix through the tets with its dense reference.
+  std::pair<SystemMatrix, Eigen::MatrixXd> tet_matrix(const Set& rows, const Set& cols, int br,
+                                                      int bc, unsigned seed) {
+    SystemMatrix m(registry.assembled(tets, rows, cols), br, bc);
+    const size_t rn = members_of(tets, rows).size(), cn = members_of(tets, cols).size();
+    LocalMatrix local =
+        random_locals(tets.size(), static_cast<int>(rn) * br, static_cast<int>(cn) * bc, seed);
+    assemble(m, tets, local);
+    return {std::move(m), assemble_dense(tets, rows, cols, br, bc, local)};
+  }
+
+  Set verts{"verts"};
+  Set tets;
+  PatternRegistry registry;
+};
+
+TEST_F(TetMatrices, AssemblyMatchesDenseAssembly) {
+  auto [m, dense] = tet_matrix(verts, verts, 3, 3, 1);
+  EXPECT_LT(max_diff(to_dense(m), dense), 1e-12);
+  EXPECT_EQ(m.component(5, 7), dense(5, 7));
+}
+
+TEST_F(TetMatrices, MatrixVectorProductBlocked) {
+  auto [m, dense] = tet_matrix(verts, verts, 3, 3, 2);
+  const std::vector<double> x = random_vector(m.scalar_cols(), 3);
+  std::vector<double> y(m.scalar_rows());
+  multiply(m, x, y);
+  EXPECT_LT((as_eigen(y) - dense * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST_F(TetMatrices, MatrixVectorProductUnblocked) {
+  auto [m, dense] = tet_matrix(verts, verts, 1, 1, 4);
+  const std::vector<double> x = random_vector(m.scalar_cols(), 5);
+  std::vector<double> y(m.scalar_rows());
+  multiply(m, x, y);
+  EXPECT_LT((as_eigen(y) - dense * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST_F(TetMatrices, RectangularAndOddBlocks) {
+  auto [m, dense] = tet_matrix(tets, verts, 2, 3, 6);  // tet rows, vertex columns, 2x3 blocks
+  EXPECT_LT(max_diff(to_dense(m), dense), 1e-12);
+  const std::vector<double> x = random_vector(m.scalar_cols(), 7);
+  std::vector<double> y(m.scalar_rows());
+  multiply(m, x, y);
+  EXPECT_LT((as_eigen(y) - dense * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
+  const std::vector<double> z = random_vector(m.scalar_rows(), 8);
+  std::vector<double> w(m.scalar_cols());
+  multiply_transposed(m, z, w);
+  EXPECT_LT((as_eigen(w) - dense.transpose() * as_eigen(z)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST_F(TetMatrices, TransposedProductBlocked) {
+  auto [m, dense] = tet_matrix(verts, verts, 3, 3, 9);
+  const std::vector<double> x = random_vector(m.scalar_rows(), 10);
+  std::vector<double> y(m.scalar_cols(), 123.0);  // overwritten, not accumulated
+  multiply_transposed(m, x, y);
+  EXPECT_LT((as_eigen(y) - dense.transpose() * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST_F(TetMatrices, SumWithTheSamePattern) {
+  auto [a, da] = tet_matrix(verts, verts, 3, 3, 11);
+  auto [b, db] = tet_matrix(verts, verts, 3, 3, 12);
+  SystemMatrix c = add(a, b, 2.0, -0.5);
+  EXPECT_EQ(c.shared_pattern(), a.shared_pattern());
+  EXPECT_LT(max_diff(to_dense(c), 2.0 * da - 0.5 * db), 1e-12);
+}
+
+TEST_F(TetMatrices, SumOfDifferentPatternsUsesTheUnion) {
+  auto [a, da] = tet_matrix(verts, verts, 3, 3, 13);
+  SystemMatrix mass(registry.assembled(verts, verts, verts), 3, 3);
+  LocalMatrix local = random_locals(verts.size(), 3, 3, 14);
+  assemble(mass, verts, local);
+  const Eigen::MatrixXd dmass = assemble_dense(verts, verts, verts, 3, 3, local);
+  const int before = registry.builds();
+  SystemMatrix c = add(a, mass, 1.0, 1.0, &registry);
+  SystemMatrix c2 = add(a, mass, 1.0, 1.0, &registry);
+  EXPECT_EQ(registry.builds(), before + 1);  // the union is built once
+  EXPECT_EQ(c.shared_pattern(), c2.shared_pattern());
+  EXPECT_LT(max_diff(to_dense(c), da + dmass), 1e-12);
+  SystemMatrix d = add(mass, a, 1.0, -1.0);  // without a registry
+  EXPECT_LT(max_diff(to_dense(d), dmass - da), 1e-12);
+}
+
+TEST_F(TetMatrices, ScaleAndNegate) {
+  auto [a, da] = tet_matrix(verts, verts, 3, 3, 15);
+  EXPECT_LT(max_diff(to_dense(scaled(-2.5, a)), -2.5 * da), 1e-12);
+  scale(0.5, a);
+  EXPECT_LT(max_diff(to_dense(a), 0.5 * da), 1e-12);
+}
+
+TEST_F(TetMatrices, Transpose) {
+  auto [a, da] = tet_matrix(tets, verts, 1, 3, 16);
+  SystemMatrix t = transposed(a, &registry);
+  EXPECT_EQ(t.block_rows(), 3);
+  EXPECT_EQ(t.block_cols(), 1);
+  EXPECT_LT(max_diff(to_dense(t), da.transpose()), 1e-12);
+  transposed(a, &registry);
+  SystemMatrix u = transposed(a, &registry);
+  EXPECT_EQ(u.shared_pattern(), t.shared_pattern());
+}
+
+TEST_F(TetMatrices, SparseProduct) {
+  auto [a, da] = tet_matrix(verts, tets, 3, 1, 17);
+  auto [b, db] = tet_matrix(tets, verts, 1, 3, 18);
+  SystemMatrix c = multiply(a, b);
+  EXPECT_EQ(c.block_rows(), 3);
+  EXPECT_EQ(c.block_cols(), 3);
+  EXPECT_LT(max_diff(to_dense(c), da * db), 1e-12);
+  EXPECT_THROW(multiply(a, a), Fault);
+}
+
+TEST_F(TetMatrices, MismatchedShapesFault) {
+  auto [a, da] = tet_matrix(verts, verts, 3, 3, 19);
+  auto [b, db] = tet_matrix(verts, verts, 1, 1, 20);
+  EXPECT_THROW(add(a, b), Fault);
+  std::vector<double> x(3), y(a.scalar_rows());
+  EXPECT_THROW(multiply(a, x, y), Fault);
+}
+
+TEST(StencilOps, WrappedOffsetsSumInProducts) {
+  Set points("points");
+  Set grid("links", points, {2});
+  PatternPtr p = MatrixPattern::stencil(grid, {{0}, {1}, {-1}});
+  SystemMatrix k(p);
+  for (int pt = 0; pt < 2; ++pt) {
+    k.block(p->row_ptr()[pt])[0] = 4.0;
+    k.block(p->row_ptr()[pt] + 1)[0] = -1.0;
+    k.block(p->row_ptr()[pt] + 2)[0] = -2.0;
+  }
+  Eigen::Matrix2d expected;
+  expected << 4.0, -3.0, -3.0, 4.0;
+  EXPECT_EQ(to_dense(k), Eigen::MatrixXd(expected));
+  const std::vector<double> x = {1.0, 10.0};
+  std::vector<double> y(2), z(2);
+  multiply(k, x, y);
+  EXPECT_EQ(y, (std::vector<double>{-26.0, 37.0}));
+  multiply_transposed(k, x, z);
+  EXPECT_EQ(z, (std::vector<double>{-26.0, 37.0}));
+  EXPECT_EQ(to_dense(transposed(k)), Eigen::MatrixXd(expected.transpose()));
+  EXPECT_EQ(to_dense(add(k, k)), Eigen::MatrixXd(2.0 * expected));
+}
+
+TEST(VectorOps, ElementwiseAndReductions) {
+  const std::vector<double> x = {1.0, -2.0, 3.0}, y = {4.0, 5.0, -6.0};
+  std::vector<double> out(3);
+  add(x, y, out);
+  EXPECT_EQ(out, (std::vector<double>{5.0, 3.0, -3.0}));
+  subtract(x, y, out);
+  EXPECT_EQ(out, (std::vector<double>{-3.0, -7.0, 9.0}));
+  multiply_elementwise(x, y, out);
+  EXPECT_EQ(out, (std::vector<double>{4.0, -10.0, -18.0}));
+  divide_elementwise(y, x, out);
+  EXPECT_EQ(out, (std::vector<double>{4.0, -2.5, -2.0}));
+  EXPECT_EQ(dot(x, y), 4.0 - 10.0 - 18.0);
+  EXPECT_DOUBLE_EQ(norm(x), std::sqrt(14.0));
+  std::vector<double> z = y;
+  axpy(2.0, x, z);
+  EXPECT_EQ(z, (std::vector<double>{6.0, 1.0, 0.0}));
+  scale(-1.0, std::span<double>(z));
+  EXPECT_EQ(z, (std::vector<double>{-6.0, -1.0, -0.0}));
+  add(z, z, z);  // aliasing is allowed
+  EXPECT_EQ(z, (std::vector<double>{-12.0, -2.0, 0.0}));
+  EXPECT_THROW(dot(x, std::vector<double>(2)), Fault);
+}
+
+}  // namespace
+}  // namespace simit::runtime

@@ -1,0 +1,106 @@
+// The `simit` command line: help, version, usage errors and `simit check`.
+#include "cli.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <unistd.h>
+
+namespace simit::tools {
+namespace {
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "simit");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  int status = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
+  return {status, out.str(), err.str()};
+}
+
+// A file in the temporary folder, removed at the end of the test.
+struct TempFile {
+  TempFile(const std::string& name, const std::string& text)
+      : path((std::filesystem::temp_directory_path() /
+              ("simit_cli_test_" + std::to_string(::getpid()) + "_" + name))
+                 .string()) {
+    std::ofstream(path) << text;
+  }
+  ~TempFile() { std::filesystem::remove(path); }
+  std::string path;
+};
+
+TEST(Cli, HelpListsTheCommands) {
+  Result r = cli({"--help"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("check"), std::string::npos);
+  EXPECT_NE(r.out.find("test"), std::string::npos);
+}
+
+TEST(Cli, Version) {
+  Result r = cli({"--version"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("simit ", 0), 0u) << r.out;
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  Result unknown = cli({"frobnicate"});
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("unknown command 'frobnicate'"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("check"), std::string::npos) << "usage should follow";
+  EXPECT_EQ(cli({}).status, 2);
+  EXPECT_EQ(cli({"check"}).status, 2);
+  EXPECT_EQ(cli({"check", "--dump=llvm", "x.sim"}).status, 2);
+  EXPECT_EQ(cli({"test"}).status, 2);
+}
+
+TEST(Cli, CheckHelpDescribesDumpAndExitStatus) {
+  Result r = cli({"check", "--help"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("--dump"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Exit status"), std::string::npos) << r.out;
+}
+
+TEST(Cli, CheckCleanAndBrokenFiles) {
+  TempFile good_file("good.sim", "func f(a : int) -> b : int\n  b = a;\nend\n");
+  TempFile bad_file("bad.sim", "func f() -> b : int\n  b = zz;\nend\n");
+  const std::string& good = good_file.path;
+  const std::string& bad = bad_file.path;
+  Result clean = cli({"check", good});
+  EXPECT_EQ(clean.status, 0) << clean.err;
+  EXPECT_EQ(clean.err, "");
+  Result broken = cli({"check", good, bad});
+  EXPECT_EQ(broken.status, 1);
+  EXPECT_NE(broken.err.find(bad + ":2:"), std::string::npos) << broken.err;
+  EXPECT_NE(broken.err.find("error:"), std::string::npos) << broken.err;
+}
+
+TEST(Cli, CheckUnreadableFile) {
+  Result r = cli({"check", "/nonexistent/dir/x.sim"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cannot read '/nonexistent/dir/x.sim'"), std::string::npos) << r.err;
+}
+
+TEST(Cli, CheckDumps) {
+  TempFile file("dump.sim", "func f(a : int) -> b : int\n  b = a;\nend\n");
+  const std::string& good = file.path;
+  Result ast = cli({"check", "--dump=ast", good});
+  EXPECT_EQ(ast.status, 0);
+  EXPECT_FALSE(ast.out.empty());
+  Result both = cli({"check", "--dump=ast,typed", good});
+  EXPECT_EQ(both.status, 0);
+  EXPECT_NE(both.out.find("# ast of"), std::string::npos);
+  EXPECT_NE(both.out.find("# typed of"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace simit::tools

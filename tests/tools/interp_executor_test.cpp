@@ -1,0 +1,146 @@
+// `%!` tests run by the interpreter (TESTFORMAT.md §3.2): literal types with and without
+// orientation, the comparison rules, run-time errors with their lines, and `simit run`.
+#include "interp_executor.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "run_command.h"
+#include "test_runner.h"
+#include "value_match.h"
+
+namespace simit::tools {
+namespace {
+
+SectionReport judge(const std::string& text) {
+  InterpExecutor executor;
+  auto reports = run_file("cases.sim", text, &executor);
+  EXPECT_EQ(reports.size(), 1u);
+  return reports.at(0);
+}
+
+TEST(InterpExecutor, PassingAndFailingTests) {
+  const std::string f = "func f(x : int) -> r : int\n  r = 2 * x;\nend\n";
+  EXPECT_EQ(judge("%! f(2) == 4;\n" + f).outcome, Outcome::Pass);
+  SectionReport r = judge("%! f(2) == 4;\n%! f(3) == 7;\n" + f);
+  EXPECT_EQ(r.outcome, Outcome::Fail);
+  EXPECT_NE(r.reason.find("cases.sim:2:1: %! f: 6 != 7"), std::string::npos) << r.reason;
+}
+
+TEST(InterpExecutor, ArgumentOrientationMustMatchButExpectedOrientationNeedNot) {
+  const std::string g = "func g(v : vector[2](float)) -> r : vector[2](float)\n  r = v;\nend\n";
+  EXPECT_EQ(judge("%! g([1.0, 2.0]') == [1.0, 2.0]';\n" + g).outcome, Outcome::Pass);
+  EXPECT_EQ(judge("%! g([1.0, 2.0]') == [1.0, 2.0];\n" + g).outcome, Outcome::Pass);
+  SectionReport r = judge("%! g([1.0, 2.0]) == [1.0, 2.0]';\n" + g);
+  EXPECT_EQ(r.outcome, Outcome::Fail);
+  EXPECT_NE(r.reason.find("parameter 'v'"), std::string::npos) << r.reason;
+  EXPECT_EQ(judge("%! g([1.0, 2.0]') == [1.0, 2.0, 3.0]';\n" + g).outcome, Outcome::Fail);
+}
+
+TEST(InterpExecutor, ArityAndResultCountAreChecked) {
+  SectionReport r = judge("%! h(1) == 1;\nfunc h(a : int) -> (x : int, y : int)\n  x = a;\nend\n");
+  EXPECT_EQ(r.outcome, Outcome::Fail);
+  EXPECT_NE(r.reason.find("exactly one result"), std::string::npos) << r.reason;
+}
+
+TEST(InterpExecutor, GenericFunctionsBindFromTheLiterals) {
+  const std::string s = "func s<0:N>(v : vector[N](int)) -> r : int\n  r = N;\nend\n";
+  EXPECT_EQ(judge("%! s([1, 2, 3]') == 3;\n%! s([4]') == 1;\n" + s).outcome, Outcome::Pass);
+}
+
+TEST(InterpExecutor, RuntimeErrorsFailOrdinarySectionsAndPassExpectingOnes) {
+  const std::string d = "func d(a : int) -> r : int\n  r = 1 / a;\nend\n";
+  SectionReport r = judge("%! d(0) == 0;\n" + d);
+  EXPECT_EQ(r.outcome, Outcome::Fail);
+  EXPECT_NE(r.reason.find("cases.sim:3:7: runtime error: integer division by zero"),
+            std::string::npos)
+      << r.reason;
+  EXPECT_EQ(
+      judge("%%% x\n%@ error runtime\n%@ error-contains \"division by zero\"\n%! d(0) == 0;\n" + d)
+          .outcome,
+      Outcome::Pass);
+  EXPECT_EQ(judge("%%% x\n%@ error runtime\n%! d(1) == 1;\n" + d).outcome, Outcome::Fail);
+}
+
+TEST(InterpExecutor, GraphSectionsAreSkippedWithAReason) {
+  SectionReport r = judge(
+      "%@ set nodes = 2\n%@ run main\n"
+      "element N\n  x : float;\nend\nextern nodes : set{N};\nexport func main()\nend\n");
+  EXPECT_EQ(r.outcome, Outcome::Skip);
+  EXPECT_NE(r.reason.find("sets"), std::string::npos);
+}
+
+interp::Value value(const std::string& text) {
+  LiteralResult r = parse_literal(text);
+  EXPECT_TRUE(r.literal) << r.error;
+  return literal_value(*r.literal);
+}
+
+TEST(ValuesMatch, FloatRelativeToleranceAndExactZero) {
+  EXPECT_TRUE(values_match(value("1.0005"), value("1.0")));
+  EXPECT_FALSE(values_match(value("1.002"), value("1.0")));
+  EXPECT_TRUE(values_match(value("-0.0"), value("0.0")));
+  EXPECT_FALSE(values_match(value("1e-300"), value("0.0")));
+  EXPECT_TRUE(values_match(value("[1.0, 2000.0]"), value("[1.0, 2001.0]")));
+  EXPECT_FALSE(values_match(value("[1.0, 2.0]"), value("[1.0, 2.0, 3.0]")));
+  EXPECT_TRUE(values_match(value("1.0"), value("1.5"), 0.5));
+  EXPECT_FALSE(values_match(value("1.0"), value("1.6"), 0.5));
+}
+
+TEST(ValuesMatch, ExactKindsAndComplexParts) {
+  EXPECT_TRUE(values_match(value("3"), value("3")));
+  EXPECT_FALSE(values_match(value("3"), value("4")));
+  EXPECT_FALSE(values_match(value("3"), value("3.0")));
+  EXPECT_TRUE(values_match(value("true"), value("true")));
+  EXPECT_FALSE(values_match(value("\"a\""), value("\"b\"")));
+  EXPECT_TRUE(values_match(value("<1.0, 1000.0>"), value("<1.0, 1000.5>")));
+  EXPECT_FALSE(values_match(value("<1.0, 0.0>"), value("<1.0, 1e-9>")));
+}
+
+std::string write_program(const std::string& text) {
+  std::string path = ::testing::TempDir() + "run_command_test.sim";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(RunCommand, PrintsOutputAndResults) {
+  RunOptions o;
+  o.file = write_program(
+      "export func f(a : float, v : vector[2](float)) -> (s : float, w : vector[2](float))\n"
+      "  println \"hello \", a;\n  s = 2.0 * a;\n  w = a * v;\nend\n");
+  o.func = "f";
+  o.args = {"-1.5", "[1.0, 2.0]'"};
+  std::ostringstream out, err;
+  EXPECT_EQ(run_function(o, out, err), 0) << err.str();
+  EXPECT_EQ(out.str(), "hello -1.5\ns = -3.0\nw = [-1.5, -3.0]'\n");
+}
+
+TEST(RunCommand, RejectsBadArgumentsAndReportsRuntimeErrors) {
+  RunOptions o;
+  o.file = write_program(
+      "export func f(v : vector[2](float), i : int) -> r : float\n  r = v(i);\nend\n"
+      "func hidden() -> r : int\n  r = 1;\nend\n");
+  o.func = "f";
+  std::ostringstream out, err;
+  o.args = {"[1.0, 2.0]", "0"};  // a row vector for a column parameter
+  EXPECT_EQ(run_function(o, out, err), 1);
+  EXPECT_NE(err.str().find("parameter 'v'"), std::string::npos) << err.str();
+  o.args = {"[1.0, 2.0]'"};
+  EXPECT_EQ(run_function(o, out, err), 1);
+  o.args = {"[1.0, 2.0]'", "2"};
+  err.str("");
+  EXPECT_EQ(run_function(o, out, err), 1);
+  EXPECT_NE(err.str().find(":2:9: runtime error: index 2 is out of range"), std::string::npos)
+      << err.str();
+  EXPECT_NE(err.str().find("  in f ("), std::string::npos) << err.str();
+  o.func = "hidden";
+  o.args = {};
+  err.str("");
+  EXPECT_EQ(run_function(o, out, err), 1);
+  EXPECT_NE(err.str().find("not an exported function"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace simit::tools

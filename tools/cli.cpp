@@ -1,0 +1,131 @@
+// The `simit` command line: subcommands and their options.
+#include "cli.h"
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "check_command.h"
+#include "interp_executor.h"
+#include "run_command.h"
+#include "test_runner.h"
+
+#ifndef SIMIT_VERSION
+#define SIMIT_VERSION "unknown"
+#endif
+
+namespace simit::tools {
+namespace {
+
+constexpr int kUsageError = 2;
+
+struct Commands {
+  CLI::App* check = nullptr;
+  CLI::App* test = nullptr;
+  CLI::App* run = nullptr;
+  CheckOptions check_options;
+  std::vector<std::string> test_paths;
+  TestOptions test_options;
+  interp::Options interp_options;  // `simit test` runs %! tests with the interpreter
+  RunOptions run_options;
+};
+
+void add_check(CLI::App& app, Commands& c) {
+  c.check = app.add_subcommand("check", "Parse and type-check Simit programs");
+  c.check->add_option("FILE", c.check_options.files, "Simit source files (.sim)")
+      ->required()
+      ->type_name("");
+  c.check
+      ->add_option("--dump", c.check_options.dumps,
+                   "Also print a tree to stdout: 'ast' (the parse tree, when the file parses) "
+                   "or 'typed' (the checked tree, when the file checks clean); "
+                   "'ast,typed' prints both")
+      ->type_name("KIND")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"ast", "typed"}));
+  c.check->footer(
+      "Diagnostics go to stderr as file:line:col: error: message, with the source line and a "
+      "caret.\nExit status: 0 when every file is clean, 1 when any file has errors or cannot "
+      "be read, 2 on a usage error.");
+}
+
+void add_test(CLI::App& app, Commands& c) {
+  c.test = app.add_subcommand("test", "Run .sim test files (the inline test format)");
+  c.test->add_option("PATH", c.test_paths, "Test files, or folders searched for *.sim files")
+      ->required()
+      ->type_name("");
+  c.test->add_flag("-v,--verbose", c.test_options.verbose,
+                   "List every section with PASS, SKIP or FAIL (default: failures only)");
+  c.test->add_flag("--float32", c.interp_options.float32, "Run programs with 32-bit floats");
+  c.test->add_flag("--check-finite", c.interp_options.check_finite,
+                   "Stop a run with a run-time error at the first NaN or infinity it produces");
+  c.test->footer(
+      "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
+      "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
+      "run in the interpreter. Sections with graph directives are skipped until the "
+      "interpreter supports sets.\n"
+      "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
+      "otherwise, 2 on a usage error.");
+}
+
+void add_run(CLI::App& app, Commands& c) {
+  RunOptions& o = c.run_options;
+  c.run = app.add_subcommand("run", "Run an exported function that needs no sets");
+  c.run->add_option("FILE", o.file, "Simit source file (.sim)")->required();
+  c.run->add_option("--call", o.func, "Name of the exported function")->required();
+  // The arguments are taken raw (CLI11 would split `[1, 2]` at its comma).
+  c.run->allow_extras();
+  c.run->add_flag("--float32", o.float32, "Run with 32-bit floats");
+  c.run->add_flag("--check-finite", o.check_finite,
+                  "Stop with a run-time error at the first NaN or infinity produced");
+  c.run->footer(
+      "ARGS: one literal per parameter after the file, e.g. 2 -1.5 true \"text\" <1.0,-1.0> "
+      "\"[1.0, 2.0]'\" (a column vector) \"[1, 2; 3, 4]\".\nPrints what the program prints, then "
+      "one 'name = value' line per result.\nExit status: "
+      "0 on success, 1 when the file does not compile, the arguments do not fit or the run "
+      "stops with a run-time error, 2 on a usage error.");
+}
+
+int usage_error(const CLI::App& app, const std::string& message, std::ostream& err) {
+  err << "simit: error: " << message << "\n\n" << app.help();
+  return kUsageError;
+}
+
+// CLI11 would report an unknown subcommand as a stray argument; name it plainly instead.
+bool names_unknown_command(const CLI::App& app, int argc, const char* const* argv) {
+  if (argc < 2 || argv[1][0] == '-') return false;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    if (sub->get_name() == argv[1]) return false;
+  return true;
+}
+
+}  // namespace
+
+int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+  app.set_version_flag("--version", "simit " SIMIT_VERSION);
+  app.require_subcommand(1);
+  Commands c;
+  add_check(app, c);
+  add_test(app, c);
+  add_run(app, c);
+  if (names_unknown_command(app, argc, argv))
+    return usage_error(app, std::string("unknown command '") + argv[1] + "'", err);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    out << (e.get_name() == "CallForVersion" ? std::string(e.what()) + "\n" : app.help());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return usage_error(app, e.what(), err);
+  }
+  if (c.check->parsed()) return run_check(c.check_options, out, err);
+  if (c.run->parsed()) {
+    c.run_options.args = c.run->remaining();
+    return run_function(c.run_options, out, err);
+  }
+  InterpExecutor executor(c.interp_options);
+  c.test_options.executor = &executor;
+  return run_tests(c.test_paths, c.test_options, out, err);
+}
+
+}  // namespace simit::tools
