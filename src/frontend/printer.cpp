@@ -213,6 +213,11 @@ class SourcePrinter {
 
   std::string unary(const Unary& u) {
     const char* op = u.op == Unary::Op::Not ? "not " : u.op == Unary::Op::Neg ? "-" : "+";
+    // Prefix operators nest without brackets (`- -x`, `not not b`); brackets would double
+    // the nesting depth of the printed text and could push it past the parser's limit.
+    if (const auto* inner = u.operand->as<Unary>();
+        inner && (u.op == Unary::Op::Not || inner->op != Unary::Op::Not))
+      return std::string(op) + (u.op == Unary::Op::Not ? "" : " ") + unary(*inner);
     return op + operand(*u.operand);
   }
 
