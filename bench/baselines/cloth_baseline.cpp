@@ -1,0 +1,141 @@
+// Hand-written Eigen version of examples/cloth/cloth.sim: membrane stretching on triangles,
+// discrete-shells bending on hinges, explicit Velocity Verlet, on a generated square cloth.
+// Usage: cloth_baseline [--check] [--csv FILE] [N] [FRAMES]   (N x N vertices, default 32)
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "baseline_common.h"
+#include "runtime/mesh/mesh.h"
+#include "runtime/mesh/topology.h"
+
+using namespace simit::baseline;
+
+namespace {
+
+const double density = 0.1, mu_s = 50.0, lambda_s = 50.0, kb = 1e-3, h = 2e-4;
+const int substeps = 50;
+const Vec3 gravity(0.0, -10.0, 0.0);
+using Mat32 = Eigen::Matrix<double, 3, 2>;
+
+struct FaceRest {
+  Eigen::Matrix2d B;  // inverse rest edge matrix in the triangle's plane
+  double area;
+};
+
+struct HingeRest {
+  double theta0, w;
+};
+
+// Signed dihedral angle of hinge (a, b, c, d), triangles (a, b, c) and (b, a, d), and its
+// gradient per point (Bridson et al. 2003).
+double dihedral(const std::vector<Vec3>& x, const simit::runtime::Hinge& hg,
+                std::array<Vec3, 4>& g) {
+  const Vec3 &a = x[hg[0]], &b = x[hg[1]], &c = x[hg[2]], &d = x[hg[3]];
+  const Vec3 e = b - a;
+  const double le = e.norm();
+  const Vec3 n1 = e.cross(c - a), n2 = (a - b).cross(d - b);
+  const Vec3 q1 = n1 / n1.squaredNorm(), q2 = n2 / n2.squaredNorm();
+  g[2] = -le * q1;
+  g[3] = -le * q2;
+  g[0] = -(((c - b).dot(e) / le) * q1 + ((d - b).dot(e) / le) * q2);
+  g[1] = ((c - a).dot(e) / le) * q1 + ((d - a).dot(e) / le) * q2;
+  return std::atan2(n1.cross(n2).dot(e) / le, n1.dot(n2));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options options = parse_options(argc, argv, "32");
+  const int side = std::atoi(options.input.c_str());
+  if (side < 2) {
+    std::fprintf(stderr, "the cloth needs N >= 2 vertices per side, got '%s'\n",
+                 options.input.c_str());
+    return 2;
+  }
+  // A unit square in the xz-plane at y = 0, each quad split along one diagonal with the same
+  // winding; pinned at the corners (0, 0, 0) and (1, 0, 0).
+  const int n = side * side;
+  std::vector<Vec3> x(n), v(n, Vec3::Zero()), acc(n, Vec3::Zero()), f(n);
+  std::vector<char> pinned(n, 0);
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+      x[i + side * j] = Vec3(double(i) / (side - 1), 0.0, double(j) / (side - 1));
+  pinned[0] = pinned[side - 1] = 1;
+  std::vector<simit::runtime::Triangle> faces;
+  for (int j = 0; j + 1 < side; ++j)
+    for (int i = 0; i + 1 < side; ++i) {
+      const int p = i + side * j;
+      faces.push_back({p, p + 1, p + side + 1});
+      faces.push_back({p, p + side + 1, p + side});
+    }
+  const std::vector<simit::runtime::Hinge> hinges = simit::runtime::hinges(faces);
+  const int nf = static_cast<int>(faces.size()), nh = static_cast<int>(hinges.size());
+
+  std::vector<FaceRest> face_rest(nf);
+  std::vector<double> m(n, 0.0);
+  for (int k = 0; k < nf; ++k) {
+    const auto& t = faces[k];
+    const Vec3 e1 = x[t[1]] - x[t[0]], e2 = x[t[2]] - x[t[0]], nrm = e1.cross(e2);
+    const Vec3 t1 = e1 / e1.norm(), t2 = nrm.cross(t1) / nrm.norm();
+    Eigen::Matrix2d dm;
+    dm << e1.norm(), t1.dot(e2), 0.0, t2.dot(e2);
+    face_rest[k] = {dm.inverse(), 0.5 * nrm.norm()};
+    for (int i = 0; i < 3; ++i) m[t[i]] += density * face_rest[k].area / 3.0;
+  }
+  std::vector<HingeRest> hinge_rest(nh);
+  std::array<Vec3, 4> g;
+  for (int k = 0; k < nh; ++k) {
+    const auto& hg = hinges[k];
+    const Vec3 e = x[hg[1]] - x[hg[0]];
+    const double areas = 0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() +
+                                e.cross(x[hg[3]] - x[hg[1]]).norm());
+    hinge_rest[k] = {dihedral(x, hg, g), 3.0 * kb * e.squaredNorm() / areas};
+  }
+  std::printf("cloth %dx%d: %d points, %d faces, %d hinges\n", side, side, n, nf, nh);
+
+  auto accelerations = [&](std::vector<Vec3>& out) {
+    std::fill(f.begin(), f.end(), Vec3::Zero());
+    for (int k = 0; k < nf; ++k) {
+      const auto& t = faces[k];
+      const FaceRest& r = face_rest[k];
+      Mat32 ds;
+      ds << x[t[1]] - x[t[0]], x[t[2]] - x[t[0]];
+      const Mat32 F = ds * r.B;
+      const Eigen::Matrix2d E = 0.5 * (F.transpose() * F - Eigen::Matrix2d::Identity());
+      const Eigen::Matrix2d S =
+          (lambda_s * E.trace()) * Eigen::Matrix2d::Identity() + (2.0 * mu_s) * E;
+      const Mat32 H = -r.area * (F * S * r.B.transpose());
+      f[t[0]] -= H.col(0) + H.col(1);
+      f[t[1]] += H.col(0);
+      f[t[2]] += H.col(1);
+    }
+    for (int k = 0; k < nh; ++k) {
+      const auto& hg = hinges[k];
+      const double theta = dihedral(x, hg, g);
+      const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
+      for (int i = 0; i < 4; ++i) f[hg[i]] += s * g[i];
+    }
+    for (int i = 0; i < n; ++i) out[i] = pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity);
+  };
+
+  accelerations(acc);
+  std::vector<Vec3> acc_new(n);
+  FrameLog log{"forces", "integration", {}};
+  for (int frame = 1; frame <= options.frames; ++frame) {
+    double force_ms = 0.0, integrate_ms = 0.0;
+    Stopwatch clock;
+    for (int s = 0; s < substeps; ++s) {
+      for (int i = 0; i < n; ++i) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
+      integrate_ms += clock.lap_ms();
+      accelerations(acc_new);
+      force_ms += clock.lap_ms();
+      for (int i = 0; i < n; ++i) v[i] += (0.5 * h) * (acc[i] + acc_new[i]);
+      acc.swap(acc_new);
+      integrate_ms += clock.lap_ms();
+    }
+    log.frame(frame, force_ms, integrate_ms);
+  }
+  log.summary();
+  return finish(options, x) ? 0 : 1;
+}
