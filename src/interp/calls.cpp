@@ -29,8 +29,9 @@ Value Interpreter::eval_user_call(const ast::Call& c) {
 }
 
 std::vector<Value> Interpreter::eval_multi(const ast::Expr& e) {
+  if (const auto* m = e.as<ast::Map>()) return eval_map(*m);
   const auto* c = e.as<ast::Call>();
-  if (!c) unsupported(e.span, "map assemblies");
+  if (!c) fail(e.span, "expression does not produce several values");
   if (c->intrinsic != frontend::Intrinsic::None) return {eval_call(*c)};
   Frame& callee = run_call(*c);
   std::vector<Value> results;

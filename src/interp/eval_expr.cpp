@@ -6,6 +6,7 @@
 #include "interp/interpreter.h"
 #include "interp/operators.h"
 #include "runtime/fault.h"
+#include "runtime/system_ops.h"
 
 namespace simit::interp {
 
@@ -76,12 +77,19 @@ Value Interpreter::eval_node(const ast::Expr& e) {
     case ast::NodeKind::Compare: return eval_compare(static_cast<const ast::Compare&>(e));
     case ast::NodeKind::Transpose: {
       Value scratch;
+      const Value& x = operand(*static_cast<const ast::Transpose&>(e).operand, scratch);
+      if (x.kind() == Value::Kind::Matrix)
+        return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(runtime::transposed(*x.matrix(), &patterns_)));
       return transpose_value(operand(*static_cast<const ast::Transpose&>(e).operand, scratch));
     }
-    case ast::NodeKind::TupleRead:
-    case ast::NodeKind::FieldRead:
-    case ast::NodeKind::SetRead: unsupported(e.span, "elements, tuples and set fields");
-    case ast::NodeKind::Map: unsupported(e.span, "map assemblies");
+    case ast::NodeKind::TupleRead: return eval_tuple_read(static_cast<const ast::TupleRead&>(e));
+    case ast::NodeKind::FieldRead: return eval_field_read(static_cast<const ast::FieldRead&>(e));
+    case ast::NodeKind::SetRead: return eval_set_read(static_cast<const ast::SetRead&>(e));
+    case ast::NodeKind::Map: {
+      std::vector<Value> values = eval_map(static_cast<const ast::Map&>(e));
+      if (values.empty()) return {};
+      return std::move(values[0]);
+    }
     default: break;
   }
   fail(e.span, std::string("cannot evaluate a ") + ast::node_kind_name(e.kind) + " node");
@@ -128,6 +136,11 @@ Value Interpreter::eval_binary(const ast::Binary& b) {
   const Value& r = operand(*b.rhs, rs);
   Value v;
   double x;
+  if ((l.kind() == Value::Kind::Matrix || r.kind() == Value::Kind::Matrix ||
+       b.op == ast::Binary::Op::LeftDiv) && system_binary(b, l, r, v)) {
+    finish(v, b);
+    return v;
+  }
   if (l.kind() == Value::Kind::Float && r.kind() == Value::Kind::Float &&
       float_arith(b.op, l.as_float(), r.as_float(), x)) {
     v = Value::of_float(x);
@@ -142,7 +155,10 @@ Value Interpreter::eval_unary(const ast::Unary& u) {
   Value scratch;
   const Value& x = operand(*u.operand, scratch);
   switch (u.op) {
-    case ast::Unary::Op::Neg: return negate(x);
+    case ast::Unary::Op::Neg:
+      if (x.kind() == Value::Kind::Matrix)
+        return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(runtime::scaled(-1.0, *x.matrix())));
+      return negate(x);
     case ast::Unary::Op::Plus: return x;
     case ast::Unary::Op::Not: return Value::of_bool(!x.as_bool());
   }
@@ -162,8 +178,10 @@ Value Interpreter::eval_compare(const ast::Compare& c) {
 
 size_t Interpreter::index_value(const ast::Expr& index, int size) {
   Value v = eval(index);
-  if (v.kind() != Value::Kind::Int) unsupported(index.span, "indices that are elements of sets");
-  int32_t i = v.as_int();
+  int32_t i = 0;
+  if (v.kind() == Value::Kind::Element) i = v.index();
+  else if (v.kind() == Value::Kind::Int) i = v.as_int();
+  else fail(index.span, "index is neither an int nor an element");
   if (i < 0 || i >= size)
     fail(index.span, "index " + std::to_string(i) + " is out of range for a dimension of size " +
                          std::to_string(size));
@@ -175,6 +193,7 @@ Value Interpreter::eval_tensor_read(const ast::TensorRead& r) {
   const Value& base = operand(*r.base, scratch);
   for (const auto& index : r.indices)
     if (!index) return eval_slice(r, base);
+  if (base.kind() == Value::Kind::Matrix) return matrix_read(r, base);
   if (!base.is_tensor()) unsupported(r.span, "reads of sets and other non-tensor values");
   const Tensor& t = base.tensor();
   const Shape& s = t.shape();
@@ -192,6 +211,7 @@ Value Interpreter::eval_tensor_read(const ast::TensorRead& r) {
 
 // `M(i, :)`, `T(k, :, :)`: the kept dimensions in order, blocks kept whole (§6.3.4).
 Value Interpreter::eval_slice(const ast::TensorRead& r, const Value& base) {
+  if (base.kind() == Value::Kind::Matrix) return matrix_read(r, base);
   if (!base.is_tensor()) unsupported(r.span, "slices of non-tensor values");
   const Tensor& t = base.tensor();
   const Shape& s = t.shape();

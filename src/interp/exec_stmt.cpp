@@ -54,7 +54,7 @@ void Interpreter::exec_node(const ast::Stmt& s) {
     case ast::NodeKind::ForRange: return exec_for_range(static_cast<const ast::ForRange&>(s));
     case ast::NodeKind::ForSet: return exec_for_set(static_cast<const ast::ForSet&>(s));
     case ast::NodeKind::Print: return exec_print(static_cast<const ast::Print&>(s));
-    case ast::NodeKind::Apply: unsupported(s.span, "apply statements");
+    case ast::NodeKind::Apply: exec_apply(static_cast<const ast::Apply&>(s)); return;
     default: break;
   }
   fail(s.span, std::string("cannot execute a ") + ast::node_kind_name(s.kind) + " node");
@@ -145,8 +145,16 @@ void Interpreter::exec_for_range(const ast::ForRange& s) {
 
 void Interpreter::exec_for_set(const ast::ForSet& s) {
   const ast::Variable* domain = s.domain_var;
-  if (!domain || domain->kind != ast::Variable::Kind::Generic)
-    unsupported(s.span, "loops over sets");
+  if (!domain) fail(s.span, "loop over an unresolved set");
+  if (var(*domain).kind() == Value::Kind::Set) {
+    SetBinding* b = var(*domain).binding();
+    const int n = b->set->size();
+    for (int32_t i = 0; i < n; ++i) {
+      var(*s.var) = Value::of_element(b, i);
+      exec_block(s.body);
+    }
+    return;
+  }
   // A generic parameter bound to a size n: the loop runs over 0 .. n-1.
   const int32_t n = var(*domain).kind() == Value::Kind::Int ? var(*domain).as_int() : -1;
   if (n < 0) unsupported(s.span, "loops over sets");

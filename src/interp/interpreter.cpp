@@ -94,7 +94,7 @@ bool fits(const Type& t, ComponentKind kind, const Shape& shape) {
 
 void Interpreter::check_argument(const ast::Param& p, const Value& v) const {
   const Type& t = *p.var->type;
-  if (!t.is_tensor()) unsupported(p.span, "arguments of element, set, tuple or opaque type");
+  if (!t.is_tensor() || v.kind() == Value::Kind::Matrix) return;
   if (v.empty() || !fits(t, v.component_kind(), v.shape()))
     fail(p.span, "the value passed for '" + p.name + "' does not have its type '" +
                      frontend::to_string(t) + "'");
@@ -140,9 +140,10 @@ int Interpreter::dim_size(const IndexSet& d, const SourceSpan& at) {
     case IndexSet::Kind::Generic: {
       const Value& v = *frame().refs[d.var->slot];
       if (v.kind() == Value::Kind::Int) return v.as_int();
+      if (v.kind() == Value::Kind::Set) return v.binding()->set->size();
       break;
     }
-    case IndexSet::Kind::Set: break;
+    case IndexSet::Kind::Set: return set_size(*d.var, at);
   }
   unsupported(at, "tensors with set dimensions");
 }
@@ -165,6 +166,21 @@ Shape Interpreter::shape_of(const Type& t, const SourceSpan& at) {
 }
 
 Value Interpreter::zero_of(const Type& t, const SourceSpan& at) {
+  auto set_dim = [&](const IndexSet& d) {
+    if (d.kind == IndexSet::Kind::Set) return true;
+    return d.kind == IndexSet::Kind::Generic && frame().refs[d.var->slot]->kind() == Value::Kind::Set;
+  };
+  if (t.kind == Type::Kind::Tensor && t.dims.size() == 2 && set_dim(t.dims[0]) && set_dim(t.dims[1])) {
+    // A system matrix nothing was assembled into: an empty pattern (every component zero).
+    const int rows = dim_size(t.dims[0], at), cols = dim_size(t.dims[1], at);
+    Shape block = t.block ? shape_of(*t.block, at) : Shape();
+    auto pattern = runtime::MatrixPattern::from_csr(rows, cols, std::vector<int32_t>(rows + 1, 0), {});
+    return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(
+        pattern, block.order() >= 1 ? block.dim(0) : 1, block.order() >= 2 ? block.dim(1) : 1));
+  }
+  if (t.kind == Type::Kind::Opaque || t.kind == Type::Kind::Element || t.kind == Type::Kind::Tuple ||
+      t.kind == Type::Kind::Set)
+    return {};
   return Value::zero(component_of(t.component()), shape_of(t, at));
 }
 

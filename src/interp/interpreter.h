@@ -12,7 +12,9 @@
 #include "frontend/ast.h"
 #include "interp/options.h"
 #include "interp/runtime_error.h"
+#include "interp/set_binding.h"
 #include "interp/value.h"
+#include "runtime/system_matrix.h"
 
 namespace simit::interp {
 
@@ -22,6 +24,15 @@ struct Place {
   bool whole = true;
   size_t offset = 0;  // first component of the addressed part (when not whole)
   Shape shape;        // shape of the addressed part: scalar for one component
+  // A set field: `root` is a staged copy of the element's (or, with element < 0, the whole
+  // set's) field value, stored back after each write.
+  std::shared_ptr<Value> staged;
+  runtime::Set* field_set = nullptr;
+  int field = -1;
+  int element = -1;
+  // A block of a system matrix being assembled (root is the matrix value).
+  int32_t matrix_position = -1;
+  bool accumulate = false;  // `reduce +`: the write adds
 };
 
 class Interpreter {
@@ -40,8 +51,12 @@ class Interpreter {
   // transposed), e.g. the arguments of a `%!` test. Throws RuntimeError.
   Value evaluate_constant(const frontend::ast::Expr& expr);
 
-  // Binds an extern tensor (the host's job; sets come later).
+  // Binds an extern tensor (the host's job); see interp/set_binding.h for the whole
+  // binding interface.
   void set_global(const frontend::ast::Variable& var, Value value);
+  // Binds a set to an extern set declaration (checks fields and endpoint sets).
+  void bind_set(const frontend::ast::Variable& var, runtime::Set& set);
+  runtime::PatternRegistry& patterns() { return patterns_; }
   const Value& global(const frontend::ast::Variable& var) const;
   // The value of a parameter, result or local of the innermost active call (for hooks);
   // null when `var` has no value there.
@@ -52,6 +67,7 @@ class Interpreter {
  private:
   struct Frame;
   struct InoutArg;
+  struct MapContext;
 
   // interpreter.cpp: frames, variables, types at run time
   Frame& frame() { return *frames_[depth_]; }
@@ -117,6 +133,7 @@ class Interpreter {
   Place resolve_place(const frontend::ast::Expr& target, Value* root_override = nullptr);
   Value read_place(const Place& p) const;
   void write_place(const Place& p, Value value, const frontend::SourceSpan& at);
+  void write_place_raw(const Place& p, Value value, const frontend::SourceSpan& at);
 
   // exec_stmt.cpp: statements
   void exec_block(const frontend::ast::Block& b);
@@ -140,6 +157,36 @@ class Interpreter {
   void set_ivars(const std::vector<const frontend::ast::Variable*>& vars,
                  const std::vector<int>& values);
   Value reduce(const frontend::ast::Assign& a, const IndexVars& vars);
+
+  // sets.cpp: fields, elements, tuples, grids, loops over sets
+  SetBinding& binding_of(const runtime::Set& s, const frontend::SourceSpan& at);
+  Value eval_field_read(const frontend::ast::FieldRead& r);
+  Value eval_tuple_read(const frontend::ast::TupleRead& r);
+  Value eval_set_read(const frontend::ast::SetRead& r);
+  Value field_vector(const SetBinding& b, int field);
+  Place field_place(const frontend::ast::FieldRead& r);
+  void store_field(const Place& p);
+  int set_size(const frontend::ast::Variable& v, const frontend::SourceSpan& at);
+
+  // assembly.cpp: map and apply
+  std::vector<Value> eval_map(const frontend::ast::Map& m);
+  void exec_apply(const frontend::ast::Apply& a);
+  void run_assembly(const frontend::ast::Assembly& a, const frontend::ast::Variable* through,
+                    MapContext* ctx, const frontend::SourceSpan& at);
+  Place matrix_place(const frontend::ast::TensorRead& r, Value& m);
+  void check_vector_write(const frontend::ast::TensorRead& r, Value* root);
+  bool is_map_result(const Value* v) const;
+  Value finish_grid_result(MapContext& ctx, size_t result);
+
+  // linalg.cpp: system values in operators and intrinsics
+  bool system_binary(const frontend::ast::Binary& b, const Value& l, const Value& r, Value& out);
+  Value matrix_read(const frontend::ast::TensorRead& r, const Value& m);
+  Value solver_intrinsic(const frontend::ast::Call& c, std::vector<Value>& args);
+
+  runtime::PatternRegistry patterns_;
+  std::vector<std::unique_ptr<SetBinding>> bindings_;
+  MapContext* map_ = nullptr;  // the innermost running map
+  int map_depth_ = -1;         // the depth of its mapped function's frame
 
   const frontend::ast::Program& program_;
   Options options_;

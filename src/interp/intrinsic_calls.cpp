@@ -128,6 +128,10 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
     case Intrinsic::ComplexNorm: return Value::of_float(std::abs(a0.as_complex()));
     case Intrinsic::ComplexConj: return Value::of_complex(std::conj(a0.as_complex()));
     case Intrinsic::TriangularSolve:
+      if (a0.kind() == Value::Kind::Matrix) {
+        std::vector<Value> args{a0, a1};
+        return solver_intrinsic(c, args);
+      }
       if (a0.is_tensor() && a1.is_tensor())
         return Value::of_tensor(runtime::lower_triangular_solve(a0.tensor(), a1.tensor()));
       break;
@@ -138,7 +142,10 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
     case Intrinsic::Chol:
     case Intrinsic::LltSolve:
     case Intrinsic::LltMatSolve:
-    case Intrinsic::CholFree:
+    case Intrinsic::CholFree: {
+      std::vector<Value> args{a0, a1};
+      return solver_intrinsic(c, args);
+    }
     case Intrinsic::None: break;
   }
   unsupported(c.span, "sparse solver intrinsics");

@@ -1,6 +1,8 @@
 // Assignment targets and inout places: whole variables, components and blocks.
 #include "interp/frame.h"
 #include "interp/interpreter.h"
+#include "interp/map_context.h"
+#include "runtime/fault.h"
 
 namespace simit::interp {
 
@@ -16,7 +18,31 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
     }
     case ast::NodeKind::TensorRead: {
       const auto& r = static_cast<const ast::TensorRead&>(target);
+      const auto* fr = r.base->as<ast::FieldRead>();
+      if (fr && fr->of_set && r.indices.size() == 1 && r.indices[0]) {
+        // `S.f(e) = b`: the field of one element.
+        Value set = eval(*fr->base), e = eval(*r.indices[0]);
+        if (e.kind() != Value::Kind::Element) fail(r.span, "set fields are indexed by elements");
+        const SetBinding& b = *set.binding();
+        Place p;
+        p.field_set = b.set;
+        p.field = b.fields[fr->field_index];
+        p.element = e.index();
+        Tensor t = b.set->get(p.field, p.element);
+        p.staged = std::make_shared<Value>(t.shape().is_scalar() ? Value::component(t, 0)
+                                                                  : Value::of_tensor(std::move(t)));
+        p.root = p.staged.get();
+        return p;
+      }
       Place p = resolve_place(*r.base, root_override);
+      if (p.whole && p.root->kind() == Value::Kind::Matrix) {
+        if (is_map_result(p.root)) return matrix_place(r, *p.root);
+        fail(r.span, "a system matrix can only be written by assembly");
+      }
+      if (p.whole && is_map_result(p.root)) {
+        check_vector_write(r, p.root);
+        p.accumulate = map_->reduce;
+      }
       if (p.whole && !p.root->is_tensor()) {
         if (p.root->empty()) fail(r.base->span, "assignment into a variable that has no value");
         unsupported(r.span, "writes into non-tensor values");
@@ -32,10 +58,19 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
         outer = outer * d + index_value(*r.indices[k], d);
       }
       Shape block = s.block();
-      return Place{p.root, false, offset + outer * block.size(), block};
+      p.whole = false;
+      p.offset = offset + outer * block.size();
+      p.shape = block;
+      return p;
     }
-    case ast::NodeKind::FieldRead:
-    case ast::NodeKind::TupleRead: unsupported(target.span, "element fields and set fields");
+    case ast::NodeKind::FieldRead: return field_place(static_cast<const ast::FieldRead&>(target));
+    case ast::NodeKind::TupleRead: {
+      // An endpoint passed on as an element: elements are references, nothing to write back.
+      Place p;
+      p.staged = std::make_shared<Value>(eval(target));
+      p.root = p.staged.get();
+      return p;
+    }
     default: break;
   }
   fail(target.span, "expression is not assignable");
@@ -47,7 +82,67 @@ Value Interpreter::read_place(const Place& p) const {
   return Value::of_tensor(p.root->tensor().range(p.offset, p.shape));
 }
 
+namespace {
+
+// `reduce +` writes add (§8.5.4); the target is a tensor or a system matrix's values.
+template <class T>
+void add_into(T* dst, const Value& v, size_t count) {
+  if (v.is_tensor()) {
+    const Tensor& t = v.tensor();
+    if (t.size() != count) throw runtime::Fault("cannot add a value of shape " + t.shape().str() + " into a part of " + std::to_string(count) + " components");
+    if constexpr (std::is_same_v<T, double>) {
+      const double* s = t.floats();
+      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
+    } else if constexpr (std::is_same_v<T, int32_t>) {
+      const int32_t* s = t.ints();
+      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
+    } else {
+      const Complex* s = t.complexes();
+      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
+    }
+    return;
+  }
+  for (size_t i = 0; i < count; ++i) {
+    if constexpr (std::is_same_v<T, double>) dst[i] += v.as_float();
+    else if constexpr (std::is_same_v<T, int32_t>) dst[i] += v.as_int();
+    else dst[i] += v.as_complex();
+  }
+}
+
+}  // namespace
+
 void Interpreter::write_place(const Place& p, Value value, const SourceSpan& at) {
+  try {
+    write_place_raw(p, std::move(value), at);
+  } catch (const runtime::Fault& f) {
+    fail(at, f.what());
+  }
+  if (p.field_set) store_field(p);
+}
+
+void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan& at) {
+  if (p.root->kind() == Value::Kind::Matrix) {
+    double* dst = p.root->matrix()->values() + p.offset;
+    const size_t n = p.shape.size();
+    if (p.accumulate) return add_into(dst, value, n);
+    if (value.is_tensor()) {
+      if (value.tensor().size() != n) throw runtime::Fault("block of the wrong shape");
+      std::copy(value.tensor().floats(), value.tensor().floats() + n, dst);
+    } else {
+      std::fill(dst, dst + n, value.as_float());
+    }
+    return;
+  }
+  if (p.accumulate && !p.whole) {
+    Tensor& t = p.root->tensor();
+    const size_t n = p.shape.size();
+    switch (t.kind()) {
+      case ComponentKind::Float: return add_into(t.mutable_floats() + p.offset, value, n);
+      case ComponentKind::Int: return add_into(t.mutable_ints() + p.offset, value, n);
+      case ComponentKind::Complex: return add_into(t.mutable_complexes() + p.offset, value, n);
+      default: break;
+    }
+  }
   if (p.whole) {
     Value& dst = *p.root;
     if (value.is_scalar() && dst.is_tensor()) {  // broadcast (§7.1)

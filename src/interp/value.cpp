@@ -40,7 +40,8 @@ ComponentKind Value::component_kind() const {
     case Kind::Complex: return ComponentKind::Complex;
     case Kind::String: return ComponentKind::String;
     case Kind::Tensor: return t_.kind();
-    case Kind::Empty: break;
+    case Kind::Matrix: return ComponentKind::Float;
+    default: break;
   }
   throw runtime::Fault("a value was used before it was assigned");
 }
@@ -73,6 +74,11 @@ bool Value::operator==(const Value& o) const {
     case Kind::Complex: return re_ == o.re_ && im_ == o.im_;
     case Kind::String: return s_ == o.s_;
     case Kind::Tensor: return t_ == o.t_;
+    case Kind::Element:
+    case Kind::Tuple: return set_ == o.set_ && i_ == o.i_;
+    case Kind::Set: return set_ == o.set_;
+    case Kind::Matrix: return m_ == o.m_;
+    case Kind::Opaque: return o_ == o.o_;
   }
   return false;
 }

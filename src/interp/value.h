@@ -7,9 +7,15 @@
 #include <string>
 #include <utility>
 
+#include <memory>
+
+#include "runtime/system_matrix.h"
 #include "runtime/tensor.h"
 
 namespace simit::interp {
+
+struct SetBinding;
+struct SolverHandle;
 
 using runtime::Complex;
 using runtime::ComponentKind;
@@ -25,7 +31,12 @@ class Value {
     Bool,
     Complex,
     String,
-    Tensor,  // a dense tensor of order >= 1, possibly blocked
+    Tensor,  // a dense tensor of order >= 1, possibly blocked (global vectors too)
+    Element,  // one element of a bound set (set + index)
+    Set,      // a bound set
+    Tuple,    // the endpoint tuple of one edge (edge set + edge index)
+    Matrix,   // a system matrix (block CSR over a shared pattern)
+    Opaque,   // a solver factorisation
   };
 
   Value() = default;
@@ -60,6 +71,34 @@ class Value {
     x.t_ = std::move(t);
     return x;
   }
+  static Value of_element(SetBinding* set, int32_t index, int32_t offset_tag = -1) {
+    Value x(Kind::Element);
+    x.set_ = set;
+    x.i_ = index;
+    x.aux_ = offset_tag;
+    return x;
+  }
+  static Value of_set(SetBinding* set) {
+    Value x(Kind::Set);
+    x.set_ = set;
+    return x;
+  }
+  static Value of_tuple(SetBinding* edges, int32_t edge) {
+    Value x(Kind::Tuple);
+    x.set_ = edges;
+    x.i_ = edge;
+    return x;
+  }
+  static Value of_matrix(std::shared_ptr<runtime::SystemMatrix> m) {
+    Value x(Kind::Matrix);
+    x.m_ = std::move(m);
+    return x;
+  }
+  static Value of_opaque(std::shared_ptr<SolverHandle> h) {
+    Value x(Kind::Opaque);
+    x.o_ = std::move(h);
+    return x;
+  }
   // The zero of a component kind (0, 0.0, false, <0,0>, "").
   static Value zero(ComponentKind k);
   // Zero of a shape: a scalar for the scalar shape, otherwise a zero tensor.
@@ -81,6 +120,16 @@ class Value {
   Tensor& tensor() { return t_; }
 
   void set_float(double v) { f_ = v; }
+
+  // Element, Set, Tuple: the set binding; element / edge index; for grid points read as
+  // `P[o]` inside a stencil map, the stencil offset's number (-1 otherwise).
+  SetBinding* binding() const { return set_; }
+  int32_t index() const { return i_; }
+  int32_t offset_tag() const { return aux_; }
+  // Matrix and Opaque payloads (shared: copies of a value share one matrix, which is
+  // never modified after it was produced).
+  const std::shared_ptr<runtime::SystemMatrix>& matrix() const { return m_; }
+  const std::shared_ptr<SolverHandle>& opaque() const { return o_; }
 
   // The component kind of a scalar or tensor.
   ComponentKind component_kind() const;
@@ -105,8 +154,12 @@ class Value {
     double re_;
   };
   double im_ = 0.0;
+  int32_t aux_ = -1;
+  SetBinding* set_ = nullptr;
   std::string s_;
   Tensor t_;
+  std::shared_ptr<runtime::SystemMatrix> m_;
+  std::shared_ptr<SolverHandle> o_;
 };
 
 }  // namespace simit::interp

@@ -64,12 +64,18 @@ TEST(InterpExecutor, RuntimeErrorsFailOrdinarySectionsAndPassExpectingOnes) {
   EXPECT_EQ(judge("%%% x\n%@ error runtime\n%! d(1) == 1;\n" + d).outcome, Outcome::Fail);
 }
 
-TEST(InterpExecutor, GraphSectionsAreSkippedWithAReason) {
-  SectionReport r = judge(
-      "%@ set nodes = 2\n%@ run main\n"
-      "element N\n  x : float;\nend\nextern nodes : set{N};\nexport func main()\nend\n");
-  EXPECT_EQ(r.outcome, Outcome::Skip);
-  EXPECT_NE(r.reason.find("sets"), std::string::npos);
+TEST(InterpExecutor, GraphSectionsRunAndCheckFields) {
+  const std::string program =
+      "element N\n  x : float;\nend\nextern nodes : set{N};\n"
+      "func twice(inout n : N)\n  n.x = 2.0 * n.x;\nend\n"
+      "export func main()\n  apply twice to nodes;\nend\n";
+  EXPECT_EQ(judge("%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n"
+                  "%@ expect nodes.x = 2.0, 6.0\n" + program).outcome,
+            Outcome::Pass);
+  SectionReport r = judge("%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n"
+                          "%@ expect nodes.x = 2.0, 7.0\n" + program);
+  EXPECT_EQ(r.outcome, Outcome::Fail);
+  EXPECT_NE(r.reason.find("nodes.x[1]"), std::string::npos) << r.reason;
 }
 
 interp::Value value(const std::string& text) {

@@ -1,0 +1,241 @@
+// `map` and `apply` (LANGUAGE.md §8.5-8.7): the mapped function runs once per element with
+// its result variables bound to the global results, which start at zero; assembly writes
+// land in place through the precomputed block positions of the pattern.
+#include "interp/frame.h"
+#include "interp/interpreter.h"
+#include "interp/map_context.h"
+
+namespace simit::interp {
+
+namespace ast = frontend::ast;
+using frontend::IndexSet;
+using frontend::SourceSpan;
+using frontend::Type;
+
+namespace {
+
+bool is_system_matrix_type(const Type& t) {
+  return t.kind == Type::Kind::Tensor && t.dims.size() == 2 &&
+         t.dims[0].kind != IndexSet::Kind::Fixed && t.dims[1].kind != IndexSet::Kind::Fixed;
+}
+
+}  // namespace
+
+std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
+  MapContext ctx;
+  ctx.reduce = m.reduce;
+  run_assembly(m.assembly, m.through_set, &ctx, m.span);
+  std::vector<Value> out;
+  for (size_t i = 0; i < ctx.values.size(); ++i)
+    out.push_back(ctx.is_matrix[i] && ctx.grid ? finish_grid_result(ctx, i)
+                                               : std::move(ctx.values[i]));
+  return out;
+}
+
+void Interpreter::exec_apply(const ast::Apply& a) {
+  MapContext ctx;
+  run_assembly(a.assembly, nullptr, &ctx, a.span);
+}
+
+void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* through,
+                               MapContext* ctx, const SourceSpan& at) {
+  if (!a.callee || !a.target_set) fail(at, "map of an unresolved function or set");
+  const ast::FuncDecl& f = *a.callee;
+  ctx->target = var(*a.target_set).binding();
+  if (!ctx->target) fail(at, "set '" + a.target_set->name + "' has no value (the host did not bind it)");
+  if (through) {
+    ctx->grid = var(*through).binding();
+    if (!ctx->grid) fail(at, "grid '" + through->name + "' is not bound");
+  }
+  std::vector<Value> partial;
+  for (const auto& arg : a.args) partial.push_back(eval_root(*arg));
+  const std::vector<Value> generics = [&] {
+    std::vector<Value> g;
+    for (const IndexSet& b : a.bindings) {
+      if (b.kind == IndexSet::Kind::Fixed) g.push_back(Value::of_int(b.size));
+      else if (b.var) g.push_back(var(*b.var));
+      else g.emplace_back();
+    }
+    return g;
+  }();
+  MapContext* saved = map_;
+  const int saved_depth = map_depth_, base_depth = depth_;
+  auto setup = [&](int element) -> Frame& {
+    if (frames_.size() <= static_cast<size_t>(depth_ + 1)) frames_.push_back(std::make_unique<Frame>());
+    Frame& callee = *frames_[depth_ + 1];
+    callee.func = &f;
+    callee.call_site = at;
+    const size_t n = static_cast<size_t>(f.frame_size);
+    if (callee.slots.size() < n) {
+      callee.slots.resize(n);
+      callee.refs.resize(n);
+    }
+    for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
+    size_t k = 0;
+    for (const Value& p : partial) callee.slots[f.params[k++].var->slot] = p;
+    if (k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_element(ctx->target, element);
+    if (a.pass_endpoints && k < f.params.size())
+      callee.slots[f.params[k++].var->slot] = Value::of_tuple(ctx->target, element);
+    if (ctx->grid && k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_set(ctx->grid);
+    for (size_t i = 0; i < f.generics.size(); ++i)
+      callee.slots[f.generics[i].var->slot] = i < generics.size() ? generics[i] : Value();
+    for (const ast::Param& p : f.params) {
+      const Value& v = callee.slots[p.var->slot];
+      if (p.var->type && p.var->type->kind == Type::Kind::Tensor && v.is_tensor())
+        deduce(*p.var->type, v.tensor().shape(), callee, at);
+    }
+    for (size_t i = 0; i < f.results.size(); ++i)
+      callee.refs[f.results[i].var->slot] = &ctx->values[i];
+    return callee;
+  };
+  map_ = ctx;
+  map_depth_ = depth_ + 1;
+  try {
+    // The results exist (zero) even when the set is empty.
+    ctx->values.resize(f.results.size());
+    setup(0);
+    ++depth_;
+    for (const ast::Param& r : f.results) {
+      const Type& t = *r.var->type;
+      Shape block = t.block ? shape_of(*t.block, r.span) : Shape();
+      ctx->blocks.push_back(block);
+      ctx->is_matrix.push_back(is_system_matrix_type(t));
+      ctx->stencil.emplace_back();
+      Value& slot = ctx->values[ctx->blocks.size() - 1];
+      if (!ctx->is_matrix.back()) {
+        slot = zero_of(t, r.span);
+        continue;
+      }
+      if (ctx->grid) {
+        slot = Value::of_matrix(nullptr);
+        continue;
+      }
+      auto set_of = [&](const IndexSet& d) -> runtime::Set& {
+        const Value& v = *frame().refs[d.var->slot];
+        const Value& s = d.kind == IndexSet::Kind::Set ? var(*d.var) : v;
+        if (s.kind() != Value::Kind::Set) fail(r.span, "matrix dimension '" + d.var->name + "' is not bound to a set");
+        return *s.binding()->set;
+      };
+      runtime::PatternPtr pattern =
+          patterns_.assembled(*ctx->target->set, set_of(t.dims[0]), set_of(t.dims[1]));
+      const int br = block.order() >= 1 ? block.dim(0) : 1;
+      const int bc = block.order() >= 2 ? block.dim(1) : 1;
+      slot = Value::of_matrix(std::make_shared<runtime::SystemMatrix>(pattern, br, bc));
+    }
+    --depth_;
+    const int n = ctx->target->set->size();
+    for (int e = 0; e < n; ++e) {
+      ctx->element = e;
+      setup(e);
+      ++depth_;
+      execute_body(f);
+    }
+  } catch (...) {
+    depth_ = base_depth;
+    map_ = saved;
+    map_depth_ = saved_depth;
+    throw;
+  }
+  map_ = saved;
+  map_depth_ = saved_depth;
+}
+
+bool Interpreter::is_map_result(const Value* v) const {
+  if (!map_ || depth_ != map_depth_) return false;
+  for (const Value& r : map_->values)
+    if (&r == v) return true;
+  return false;
+}
+
+namespace {
+
+std::string element_text(const Value& v) {
+  if (v.kind() != Value::Kind::Element) return "a non-element";
+  return "element " + std::to_string(v.index()) + " of " + v.binding()->set->describe();
+}
+
+}  // namespace
+
+// `K(a, b) = M` inside a mapped function: the block position comes from the assembly index
+// of the pattern (edge sets) or from the stencil offset (grids).
+Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
+  if (r.indices.size() != 2 || !r.indices[0] || !r.indices[1])
+    fail(r.span, "a system matrix is written at (row element, column element)");
+  Value row = eval(*r.indices[0]), col = eval(*r.indices[1]);
+  if (row.kind() != Value::Kind::Element || col.kind() != Value::Kind::Element)
+    fail(r.span, "system matrices are indexed by elements");
+  MapContext& ctx = *map_;
+  size_t res = 0;
+  while (&ctx.values[res] != &m) ++res;
+  const Shape& block = ctx.blocks[res];
+  const size_t bsize = block.size();
+  Place p;
+  p.whole = false;
+  p.shape = block;
+  p.accumulate = ctx.reduce;
+  if (ctx.grid) {
+    if (row.index() != ctx.element)
+      fail(r.span, "a stencil map writes only the row of the point it visits, not " + element_text(row));
+    int tag = col.offset_tag();
+    if (tag < 0) {
+      if (col.index() != ctx.element)
+        fail(r.span, "write outside the stencil: column " + element_text(col));
+      tag = ctx.offset_tag(std::vector<int>(ctx.grid->set->dimensions(), 0));
+    }
+    auto& per_offset = ctx.stencil[res];
+    const int points = ctx.grid->set->points().size();
+    while (per_offset.size() <= static_cast<size_t>(tag))
+      per_offset.push_back(Value::of_tensor(Tensor(ComponentKind::Float, Shape::blocked(std::vector<int>{points}, block))));
+    p.root = &per_offset[tag];
+    p.offset = static_cast<size_t>(row.index()) * bsize;
+    return p;
+  }
+  const runtime::SystemMatrix& mat = *m.matrix();
+  int32_t pos = mat.pattern().assembly_position(*ctx.target->set, ctx.element, row.index(), col.index());
+  if (pos < 0)
+    fail(r.span, "write to (" + element_text(row) + ", " + element_text(col) +
+                     ") outside the sparsity pattern while mapping element " +
+                     std::to_string(ctx.element) + " of " + ctx.target->set->describe());
+  p.root = &m;
+  p.offset = static_cast<size_t>(pos) * bsize;
+  p.matrix_position = pos;
+  return p;
+}
+
+// A write `r(x)` into a global vector result must name the visited element or an endpoint.
+void Interpreter::check_vector_write(const ast::TensorRead& r, Value* root) {
+  (void)root;
+  if (map_->grid) return;
+  const runtime::Set& t = *map_->target->set;
+  const int e = map_->element;
+  for (const auto& index : r.indices) {
+    if (!index || !index->type || index->type->kind != Type::Kind::Element) continue;
+    Value x = eval(*index);
+    if (x.kind() != Value::Kind::Element) continue;
+    const runtime::Set* s = x.binding()->set;
+    bool ok = s == &t && x.index() == e;
+    for (int k = 0; !ok && k < t.arity(); ++k)
+      ok = &t.endpoint_set(k) == s && t.endpoint(e, k) == x.index();
+    if (!ok)
+      fail(r.span, "write to " + element_text(x) + " outside the neighbourhood of element " +
+                       std::to_string(e) + " of " + t.describe());
+  }
+}
+
+Value Interpreter::finish_grid_result(MapContext& ctx, size_t res) {
+  const runtime::Set& grid = *ctx.grid->set;
+  const Shape& block = ctx.blocks[res];
+  const int br = block.order() >= 1 ? block.dim(0) : 1, bc = block.order() >= 2 ? block.dim(1) : 1;
+  runtime::PatternPtr pattern = patterns_.stencil(grid, ctx.offsets);
+  auto m = std::make_shared<runtime::SystemMatrix>(pattern, br, bc);
+  const size_t bsize = block.size();
+  const auto& rp = pattern->row_ptr();
+  for (size_t j = 0; j < ctx.stencil[res].size(); ++j) {
+    const double* src = ctx.stencil[res][j].tensor().floats();
+    for (int p = 0; p + 1 < static_cast<int>(rp.size()); ++p)
+      for (size_t c = 0; c < bsize; ++c) m->block(rp[p] + static_cast<int32_t>(j))[c] = src[p * bsize + c];
+  }
+  return Value::of_matrix(std::move(m));
+}
+
+}  // namespace simit::interp
