@@ -45,7 +45,7 @@ void add_check(CLI::App& app, Commands& c) {
   c.check->footer(
       "Diagnostics go to stderr as file:line:col: error: message, with the source line and a "
       "caret.\nExit status: 0 when every file is clean, 1 when any file has errors or cannot "
-      "be read, 2 on a usage error.");
+      "be read, 2 on a usage error.\n");
 }
 
 void add_test(CLI::App& app, Commands& c) {
@@ -61,10 +61,9 @@ void add_test(CLI::App& app, Commands& c) {
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
-      "run in the interpreter. Sections with graph directives are skipped until the "
-      "interpreter supports sets.\n"
+      "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...).\n"
       "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
-      "otherwise, 2 on a usage error.");
+      "otherwise, 2 on a usage error.\n");
 }
 
 void add_run(CLI::App& app, Commands& c) {
@@ -82,7 +81,7 @@ void add_run(CLI::App& app, Commands& c) {
       "\"[1.0, 2.0]'\" (a column vector) \"[1, 2; 3, 4]\".\nPrints what the program prints, then "
       "one 'name = value' line per result.\nExit status: "
       "0 on success, 1 when the file does not compile, the arguments do not fit or the run "
-      "stops with a run-time error, 2 on a usage error.");
+      "stops with a run-time error, 2 on a usage error.\n");
 }
 
 int usage_error(const CLI::App& app, const std::string& message, std::ostream& err) {
