@@ -1,0 +1,212 @@
+// Host sets: vertex, edge and grid sets wrapping the runtime's struct-of-arrays storage,
+// with typed field handles (FieldRef) and element handles (ElementRef).
+#pragma once
+
+#include <concepts>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "runtime/set.h"
+#include "simit/element.h"
+
+namespace simit {
+
+class Set;
+
+// A typed handle to one field of one set. It names the field by (set, index), not by a
+// pointer into the storage, so it stays valid when the set grows.
+template <Component T, int... dims>
+class FieldRef {
+ public:
+  using View = TensorRef<T, dims...>;
+  static constexpr size_t components = View::size;
+
+  FieldRef() = default;
+  FieldRef(runtime::Set* set, int field) : set_(set), field_(field) {}
+
+  bool defined() const { return set_ != nullptr; }
+  const std::string& name() const { return set_->field(field_).name(); }
+
+  // A view of element e's value (reads and writes the set's storage directly).
+  View get(ElementRef e) const { return View(at(e)); }
+  View operator()(ElementRef e) const { return get(e); }
+
+  // All components of e, row-major.
+  void set(ElementRef e, std::initializer_list<T> values) const { get(e) = values; }
+  template <class Collection>
+    requires requires(const Collection& c) { std::begin(c); std::size(c); }
+  void set(ElementRef e, const Collection& values) const {
+    if (std::size(values) != components)
+      throw Error("field '" + name() + "' has " + std::to_string(components) +
+                  " components per element but " + std::to_string(std::size(values)) +
+                  " values were given");
+    T* out = at(e);
+    for (const auto& v : values) *out++ = static_cast<T>(v);
+  }
+  void set(ElementRef e, const T& v) const
+    requires(sizeof...(dims) == 0)
+  {
+    *at(e) = v;
+  }
+
+  // The whole array: element 0's components, then element 1's, ... (moves when the set grows).
+  T* data() const { return set_->field(field_).template data<T>(); }
+  T* getData() const { return data(); }
+
+ private:
+  T* at(ElementRef e) const {
+    if (!set_) throw Error("use of an undefined FieldRef");
+    if (!e.defined() || e.ident() >= set_->size())
+      throw Error(set_->describe() + " has no element " + std::to_string(e.ident()) +
+                  " (field '" + name() + "')");
+    return set_->field(field_).template at<T>(e.ident());
+  }
+  runtime::Set* set_ = nullptr;
+  int field_ = -1;
+};
+
+// Elements 0..n-1 of a set, or the elements added by one add_many call, as ElementRefs.
+class ElementRange {
+ public:
+  class iterator {
+   public:
+    using value_type = ElementRef;
+    using difference_type = std::ptrdiff_t;
+    iterator() = default;
+    explicit iterator(int i) : i_(i) {}
+    ElementRef operator*() const { return ElementRef(i_); }
+    iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    iterator operator++(int) { return iterator(i_++); }
+    bool operator==(const iterator&) const = default;
+
+   private:
+    int i_ = 0;
+  };
+  ElementRange(int first, int count) : first_(first), count_(count) {}
+  iterator begin() const { return iterator(first_); }
+  iterator end() const { return iterator(first_ + count_); }
+  int size() const { return count_; }
+  ElementRef operator[](int k) const { return ElementRef(first_ + k); }
+
+ private:
+  int first_, count_;
+};
+
+// A set of elements of the hypergraph. Sets are neither copyable nor movable: edge sets and
+// bound functions refer to them by address. Note that `Set b(a);` does not copy `a`: it makes
+// an edge set with one endpoint per element in `a` (as in the original API).
+class Set {
+ public:
+  enum Kind { Unstructured, Grid };
+
+  Set() : Set(std::string()) {}
+  explicit Set(std::string name);
+  explicit Set(const char* name) : Set(std::string(name)) {}
+  // An edge set whose elements have one endpoint in each of `endpoints`, in order.
+  template <class... S>
+    requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...))
+  explicit Set(S&... endpoints) : Set(std::string(), std::vector<Set*>{&endpoints...}) {}
+  template <class... S>
+    requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...))
+  Set(std::string name, S&... endpoints) : Set(std::move(name), std::vector<Set*>{&endpoints...}) {}
+  Set(std::string name, std::vector<Set*> endpoints);
+  // A periodic grid over the empty vertex set `points` (fills it; coordinate 0 fastest).
+  Set(Set& points, std::vector<int> extents) : Set(std::string(), points, std::move(extents)) {}
+  Set(std::string name, Set& points, std::vector<int> extents);
+  Set(const Set&) = delete;
+  Set& operator=(const Set&) = delete;
+  ~Set();
+
+  const std::string& name() const { return impl_->name(); }
+  int size() const { return impl_->size(); }
+  int cardinality() const { return impl_->arity(); }
+  Kind kind() const { return impl_->is_grid() ? Grid : Unstructured; }
+  bool is_homogeneous() const { return impl_->homogeneous(); }
+
+  // --- elements ------------------------------------------------------------------------
+  ElementRef add();  // vertex sets
+  template <class... E>
+    requires(sizeof...(E) >= 1 && (std::same_as<E, ElementRef> && ...))
+  ElementRef add(E... endpoints) {
+    const ElementRef ends[] = {endpoints...};
+    return add(std::span<const ElementRef>(ends));
+  }
+  ElementRef add(std::span<const ElementRef> endpoints);  // edge sets, one per endpoint set
+  ElementRange add_many(int count);                       // vertex sets
+  ElementRange elements() const { return ElementRange(0, size()); }
+  ElementRange::iterator begin() const { return elements().begin(); }
+  ElementRange::iterator end() const { return elements().end(); }
+
+  // --- endpoints -----------------------------------------------------------------------
+  ElementRef endpoint(ElementRef edge, int k) const;
+  std::vector<ElementRef> endpoints(ElementRef edge) const;
+  Set* endpoint_set(int k) const;
+  const int32_t* endpoints_data() const { return impl_->endpoints(); }
+
+  // --- fields --------------------------------------------------------------------------
+  template <Component T, int... dims>
+  FieldRef<T, dims...> add_field(const std::string& name) {
+    return FieldRef<T, dims...>(impl_.get(), add_field(name, field_type_of<T, dims...>()));
+  }
+  // A field described at run time (choice 2 of API.md §8); returns its index.
+  int add_field(const std::string& name, const runtime::FieldType& type);
+  // An existing field; its component type and dimensions must be exactly T and dims.
+  template <Component T, int... dims>
+  FieldRef<T, dims...> get_field(const std::string& name) const {
+    return FieldRef<T, dims...>(impl_.get(), require_field(name, field_type_of<T, dims...>()));
+  }
+  bool has_field(const std::string& name) const { return impl_->field_index(name) >= 0; }
+  void* field_data(const std::string& name);
+
+  // --- grids ---------------------------------------------------------------------------
+  const std::vector<int>& grid_extents() const { return impl_->extents(); }
+  ElementRef grid_point(std::span<const int> coords) const;
+  ElementRef grid_point(std::initializer_list<int> coords) const {
+    return grid_point(std::span<const int>(coords.begin(), coords.size()));
+  }
+  std::vector<int> grid_point_coords(ElementRef point) const;
+  ElementRef grid_edge(std::span<const int> coords, int axis) const;
+
+  // The runtime storage itself (what programs read and write; shared, never copied).
+  runtime::Set& runtime() { return *impl_; }
+  const runtime::Set& runtime() const { return *impl_; }
+
+  // --- the spellings of the original API ---------------------------------------------------
+  template <Component T, int... dims>
+  FieldRef<T, dims...> addField(const std::string& name) {
+    return add_field<T, dims...>(name);
+  }
+  template <Component T, int... dims>
+  FieldRef<T, dims...> getField(const std::string& name) const {
+    return get_field<T, dims...>(name);
+  }
+  void* getFieldData(const std::string& name) { return field_data(name); }
+  int getSize() const { return size(); }
+  int getCardinality() const { return cardinality(); }
+  Kind getKind() const { return kind(); }
+  const std::string& getName() const { return name(); }
+  ElementRef getEndpoint(ElementRef edge, int k) const { return endpoint(edge, k); }
+  std::vector<ElementRef> getEndpoints(ElementRef edge) const { return endpoints(edge); }
+  const Set* getEndpointSet(int k) const { return endpoint_set(k); }
+  bool isHomogeneous() const { return is_homogeneous(); }
+  const int32_t* getEndpointsData() const { return endpoints_data(); }
+  std::vector<int> getDimensions() const { return grid_extents(); }
+  ElementRef getGridPoint(std::initializer_list<int> coords) const { return grid_point(coords); }
+  std::vector<int> getGridPointCoords(ElementRef p) const { return grid_point_coords(p); }
+
+ private:
+  int require_field(const std::string& name, const runtime::FieldType& type) const;
+  void check_element(ElementRef e, const char* what) const;
+
+  std::unique_ptr<runtime::Set> impl_;
+  std::vector<Set*> endpoint_sets_;
+};
+
+std::ostream& operator<<(std::ostream& os, const Set& set);
+
+}  // namespace simit
