@@ -24,9 +24,11 @@ struct Place {
   bool whole = true;
   size_t offset = 0;  // first component of the addressed part (when not whole)
   Shape shape;        // shape of the addressed part: scalar for one component
-  // A set field: `root` is a staged copy of the element's (or, with element < 0, the whole
-  // set's) field value, stored back after each write.
+  // A value made for the place (an endpoint passed on as an element); root points at it.
   std::shared_ptr<Value> staged;
+  // A set field (root is null): the components [offset, offset + shape.size()) of the
+  // field's array, read and written there directly. `whole` is the whole field (element
+  // < 0, from `S.f`); otherwise `element` is the element addressed (from `e.f`, `S.f(e)`).
   runtime::Set* field_set = nullptr;
   int field = -1;
   int element = -1;
@@ -165,7 +167,10 @@ class Interpreter {
   Value eval_set_read(const frontend::ast::SetRead& r);
   Value field_vector(const SetBinding& b, int field);
   Place field_place(const frontend::ast::FieldRead& r);
-  void store_field(const Place& p);
+  Place field_element_place(const SetBinding& b, int field, int element,
+                            const frontend::SourceSpan& at);
+  Value read_field(const Place& p) const;
+  void write_field(const Place& p, Value value, const frontend::SourceSpan& at);
   int set_size(const frontend::ast::Variable& v, const frontend::SourceSpan& at);
 
   // assembly.cpp: map and apply

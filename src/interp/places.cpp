@@ -23,18 +23,10 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
         // `S.f(e) = b`: the field of one element.
         Value set = eval(*fr->base), e = eval(*r.indices[0]);
         if (e.kind() != Value::Kind::Element) fail(r.span, "set fields are indexed by elements");
-        const SetBinding& b = *set.binding();
-        Place p;
-        p.field_set = b.set;
-        p.field = b.fields[fr->field_index];
-        p.element = e.index();
-        Tensor t = b.set->get(p.field, p.element);
-        p.staged = std::make_shared<Value>(t.shape().is_scalar() ? Value::component(t, 0)
-                                                                  : Value::of_tensor(std::move(t)));
-        p.root = p.staged.get();
-        return p;
+        return field_element_place(*set.binding(), fr->field_index, e.index(), r.span);
       }
       Place p = resolve_place(*r.base, root_override);
+      if (p.field_set) p.whole = false;  // a part of the field's array: offset and shape
       if (p.whole && p.root->kind() == Value::Kind::Matrix) {
         if (is_map_result(p.root)) return matrix_place(r, *p.root);
         fail(r.span, "a system matrix can only be written by assembly");
@@ -77,6 +69,7 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
 }
 
 Value Interpreter::read_place(const Place& p) const {
+  if (p.field_set) return read_field(p);
   if (p.whole) return *p.root;
   if (p.shape.is_scalar()) return Value::component(p.root->tensor(), p.offset);
   return Value::of_tensor(p.root->tensor().range(p.offset, p.shape));
@@ -113,15 +106,16 @@ void add_into(T* dst, const Value& v, size_t count) {
 
 void Interpreter::write_place(const Place& p, Value value, const SourceSpan& at) {
   try {
-    write_place_raw(p, std::move(value), at);
+    if (p.field_set) write_field(p, std::move(value), at);
+    else write_place_raw(p, std::move(value), at);
   } catch (const runtime::Fault& f) {
     fail(at, f.what());
   }
-  if (p.field_set) store_field(p);
 }
 
 void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan& at) {
-  if (p.root->kind() == Value::Kind::Matrix) {
+  // A block of a system matrix (assembly); a whole matrix variable is replaced below.
+  if (!p.whole && p.root->kind() == Value::Kind::Matrix) {
     double* dst = p.root->matrix()->values() + p.offset;
     const size_t n = p.shape.size();
     if (p.accumulate) return add_into(dst, value, n);

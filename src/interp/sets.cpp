@@ -1,6 +1,7 @@
 // Sets in the interpreter: binding host sets, element and set field reads and writes,
 // endpoint tuples, grid reads and loops over sets.
 #include <cstring>
+#include <utility>
 
 #include "interp/frame.h"
 #include "interp/interpreter.h"
@@ -81,24 +82,45 @@ int Interpreter::set_size(const ast::Variable& v, const SourceSpan& at) {
 
 namespace {
 
-Value from_tensor(Tensor t) {
-  if (t.shape().is_scalar()) return Value::component(t, 0);
-  return Value::of_tensor(std::move(t));
+// Components [offset, offset + shape.size()) of a field's array, read in place (float32
+// storage converted), as a scalar for the scalar shape.
+Value read_components(const runtime::Field& f, size_t offset, const Shape& shape) {
+  const runtime::FieldType& t = f.type();
+  if (shape.is_scalar()) {
+    switch (t.kind) {
+      case ComponentKind::Int: return Value::of_int(f.data<int32_t>()[offset]);
+      case ComponentKind::Bool: return Value::of_bool(f.data<bool>()[offset]);
+      case ComponentKind::Float:
+        return Value::of_float(t.single ? f.data<float>()[offset] : f.data<double>()[offset]);
+      case ComponentKind::Complex:
+        return Value::of_complex(t.single ? Complex(f.data<std::complex<float>>()[offset])
+                                          : f.data<Complex>()[offset]);
+      case ComponentKind::String: break;
+    }
+    throw runtime::Fault("field '" + f.name() + "' cannot be read");
+  }
+  Tensor out(t.kind, shape);
+  const size_t n = shape.size();
+  if (t.single && t.kind == ComponentKind::Float) {
+    const float* src = f.data<float>() + offset;
+    double* dst = out.mutable_floats();
+    for (size_t i = 0; i < n; ++i) dst[i] = src[i];
+  } else if (t.single && t.kind == ComponentKind::Complex) {
+    const std::complex<float>* src = f.data<std::complex<float>>() + offset;
+    Complex* dst = out.mutable_complexes();
+    for (size_t i = 0; i < n; ++i) dst[i] = Complex(src[i]);
+  } else if (n) {
+    const size_t w = t.component_bytes();
+    std::memcpy(out.mutable_ints(), f.bytes() + offset * w, n * w);
+  }
+  return Value::of_tensor(std::move(out));
 }
 
 }  // namespace
 
+// `S.f` as a vector: shares the field's array (copy-on-write), no copy.
 Value Interpreter::field_vector(const SetBinding& b, int field) {
-  const runtime::Field& f = b.set->field(b.fields[field]);
-  const int n = b.set->size();
-  Shape block = Shape::of(f.type().dims);
-  Tensor t(f.type().kind, Shape::blocked(std::vector<int>{n}, block));
-  if (!f.type().single && f.type().kind != ComponentKind::String) {
-    if (t.size()) std::memcpy(t.mutable_floats(), f.bytes(), t.size() * component_bytes(t.kind()));
-  } else {
-    for (int e = 0; e < n; ++e) t.write_range(e * block.size(), b.set->get(b.fields[field], e));
-  }
-  return Value::of_tensor(std::move(t));
+  return Value::of_tensor(b.set->field_tensor(b.fields[field]));
 }
 
 Value Interpreter::eval_field_read(const ast::FieldRead& r) {
@@ -107,7 +129,12 @@ Value Interpreter::eval_field_read(const ast::FieldRead& r) {
   if (r.of_set || base.kind() == Value::Kind::Set) return field_vector(*base.binding(), r.field_index);
   if (base.kind() != Value::Kind::Element) fail(r.span, "field read of a value that is not an element");
   const SetBinding& b = *base.binding();
-  return from_tensor(b.set->get(b.fields[r.field_index], base.index()));
+  const runtime::Set& s = *b.set;
+  if (base.index() < 0 || base.index() >= s.size())
+    fail(r.span, s.describe() + " has no element " + std::to_string(base.index()));
+  const runtime::Field& f = s.field(b.fields[r.field_index]);
+  return read_components(f, static_cast<size_t>(base.index()) * f.components(),
+                         Shape::of(f.type().dims));
 }
 
 Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
@@ -159,31 +186,70 @@ Place Interpreter::field_place(const ast::FieldRead& r) {
   if (base.kind() != Value::Kind::Element && base.kind() != Value::Kind::Set)
     fail(r.span, "field write to a value that is not an element or a set");
   const SetBinding& b = *base.binding();
+  if (base.kind() == Value::Kind::Element)
+    return field_element_place(b, r.field_index, base.index(), r.span);
+  const runtime::Field& f = std::as_const(*b.set).field(b.fields[r.field_index]);
   Place p;
   p.field_set = b.set;
   p.field = b.fields[r.field_index];
-  p.element = base.kind() == Value::Kind::Element ? base.index() : -1;
-  p.staged = std::make_shared<Value>(p.element < 0 ? field_vector(b, r.field_index)
-                                                   : from_tensor(b.set->get(p.field, p.element)));
-  p.root = p.staged.get();
+  p.shape = Shape::blocked(std::vector<int>{b.set->size()}, Shape::of(f.type().dims));
   return p;
 }
 
-void Interpreter::store_field(const Place& p) {
+// `e.f` and `S.f(e)`: the element's components in the field's array.
+Place Interpreter::field_element_place(const SetBinding& b, int field, int element,
+                                       const SourceSpan& at) {
+  const runtime::Set& s = *b.set;
+  if (element < 0 || element >= s.size())
+    fail(at, s.describe() + " has no element " + std::to_string(element));
+  const runtime::Field& f = s.field(b.fields[field]);
+  Place p;
+  p.field_set = b.set;
+  p.field = b.fields[field];
+  p.element = element;
+  p.whole = false;
+  p.offset = static_cast<size_t>(element) * f.components();
+  p.shape = Shape::of(f.type().dims);
+  return p;
+}
+
+Value Interpreter::read_field(const Place& p) const {
+  const runtime::Set& s = *p.field_set;
+  if (p.whole) return Value::of_tensor(s.field_tensor(p.field));
+  return read_components(s.field(p.field), p.offset, p.shape);
+}
+
+// Writes land in the field's array: `S.f = v` adopts v's storage (or copies it); a part is
+// written in place through the array moved out of the set (copied first only while a value
+// read earlier shares it) and put back.
+void Interpreter::write_field(const Place& p, Value value, const SourceSpan& at) {
   runtime::Set& s = *p.field_set;
-  const Value& v = *p.root;
-  if (p.element >= 0) {
-    s.set(p.field, p.element, v.to_tensor());
+  if (p.whole && !value.is_scalar()) {
+    if (!value.is_tensor()) fail(at, "only a tensor can be stored in a set field");
+    s.assign_field(p.field, value.tensor());
     return;
   }
-  const Tensor& t = v.tensor();
-  runtime::Field& f = s.field(p.field);
-  const size_t per = f.components();
-  if (t.size() != per * static_cast<size_t>(s.size()))
-    throw runtime::Fault("a vector of " + std::to_string(t.size()) + " components cannot be stored in field '" +
-                         f.name() + "' of " + s.describe());
-  const Shape block = Shape::of(f.type().dims);
-  for (int e = 0; e < s.size(); ++e) s.set(p.field, e, t.range(e * per, block));
+  const runtime::Field& f = std::as_const(s).field(p.field);
+  const bool one = f.type().single && p.element >= 0;  // float32 storage: stage one element
+  const size_t base = one ? static_cast<size_t>(p.element) * f.components() : 0;
+  Value staged = Value::of_tensor(one ? s.get(p.field, p.element) : s.take_field(p.field));
+  Place q;
+  q.root = &staged;
+  q.whole = p.whole;
+  q.offset = p.offset - base;
+  q.shape = p.shape;
+  q.accumulate = p.accumulate;
+  auto put_back = [&] {
+    if (one) s.set(p.field, p.element, staged.tensor());
+    else s.assign_field(p.field, staged.tensor());
+  };
+  try {
+    write_place_raw(q, std::move(value), at);
+  } catch (...) {
+    put_back();
+    throw;
+  }
+  put_back();
 }
 
 }  // namespace simit::interp

@@ -2,6 +2,7 @@
 #include "runtime/set.h"
 
 #include <atomic>
+#include <algorithm>
 #include <cstring>
 
 namespace simit::runtime {
@@ -67,6 +68,40 @@ void Field::check_storage(Tag requested) const {
                 " components; it was accessed with another component type");
 }
 
+void Field::reallocate(size_t capacity) {
+  std::shared_ptr<std::byte[]> fresh;
+  if (capacity) {
+    fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity]);
+    const size_t keep = std::min(bytes_, capacity);
+    if (keep) std::memcpy(fresh.get(), buffer_.get(), keep);
+    std::memset(fresh.get() + keep, 0, capacity - keep);
+  }
+  buffer_ = std::move(fresh);
+  capacity_ = capacity;
+  bytes_ = std::min(bytes_, capacity);
+}
+
+std::byte* Field::mutable_bytes() {
+  if (buffer_.use_count() > 1) reallocate(bytes_);
+  return buffer_.get();
+}
+
+void Field::resize(size_t elements) {
+  const size_t n = elements * element_bytes();
+  if (n > capacity_) {
+    reallocate(std::max(n, 2 * capacity_));
+  } else if (n > bytes_ && shared()) {
+    reallocate(capacity_);
+  }
+  if (n > bytes_) std::memset(buffer_.get() + bytes_, 0, n - bytes_);
+  bytes_ = n;
+}
+
+void Field::reserve(size_t elements) {
+  const size_t n = elements * element_bytes();
+  if (n > capacity_) reallocate(n);
+}
+
 // ---------------------------------------------------------------------------
 // Construction
 
@@ -130,7 +165,7 @@ void Set::grow(int count) {
 }
 
 void Set::reserve(int elements) {
-  for (auto& f : fields_) f->storage_.reserve(static_cast<size_t>(elements) * f->element_bytes());
+  for (auto& f : fields_) f->reserve(static_cast<size_t>(elements));
   endpoints_.reserve(static_cast<size_t>(elements) * arity());
 }
 
@@ -273,6 +308,69 @@ void Set::set(int field_number, int element, const Tensor& value) {
   } else {
     std::memcpy(f.bytes() + first * t.component_bytes(), value.ints(), f.element_bytes());
   }
+}
+
+Tensor Set::field_tensor(int field_number) const {
+  check_field(field_number);
+  const Field& f = *fields_[field_number];
+  const FieldType& t = f.type();
+  const Shape shape = Shape::blocked(std::vector<int>{size_}, Shape::of(t.dims));
+  if (!t.single) return Tensor(t.kind, shape, f.buffer());
+  Tensor out(t.kind, shape);
+  const size_t n = out.size();
+  if (t.kind == ComponentKind::Float) {
+    const float* src = f.data<float>();
+    double* dst = out.mutable_floats();
+    for (size_t i = 0; i < n; ++i) dst[i] = src[i];
+  } else {
+    const std::complex<float>* src = f.data<std::complex<float>>();
+    Complex* dst = out.mutable_complexes();
+    for (size_t i = 0; i < n; ++i) dst[i] = Complex(src[i]);
+  }
+  return out;
+}
+
+void Set::assign_field(int field_number, const Tensor& value) {
+  check_field(field_number);
+  Field& f = *fields_[field_number];
+  const FieldType& t = f.type();
+  const size_t n = f.components() * static_cast<size_t>(size_);
+  if (value.kind() != t.kind)
+    throw Fault("a " + tensor_str(value) + " value cannot be stored in field '" + f.name() +
+                "' of " + describe() + ", which holds " + t.str());
+  if (value.size() != n)
+    throw Fault("a vector of " + std::to_string(value.size()) +
+                " components cannot be stored in field '" + f.name() + "' of " + describe());
+  if (t.single && t.kind == ComponentKind::Float) {
+    float* dst = f.data<float>();
+    const double* src = value.floats();
+    for (size_t i = 0; i < n; ++i) dst[i] = static_cast<float>(src[i]);
+    return;
+  }
+  if (t.single && t.kind == ComponentKind::Complex) {
+    std::complex<float>* dst = f.data<std::complex<float>>();
+    const Complex* src = value.complexes();
+    for (size_t i = 0; i < n; ++i) dst[i] = std::complex<float>(src[i]);
+    return;
+  }
+  const size_t bytes = n * t.component_bytes();
+  if (value.shared_buffer()) {  // adopt: the value's heap block becomes the array
+    if (value.shared_buffer() == f.buffer_) return;  // `S.f = S.f`
+    f.buffer_ = value.shared_buffer();
+    f.bytes_ = f.capacity_ = bytes;
+    return;
+  }
+  if (bytes) std::memcpy(f.mutable_bytes(), value.ints(), bytes);
+}
+
+Tensor Set::take_field(int field_number) {
+  Tensor out = field_tensor(field_number);
+  Field& f = *fields_[field_number];
+  if (!f.type().single) {
+    f.buffer_.reset();
+    f.bytes_ = f.capacity_ = 0;
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------------------

@@ -32,7 +32,11 @@ struct FieldType {
 };
 
 // One field: a contiguous array with the tensor of element 0, then element 1, ..., each
-// stored row-major. The array moves when the set grows, so keep the field, not the pointer.
+// stored row-major. The array is a shared, reference-counted heap block, the same kind of
+// block runtime::Tensor uses: reading the field as a tensor (Set::field_tensor) shares it,
+// and every mutable access below copies it first while it is shared (copy-on-write), so a
+// tensor read earlier keeps its values. The array moves when the set grows and when a
+// mutable access finds it shared, so keep the field, not the pointer.
 class Field {
  public:
   Field(std::string name, FieldType type) : name_(std::move(name)), type_(std::move(type)) {}
@@ -41,20 +45,21 @@ class Field {
   const FieldType& type() const { return type_; }
   size_t components() const { return type_.components(); }
   size_t element_bytes() const { return components() * type_.component_bytes(); }
-  std::byte* bytes() { return storage_.data(); }
-  const std::byte* bytes() const { return storage_.data(); }
+  std::byte* bytes() { return mutable_bytes(); }  // unshares first
+  const std::byte* bytes() const { return buffer_.get(); }
 
   // Typed view of the whole array; T must be the storage type of the components
   // (int32_t, double, float, bool, std::complex<double>, std::complex<float>).
+  // The non-const forms unshare the array first.
   template <class T>
   T* data() {
     check_storage(storage_tag<T>());
-    return reinterpret_cast<T*>(storage_.data());
+    return reinterpret_cast<T*>(mutable_bytes());
   }
   template <class T>
   const T* data() const {
     check_storage(storage_tag<T>());
-    return reinterpret_cast<const T*>(storage_.data());
+    return reinterpret_cast<const T*>(buffer_.get());
   }
   // The components of one element (no bounds check: use Set::get for checked access).
   template <class T>
@@ -65,6 +70,11 @@ class Field {
   const T* at(int element) const {
     return data<T>() + static_cast<size_t>(element) * components();
   }
+
+  // The shared block holding the array (null while it is empty), and whether anything
+  // else (a tensor read from the field) shares it now.
+  const std::shared_ptr<std::byte[]>& buffer() const { return buffer_; }
+  bool shared() const { return buffer_.use_count() > 1; }
 
  private:
   friend class Set;
@@ -80,11 +90,16 @@ class Field {
     return Tag::Other;
   }
   void check_storage(Tag requested) const;
-  void resize(size_t elements) { storage_.resize(elements * element_bytes()); }
+  std::byte* mutable_bytes();  // copies the array first while it is shared
+  void resize(size_t elements);
+  void reserve(size_t elements);
+  void reallocate(size_t capacity_bytes);  // a private copy with this capacity
 
   std::string name_;
   FieldType type_;
-  std::vector<std::byte> storage_;
+  std::shared_ptr<std::byte[]> buffer_;
+  size_t bytes_ = 0;     // in use
+  size_t capacity_ = 0;  // allocated
 };
 
 enum class SetKind : uint8_t { Vertex, Edge, Grid };
@@ -136,6 +151,20 @@ class Set {
   // Element values as runtime tensors (float kind for float32 storage too).
   Tensor get(int field, int element) const;
   void set(int field, int element, const Tensor& value);
+
+  // A whole field as one tensor: `size()` blocks of the element shape (components for a
+  // scalar field). It shares the field's array, no copy (a converted copy for float32
+  // storage); later writes to the field copy the array first, so the tensor keeps the
+  // values it was read with.
+  Tensor field_tensor(int field) const;
+  // Stores `value` (same component kind, size() x components components, any shape) as
+  // the whole field. A value whose components are on the heap is adopted, not copied (it
+  // becomes the field's array, shared copy-on-write); the field's old array is released.
+  void assign_field(int field, const Tensor& value);
+  // Moves the field's array out as field_tensor would read it, leaving this set's
+  // reference to it released, so that writes through the tensor copy nothing when no one
+  // else shares it. Put it back with assign_field before the field is used again.
+  Tensor take_field(int field);
 
   // --- endpoints ------------------------------------------------------------------------
   int arity() const { return static_cast<int>(endpoint_sets_.size()); }

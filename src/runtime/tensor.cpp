@@ -41,6 +41,17 @@ Storage::Storage(size_t bytes) : bytes_(bytes) {
   }
 }
 
+Storage::Storage(std::shared_ptr<std::byte[]> heap, size_t bytes) : bytes_(bytes) {
+  if (heap) {
+    heap_ = std::move(heap);
+  } else if (bytes > kInlineBytes) {
+    heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
+    std::memset(heap_.get(), 0, bytes);
+  } else {
+    std::memset(inline_, 0, bytes);
+  }
+}
+
 void Storage::copy_from(const Storage& o) {
   bytes_ = o.bytes_;
   heap_ = o.heap_;  // shared until someone writes
@@ -81,6 +92,11 @@ Tensor::Tensor(ComponentKind kind, const Shape& shape)
     : kind_(kind), shape_(shape), storage_(component_bytes(kind) * shape.size()) {
   if (kind == ComponentKind::String)
     strings_ = std::make_shared<std::vector<std::string>>(shape.size());
+}
+
+Tensor::Tensor(ComponentKind kind, const Shape& shape, std::shared_ptr<std::byte[]> heap)
+    : kind_(kind), shape_(shape), storage_(std::move(heap), component_bytes(kind) * shape.size()) {
+  if (kind == ComponentKind::String) throw Fault("string tensors cannot share a heap block");
 }
 
 std::string* Tensor::mutable_strings() {

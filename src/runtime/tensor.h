@@ -29,6 +29,9 @@ class Storage {
 
   Storage() = default;
   explicit Storage(size_t bytes);  // zero-filled
+  // Shares an existing heap block of at least `bytes` bytes (no copy; a null block with
+  // `bytes` > 0 allocates zeros). Writes through either owner copy it first.
+  Storage(std::shared_ptr<std::byte[]> heap, size_t bytes);
   Storage(const Storage& o) { copy_from(o); }
   Storage(Storage&& o) noexcept { move_from(o); }
   Storage& operator=(const Storage& o);
@@ -38,6 +41,8 @@ class Storage {
   size_t bytes() const { return bytes_; }
   const std::byte* data() const { return heap_ ? heap_.get() : inline_; }
   std::byte* mutable_data();  // unshares heap storage first
+  // The shared heap block (null when the bytes are inline).
+  const std::shared_ptr<std::byte[]>& heap() const { return heap_; }
 
  private:
   void copy_from(const Storage& o);
@@ -52,6 +57,9 @@ class Tensor {
  public:
   Tensor() : storage_(sizeof(double)) {}           // the float scalar 0.0
   Tensor(ComponentKind kind, const Shape& shape);  // all components zero / empty
+  // A tensor over an existing heap block (e.g. a set field's array), shared without a copy:
+  // the first write through either owner copies it (copy-on-write). Not for String.
+  Tensor(ComponentKind kind, const Shape& shape, std::shared_ptr<std::byte[]> heap);
 
   ComponentKind kind() const { return kind_; }
   const Shape& shape() const { return shape_; }
@@ -68,6 +76,9 @@ class Tensor {
   bool* mutable_bools() { return reinterpret_cast<bool*>(storage_.mutable_data()); }
   Complex* mutable_complexes() { return reinterpret_cast<Complex*>(storage_.mutable_data()); }
   std::string* mutable_strings();
+  // The heap block holding the components, shared with copies of this tensor (and with a
+  // set field it was read from or stored into); null when they are inline or strings.
+  const std::shared_ptr<std::byte[]>& shared_buffer() const { return storage_.heap(); }
 
   // The components [offset, offset + shape.size()) as a tensor of `shape` (a block).
   Tensor range(size_t offset, const Shape& shape) const;
