@@ -6,7 +6,7 @@ packages=(
   build-essential g++ cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev libreadline-dev
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
-  libpng-dev libtinyobjloader-dev llvm-19-dev clang libclang-rt-14-dev tmux
+  libpng-dev libtinyobjloader-dev llvm-19-dev clang libclang-rt-14-dev tmux python3
 )
 
 missing=()

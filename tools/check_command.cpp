@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <exception>
+#include <memory>
+#include <vector>
 
 #include "files.h"
 #include "frontend/frontend.h"
@@ -38,6 +40,14 @@ void print_dumps(const Compilation& c, const CheckOptions& options, std::ostream
   }
 }
 
+// `simit check` exits right after checking: tearing the trees down node by node would cost
+// more than a tenth of its time for nothing (compilers skip it too, e.g. clang's
+// -disable-free). The holder is never destroyed, so the trees stay reachable, not leaked.
+void keep_until_exit(std::unique_ptr<Compilation> c) {
+  static auto* kept = new std::vector<std::unique_ptr<Compilation>>();
+  kept->push_back(std::move(c));
+}
+
 bool check_one(const std::string& path, const CheckOptions& options, std::ostream& out,
                std::ostream& err) {
   std::string error;
@@ -49,7 +59,9 @@ bool check_one(const std::string& path, const CheckOptions& options, std::ostrea
   std::unique_ptr<Compilation> c = frontend::compile_source(path, std::move(*text));
   err << c->diagnostics.render_all();
   print_dumps(*c, options, out);
-  return c->ok();
+  bool ok = c->ok();
+  keep_until_exit(std::move(c));
+  return ok;
 }
 
 }  // namespace

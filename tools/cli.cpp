@@ -7,6 +7,12 @@
 #include "check_command.h"
 #include "interp_executor.h"
 #include "run_command.h"
+#include "scene_command.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
 #include "test_runner.h"
 
 #ifndef SIMIT_VERSION
@@ -27,6 +33,7 @@ struct Commands {
   TestOptions test_options;
   interp::Options interp_options;  // `simit test` runs %! tests with the interpreter
   RunOptions run_options;
+  SceneOptions scene_options;
 };
 
 void add_check(CLI::App& app, Commands& c) {
@@ -68,20 +75,34 @@ void add_test(CLI::App& app, Commands& c) {
 
 void add_run(CLI::App& app, Commands& c) {
   RunOptions& o = c.run_options;
-  c.run = app.add_subcommand("run", "Run an exported function that needs no sets");
-  c.run->add_option("FILE", o.file, "Simit source file (.sim)")->required();
-  c.run->add_option("--call", o.func, "Name of the exported function")->required();
+  SceneOptions& so = c.scene_options;
+  c.run = app.add_subcommand(
+      "run", "Run a scene (FILE.toml), or an exported function that needs no sets (FILE.sim --call)");
+  c.run->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
+  c.run->add_option("--call", o.func, "Name of the exported function (.sim files; required there)");
   // The arguments are taken raw (CLI11 would split `[1, 2]` at its comma).
   c.run->allow_extras();
   c.run->add_flag("--float32", o.float32, "Run with 32-bit floats");
   c.run->add_flag("--check-finite", o.check_finite,
                   "Stop with a run-time error at the first NaN or infinity produced");
+  c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
+      ->check(CLI::NonNegativeNumber);
+  c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
+  c.run->add_option("--final-csv", so.final_csv,
+                    "Scenes: write the last frame's positions to this CSV file (x,y,z lines)");
   c.run->footer(
-      "ARGS: one literal per parameter after the file, e.g. 2 -1.5 true \"text\" <1.0,-1.0> "
-      "\"[1.0, 2.0]'\" (a column vector) \"[1, 2; 3, 4]\".\nPrints what the program prints, then "
-      "one 'name = value' line per result.\nExit status: "
-      "0 on success, 1 when the file does not compile, the arguments do not fit or the run "
-      "stops with a run-time error, 2 on a usage error.\n");
+      "A .toml FILE is a scene (see README.md, 'Scenes'): its sets are built from mesh files, "
+      "its init procedure runs once and its step procedure once per frame, and the output is a "
+      "ParaView series (NAME.pvd + one .vtu per frame).\n"
+      "A .sim FILE needs --call NAME. ARGS: one literal per parameter after the file, e.g. 2 "
+      "-1.5 true \"text\" <1.0,-1.0> \"[1.0, 2.0]'\" (a column vector) \"[1, 2; 3, 4]\".\n"
+      "Prints what the program prints, then one 'name = value' line per result.\nExit status: "
+      "0 on success, 1 when the file does not compile, the scene or the arguments do not fit or "
+      "the run stops with a run-time error, 2 on a usage error.\n");
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 int usage_error(const CLI::App& app, const std::string& message, std::ostream& err) {
@@ -119,6 +140,18 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   }
   if (c.check->parsed()) return run_check(c.check_options, out, err);
   if (c.run->parsed()) {
+    if (ends_with(c.run_options.file, ".toml")) {
+      if (!c.run_options.func.empty() || !c.run->remaining().empty())
+        return usage_error(app, "a scene (.toml) takes no --call and no arguments", err);
+      SceneOptions& so = c.scene_options;
+      so.file = c.run_options.file;
+      so.float32 = c.run_options.float32;
+      so.check_finite = c.run_options.check_finite;
+      so.progress_line = &out == &std::cout && isatty(fileno(stdout));
+      return run_scene(so, out, err);
+    }
+    if (c.run_options.func.empty())
+      return usage_error(app, "run: a .sim file needs --call NAME (or give a .toml scene)", err);
     c.run_options.args = c.run->remaining();
     return run_function(c.run_options, out, err);
   }

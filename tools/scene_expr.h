@@ -1,0 +1,30 @@
+// Per-element expressions of a scene file: arithmetic and comparisons over the element's
+// position x, y, z (a vertex's coordinates, or an element's centroid), e.g. "y < 1e-4".
+#pragma once
+
+#include <memory>
+#include <string>
+
+namespace simit::tools {
+
+// Grammar (loosest first): `or` (also ||), `and` (&&), `not` (!), one comparison
+// (< <= > >= == !=), + -, * /, unary -, ^ (right-associative), then numbers, x, y, z, pi,
+// xmin xmax ymin ymax zmin zmax (the mesh's bounding box), parentheses and the functions sqrt abs sin cos tan exp log floor ceil min max.
+// Comparisons and logic give 1 or 0.
+class PositionExpr {
+ public:
+  struct Node;
+  // Throws std::invalid_argument("column N: ...") when the text is not an expression.
+  explicit PositionExpr(const std::string& text);
+  ~PositionExpr();
+  PositionExpr(PositionExpr&&) noexcept;
+  PositionExpr& operator=(PositionExpr&&) noexcept;
+
+  // p: the element's position; lo, hi: the corners of the mesh's bounding box.
+  double eval(const double p[3], const double lo[3], const double hi[3]) const;
+
+ private:
+  std::unique_ptr<Node> root_;
+};
+
+}  // namespace simit::tools
