@@ -262,6 +262,9 @@ class SourcePrinter {
       case NodeKind::TupleRead: return tuple_read(*e.as<TupleRead>());
       case NodeKind::FieldRead: {
         const auto* f = e.as<FieldRead>();
+        // `0.k` would lex as the malformed number `0.`; the checker rejects such a read, but
+        // the printed text must still parse.
+        if (f->base->is<IntLit>()) return "(" + expr(*f->base) + ")." + f->field;
         return read_base(*f->base, kSetRead) + "." + f->field;
       }
       case NodeKind::SetRead: return set_read(*e.as<SetRead>());

@@ -126,6 +126,7 @@ TEST(ParserPrecedence, UnaryAndTranspose) {
   EXPECT_EQ(printed("x''"), "x''");
   EXPECT_EQ(printed("--x"), "- -x");
   EXPECT_EQ(printed("not not b"), "not not b");
+  EXPECT_EQ(printed("(0).k"), "(0).k");
   EXPECT_EQ(printed("not -x"), "not -x");
   EXPECT_EQ(printed("-(not b)"), "-(not b)");
 
