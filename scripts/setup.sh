@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Quick start: installs dependencies, builds Simit (Release) and runs the main job, which
-# checks every example program (until the interpreter exists).
+# Quick start: installs dependencies, builds Simit (Release), checks every example program
+# and runs the main job: the fem example on the bunny (FRAMES frames, default 10), written as
+# a ParaView series into build/fem-bunny/.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -10,4 +11,7 @@ configure_build "$build" Release
 cmake --build "$build" -j2 --target simit
 mapfile -d '' programs < <(example_programs)
 "$build/tools/simit" check "${programs[@]}"
-echo "setup: ${#programs[@]} example program(s) check clean; the command is $build/tools/simit"
+echo "setup: ${#programs[@]} example program(s) check clean"
+"$build/tools/simit" run "$SIMIT_ROOT/examples/fem/bunny.toml" --frames "${FRAMES:-10}" \
+  --output "$build/fem-bunny"
+echo "setup: open $build/fem-bunny/bunny.pvd in ParaView; the command is $build/tools/simit"
