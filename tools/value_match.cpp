@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "interp/set_binding.h"
 #include "runtime/dense_linalg.h"
 
 namespace simit::tools {
@@ -51,17 +52,6 @@ bool component_close(const Tensor& a, const Tensor& b, size_t i, std::optional<d
   return false;
 }
 
-ComponentKind component_of(ScalarKind k) {
-  switch (k) {
-    case ScalarKind::Int: return ComponentKind::Int;
-    case ScalarKind::Float: return ComponentKind::Float;
-    case ScalarKind::Bool: return ComponentKind::Bool;
-    case ScalarKind::Complex: return ComponentKind::Complex;
-    case ScalarKind::String: return ComponentKind::String;
-  }
-  return ComponentKind::Float;
-}
-
 }  // namespace
 
 bool type_matches(const Type& wanted, const Type& actual, GenericSizes& sizes,
@@ -86,7 +76,7 @@ frontend::TypeRef literal_type(const Literal& lit) {
 }
 
 Value literal_value(const Literal& lit) {
-  const ComponentKind kind = component_of(lit.kind);
+  const ComponentKind kind = interp::component_of(lit.kind);
   Tensor t(kind, lit.is_scalar() ? Shape() : Shape::of(lit.shape));
   for (size_t i = 0; i < lit.size(); ++i) {
     switch (kind) {

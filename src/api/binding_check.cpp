@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "interp/set_binding.h"
+
 namespace simit::api {
 
 namespace ast = frontend::ast;
@@ -13,15 +15,10 @@ using runtime::ComponentKind;
 
 namespace {
 
-std::optional<ComponentKind> component_of(ScalarKind k) {
-  switch (k) {
-    case ScalarKind::Int: return ComponentKind::Int;
-    case ScalarKind::Float: return ComponentKind::Float;
-    case ScalarKind::Bool: return ComponentKind::Bool;
-    case ScalarKind::Complex: return ComponentKind::Complex;
-    case ScalarKind::String: return std::nullopt;
-  }
-  return std::nullopt;
+// Set fields cannot hold strings (LANGUAGE.md §4.2, Rec.).
+std::optional<ComponentKind> field_component_of(ScalarKind k) {
+  if (k == ScalarKind::String) return std::nullopt;
+  return interp::component_of(k);
 }
 
 std::string dims_text(const std::vector<int>& dims) {
@@ -117,7 +114,7 @@ std::optional<runtime::FieldType> field_type_for(const Type& type, int float_siz
     t = t->block.get();
   }
   if (t->kind != Type::Kind::Scalar) return std::nullopt;
-  auto kind = component_of(t->scalar);
+  auto kind = field_component_of(t->scalar);
   if (!kind) return std::nullopt;
   out.kind = *kind;
   out.single = float_size == 4 && (out.kind == ComponentKind::Float ||

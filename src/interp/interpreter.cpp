@@ -1,5 +1,6 @@
 // The interpreter's core: construction, entry calls, variables and types at run time.
 #include "interp/interpreter.h"
+#include "interp/set_binding.h"
 
 #include <cmath>
 
@@ -15,8 +16,6 @@ using frontend::SourceSpan;
 using frontend::Type;
 namespace ast = frontend::ast;
 
-namespace {
-
 ComponentKind component_of(ScalarKind k) {
   switch (k) {
     case ScalarKind::Int: return ComponentKind::Int;
@@ -28,7 +27,6 @@ ComponentKind component_of(ScalarKind k) {
   return ComponentKind::Float;
 }
 
-}  // namespace
 
 Interpreter::Interpreter(const ast::Program& program, Options options)
     : program_(program), options_(options) {

@@ -33,6 +33,9 @@ struct SetBinding {
 // The storage type of an element field declared with type `t` (tensor without set dims).
 runtime::FieldType field_type_of(const frontend::Type& t);
 
+// The runtime component kind that stores values of scalar type `k`.
+runtime::ComponentKind component_of(frontend::ScalarKind k);
+
 // What `lu` and `chol` return; `lufree` / `cholfree` empty it.
 struct SolverHandle {
   std::variant<std::monostate, runtime::LuFactor, runtime::CholeskyFactor> factor;
