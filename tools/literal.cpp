@@ -16,17 +16,6 @@ struct LiteralError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-const char* kind_name(ScalarKind k) {
-  switch (k) {
-    case ScalarKind::Int: return "int";
-    case ScalarKind::Float: return "float";
-    case ScalarKind::Bool: return "bool";
-    case ScalarKind::Complex: return "complex";
-    case ScalarKind::String: return "string";
-  }
-  return "?";
-}
-
 // Recursive-descent reader over one literal's text.
 class Reader {
  public:
@@ -42,7 +31,7 @@ class Reader {
     }
     Literal lit = body();
     if (signs > 0 && (lit.kind == ScalarKind::Bool || lit.kind == ScalarKind::String))
-      fail(std::string("a sign cannot be applied to a ") + kind_name(lit.kind) + " literal");
+      fail(std::string("a sign cannot be applied to a ") + frontend::to_string(lit.kind) + " literal");
     if (negate) negate_all(lit);
     for (skip_space(); peek() == '\''; skip_space()) {
       ++pos_;

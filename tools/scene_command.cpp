@@ -69,6 +69,17 @@ struct SceneSet {
   int arity = 0;
 };
 
+// An extern tensor bound from the scene's [tensors] table; owns the storage the binding uses.
+struct SceneTensor {
+  std::string name;
+  FieldType type;
+  std::vector<double> doubles;
+  std::vector<float> floats;
+  std::vector<int32_t> ints;
+  std::unique_ptr<bool[]> bools;
+  simit::TensorSlot slot;
+};
+
 class Scene {
  public:
   explicit Scene(const SceneOptions& options) : options_(options) {}
@@ -95,6 +106,8 @@ class Scene {
   void load_program();
   void build_sets();
   const runtime::Mesh& mesh(const std::string& path, const toml::node* at, const std::string& key);
+  void load_tensors();
+  std::string generated_mesh(const toml::table& t, const std::string& tname);
   void init_fields(SceneSet& s);
   void fill_field(SceneSet& s, const ast::FieldDecl& decl, const toml::node& value,
                   const std::string& key);
@@ -114,6 +127,7 @@ class Scene {
   std::map<std::string, runtime::Mesh> meshes_;
   std::vector<std::unique_ptr<SceneSet>> sets_;
   std::map<std::string, SceneSet*> by_name_;
+  std::map<std::string, std::unique_ptr<SceneTensor>> tensors_;
   // output
   std::string out_folder_, out_name_, csv_path_;
   SceneSet* points_ = nullptr;
@@ -168,7 +182,7 @@ void Scene::load() {
     throw SceneError(s.str());
   }
   dir_ = fs::path(options_.file).parent_path().string();
-  check_keys(doc_, "the scene", {"program", "init", "step", "frames", "frame_time", "sets", "output"});
+  check_keys(doc_, "the scene", {"program", "init", "step", "frames", "frame_time", "sets", "tensors", "output"});
   program_path_ = resolve(required_string(doc_, "the scene", "program"));
   init_name_ = optional_string(doc_, "the scene", "init").value_or("");
   step_name_ = required_string(doc_, "the scene", "step");
@@ -186,6 +200,7 @@ void Scene::load() {
     frame_time_ = *n->value<double>();
   }
   load_program();
+  load_tensors();
   build_sets();
   check_output();
 }
@@ -212,6 +227,124 @@ void Scene::load_program() {
     if (r.var && r.var->type && r.var->type->is_scalar() &&
         r.var->type->scalar != frontend::ScalarKind::String)
       stat_names_.push_back(r.name);
+}
+
+// [tensors]: values of the program's extern tensors (scalars, or dense tensors of fixed
+// size given as a flat or nested array of their components, row-major).
+void Scene::load_tensors() {
+  const toml::node* node = doc_.get("tensors");
+  if (!node) return;
+  const toml::table* t = node->as_table();
+  if (!t) fail(node, "tensors: expected a table of extern tensor values");
+  const ast::Program& program = *compilation_->program;
+  std::map<std::string, const ast::Variable*> externs;
+  for (const ast::Variable* g : program.globals)
+    if (g->kind == ast::Variable::Kind::Extern && g->type && g->type->is_tensor())
+      externs[g->name] = g;
+  const int float_size = options_.float32 ? 4 : 8;
+  for (auto&& [key, value] : *t) {
+    std::string name(key.str());
+    std::string what = "[tensors] " + name;
+    auto ext = externs.find(name);
+    if (ext == externs.end()) {
+      std::string list;
+      for (const auto& [n, v] : externs) list += (list.empty() ? "" : ", ") + n;
+      fail(&value, what + ": the program declares no extern tensor '" + name + "'" +
+                       (list.empty() ? std::string(" (it declares none)")
+                                     : " (its extern tensors: " + list + ")"));
+    }
+    const Type& type = *ext->second->type;
+    std::optional<FieldType> ft = api::field_type_for(type, float_size);
+    if (!ft || ft->kind == ComponentKind::Complex || ft->kind == ComponentKind::String)
+      fail(&value, what + ": extern '" + name + "' is " + frontend::to_string(type) +
+                       ", which a scene cannot set (only int, float and bool tensors of "
+                       "fixed size)");
+    std::vector<const toml::node*> items;
+    std::function<void(const toml::node&)> flatten = [&](const toml::node& v) {
+      if (const toml::array* a = v.as_array()) {
+        for (const toml::node& item : *a) flatten(item);
+      } else {
+        items.push_back(&v);
+      }
+    };
+    flatten(value);
+    const size_t comps = ft->components();
+    if (items.size() != comps)
+      fail(&value, what + ": extern '" + name + "' is " + frontend::to_string(type) + " with " +
+                       std::to_string(comps) + " component" + (comps == 1 ? "" : "s") +
+                       ", but " + std::to_string(items.size()) + " value" +
+                       (items.size() == 1 ? " was" : "s were") + " given");
+    auto st = std::make_unique<SceneTensor>();
+    st->name = name;
+    st->type = *ft;
+    switch (ft->kind) {
+      case ComponentKind::Float: st->doubles.resize(comps); st->floats.resize(comps); break;
+      case ComponentKind::Int: st->ints.resize(comps); break;
+      case ComponentKind::Bool: st->bools = std::make_unique<bool[]>(comps); break;
+      default: break;
+    }
+    for (size_t k = 0; k < comps; ++k) {
+      const toml::node& v = *items[k];
+      switch (ft->kind) {
+        case ComponentKind::Float:
+          if (!v.is_number())
+            fail(&v, what + ": extern '" + name + "' is " + frontend::to_string(type) +
+                         ": expected a number");
+          st->doubles[k] = *v.value<double>();
+          st->floats[k] = static_cast<float>(st->doubles[k]);
+          break;
+        case ComponentKind::Int:
+          if (!v.is_integer())
+            fail(&v, what + ": extern '" + name + "' is " + frontend::to_string(type) +
+                         ": expected a whole number");
+          st->ints[k] = static_cast<int32_t>(*v.value<int64_t>());
+          break;
+        case ComponentKind::Bool:
+          if (!v.is_boolean())
+            fail(&v, what + ": extern '" + name + "' is " + frontend::to_string(type) +
+                         ": expected true or false");
+          st->bools[k] = *v.value<bool>();
+          break;
+        default: break;
+      }
+    }
+    void* data = ft->kind == ComponentKind::Int    ? static_cast<void*>(st->ints.data())
+                 : ft->kind == ComponentKind::Bool ? static_cast<void*>(st->bools.get())
+                 : ft->single                      ? static_cast<void*>(st->floats.data())
+                                                   : static_cast<void*>(st->doubles.data());
+    st->slot = simit::TensorSlot{ft->kind, ft->single, ft->dims, data};
+    tensors_[name] = std::move(st);
+  }
+}
+
+// `generate = "square_cloth"`, `n = N`: an N x N grid of points on the unit square in the
+// xz-plane (y = 0, point i + N j at (i, 0, j) / (N - 1)), each cell split into the triangles
+// (p, p+1, p+N+1) and (p, p+N+1, p+N) -- the cloth of bench/baselines/cloth_baseline.cpp.
+// Sets generated with the same n share one mesh; the key stands for its path.
+std::string Scene::generated_mesh(const toml::table& t, const std::string& tname) {
+  std::string kind = required_string(t, tname, "generate");
+  if (kind != "square_cloth")
+    fail(t.get("generate"), tname + " generate: '" + kind + "' is not a generator (expected square_cloth)");
+  const toml::node* nn = t.get("n");
+  if (!nn) fail(t.get("generate"), tname + ": generate = \"square_cloth\" needs n (points per side)");
+  if (!nn->is_integer() || *nn->value<int64_t>() < 2 || *nn->value<int64_t>() > 4096)
+    fail(nn, tname + " n: expected a whole number from 2 to 4096 (points per side)");
+  const int side = static_cast<int>(*nn->value<int64_t>());
+  std::string key = "square_cloth(n = " + std::to_string(side) + ")";
+  if (meshes_.count(key)) return key;
+  runtime::Mesh m;
+  m.points.resize(size_t(side) * side);
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+      m.points[size_t(i) + size_t(side) * j] = {double(i) / (side - 1), 0.0, double(j) / (side - 1)};
+  for (int j = 0; j + 1 < side; ++j)
+    for (int i = 0; i + 1 < side; ++i) {
+      const int p = i + side * j;
+      m.triangles.push_back({p, p + 1, p + side + 1});
+      m.triangles.push_back({p, p + side + 1, p + side});
+    }
+  meshes_.emplace(key, std::move(m));
+  return key;
 }
 
 const runtime::Mesh& Scene::mesh(const std::string& path, const toml::node* at,
@@ -244,12 +377,18 @@ void Scene::build_sets() {
     if (!t) fail(&node, "sets." + name + ": expected a table");
     auto ext = externs.find(name);
     if (ext == externs.end()) fail(&node, tname + ": the program declares no extern set '" + name + "'");
-    check_keys(*t, tname, {"mesh", "elements", "fields"});
+    check_keys(*t, tname, {"mesh", "generate", "n", "elements", "fields"});
     auto s = std::make_unique<SceneSet>();
     s->name = name;
     s->table = t;
     s->var = ext->second;
-    s->mesh_path = resolve(required_string(*t, tname, "mesh"));
+    if (t->get("generate")) {
+      if (t->get("mesh")) fail(t->get("generate"), tname + ": give either mesh or generate, not both");
+      s->mesh_path = generated_mesh(*t, tname);
+    } else {
+      if (t->get("n")) fail(t->get("n"), tname + " n: only for generate");
+      s->mesh_path = resolve(required_string(*t, tname, "mesh"));
+    }
     std::string el = required_string(*t, tname, "elements");
     auto e = kElementNames.find(el);
     if (e == kElementNames.end())
@@ -536,10 +675,24 @@ void Scene::check_output() {
 void Scene::bind(simit::Function& f, const std::string& what) {
   for (const std::string& name : f.unbound()) {
     auto it = by_name_.find(name);
-    if (it == by_name_.end())
-      fail(doc_.get(what), what + ": '" + f.name() + "' needs '" + name +
-                               "' bound, which a scene cannot bind (only extern sets)");
-    f.bind(name, *it->second->set);
+    if (it != by_name_.end()) {
+      f.bind(name, *it->second->set);
+      continue;
+    }
+    auto t = tensors_.find(name);
+    if (t != tensors_.end()) {
+      f.bind(name, t->second->slot);
+      continue;
+    }
+    const ast::Variable* g = nullptr;
+    for (const ast::Variable* v : compilation_->program->globals)
+      if (v->name == name && v->kind == ast::Variable::Kind::Extern) g = v;
+    if (g && g->type && g->type->is_tensor())
+      fail(doc_.get(what), what + ": '" + f.name() + "' uses the extern tensor '" + name +
+                               "' (" + frontend::to_string(*g->type) +
+                               "), which is not set: add it to [tensors]");
+    fail(doc_.get(what), what + ": '" + f.name() + "' needs '" + name +
+                             "' bound, which a scene cannot bind");
   }
   f.init();
 }

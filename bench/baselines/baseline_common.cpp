@@ -23,8 +23,20 @@ Options parse_options(int argc, char** argv, const std::string& default_input) {
       o.check = true;
     } else if (arg == "--csv" && i + 1 < argc) {
       o.csv = argv[++i];
+    } else if (arg == "--cg-tol" && i + 1 < argc) {
+      o.cg_tol = std::atof(argv[++i]);
+      if (!(o.cg_tol >= 0)) {
+        std::fprintf(stderr, "%s: --cg-tol needs a number >= 0\n", name.c_str());
+        std::exit(2);
+      }
+    } else if (arg == "--cg-max" && i + 1 < argc) {
+      o.cg_max = std::atoi(argv[++i]);
+      if (o.cg_max < 0) {
+        std::fprintf(stderr, "%s: --cg-max needs a whole number >= 0\n", name.c_str());
+        std::exit(2);
+      }
     } else if (arg.starts_with("-")) {
-      std::fprintf(stderr, "usage: %s [--check] [--csv FILE] [INPUT] [FRAMES]\n", name.c_str());
+      std::fprintf(stderr, "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [INPUT] [FRAMES]\n", name.c_str());
       std::exit(2);
     } else {
       positional.push_back(arg);
@@ -33,7 +45,7 @@ Options parse_options(int argc, char** argv, const std::string& default_input) {
   if (positional.size() > 0) o.input = positional[0];
   if (positional.size() > 1) o.frames = std::atoi(positional[1].c_str());
   if (positional.size() > 2 || o.frames < 0) {
-    std::fprintf(stderr, "usage: %s [--check] [--csv FILE] [INPUT] [FRAMES]\n", name.c_str());
+    std::fprintf(stderr, "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [INPUT] [FRAMES]\n", name.c_str());
     std::exit(2);
   }
   return o;

@@ -21,9 +21,11 @@ struct Options {
   int frames = 10;
   std::string csv;         // final positions go here
   bool check = false;      // exit nonzero when a position is not finite
+  double cg_tol = -1.0;    // --cg-tol: CG stops at r'r <= cg_tol (< 0: the example's default)
+  int cg_max = -1;         // --cg-max: CG iteration cap (< 0: the example's default)
 };
 
-// NAME [--check] [--csv FILE] INPUT [FRAMES]; prints usage and exits on bad arguments.
+// NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] INPUT [FRAMES]; prints usage and exits on bad arguments.
 Options parse_options(int argc, char** argv, const std::string& default_input);
 
 // A 3n x 3n scalar CSR matrix made of 3x3 blocks, whose pattern (the diagonal plus every

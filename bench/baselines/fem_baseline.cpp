@@ -13,8 +13,8 @@ using namespace simit::baseline;
 namespace {
 
 const double E = 5e3, nu = 0.45, density = 1000.0, h = 0.005;
-const double cg_tol = 1e-12;
-const int cg_max = 100;
+const double default_cg_tol = 1e-12;  // --cg-tol overrides
+const int default_cg_max = 100;  // --cg-max overrides
 const Vec3 gravity(0.0, -10.0, 0.0);
 
 struct TetRest {
@@ -33,6 +33,8 @@ Mat3 edge_matrix(const std::vector<Vec3>& x, const simit::runtime::Tet& t) {
 
 int main(int argc, char** argv) {
   const Options options = parse_options(argc, argv, "examples/data/bunny.1.node");
+  const double cg_tol = options.cg_tol >= 0 ? options.cg_tol : default_cg_tol;
+  const int cg_max = options.cg_max >= 0 ? options.cg_max : default_cg_max;
   const simit::runtime::Mesh mesh = simit::runtime::read_mesh(options.input);
   const int n = static_cast<int>(mesh.points.size());
   const int nt = static_cast<int>(mesh.tets.size());

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Runs a scene through `simit run` and checks what it wrote (a ctest; stdlib only).
 
-check_scene.py SIMIT SCENE OUTDIR FRAMES [--baseline EXE MESH] [--rtol R]
+check_scene.py SIMIT SCENE OUTDIR FRAMES [--baseline EXE MESH] [--baseline-arg A]... [--rtol R]
 
 Runs SCENE for FRAMES frames into OUTDIR, then checks: the .pvd lists frames 0..FRAMES, every
 .vtu it names exists, has the mesh's point count and only finite point coordinates; the
 last frame's points equal the --final-csv positions. With --baseline, runs EXE --csv FILE
 MESH FRAMES (a hand-written baseline) and compares its final positions with simit's to
-relative tolerance R (|a - b| <= R * max|b| per coordinate).
+relative tolerance R (|a - b| <= R * max|b| per coordinate); each --baseline-arg is passed
+to EXE before its other arguments (e.g. --cg-tol 1e-24).
 """
 import math
 import os
@@ -55,6 +56,11 @@ def main():
         i = args.index("--baseline")
         baseline = (args[i + 1], args[i + 2])
         del args[i:i + 3]
+    baseline_args = []
+    while "--baseline-arg" in args:
+        i = args.index("--baseline-arg")
+        baseline_args.append(args[i + 1])
+        del args[i:i + 2]
     if "--rtol" in args:
         i = args.index("--rtol")
         rtol = float(args[i + 1])
@@ -85,7 +91,7 @@ def main():
     if baseline:
         exe, mesh = baseline
         base_csv = os.path.join(outdir, "baseline.csv")
-        cmd = [exe, "--csv", base_csv, mesh, str(frames)]
+        cmd = [exe] + baseline_args + ["--csv", base_csv, mesh, str(frames)]
         print(" ".join(cmd), flush=True)
         if subprocess.call(cmd) != 0:
             fail("the baseline failed")
