@@ -23,6 +23,15 @@ namespace {
 
 RunResult failed(std::string message) { return {RunResult::Status::Failed, std::move(message)}; }
 
+// A run stopped by a run-time error, with the line the runner checks `%@ error-line` against.
+RunResult runtime_error_result(const interp::RuntimeError& e) {
+  std::string text = e.render();
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  RunResult r{RunResult::Status::RuntimeError, text};
+  r.line = e.line();
+  return r;
+}
+
 bool is_column(const Type& t) {
   return t.kind == Type::Kind::Tensor && t.dims.size() == 1 && !t.row;
 }
@@ -75,11 +84,7 @@ RunResult InterpExecutor::run_test(const ast::Program& program, const ast::TestD
     return failed(interp::literal_text(actual, column) +
                   " != " + interp::literal_text(expected, column));
   } catch (const interp::RuntimeError& e) {
-    std::string text = e.render();
-    if (!text.empty() && text.back() == '\n') text.pop_back();
-    RunResult r{RunResult::Status::RuntimeError, text};
-    r.line = e.line();
-    return r;
+    return runtime_error_result(e);
   } catch (const std::exception& e) {
     return failed(std::string("the interpreter failed: ") + e.what());
   }
@@ -260,11 +265,7 @@ RunResult InterpExecutor::run_graph(const ast::Program& program, const std::vect
     if (options_.out) *options_.out << output.str();
     return {};
   } catch (const interp::RuntimeError& e) {
-    std::string text = e.render();
-    if (!text.empty() && text.back() == '\n') text.pop_back();
-    RunResult r{RunResult::Status::RuntimeError, text};
-    r.line = e.line();
-    return r;
+    return runtime_error_result(e);
   } catch (const std::exception& e) {
     return failed(std::string("the interpreter failed: ") + e.what());
   }
