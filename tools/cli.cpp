@@ -14,6 +14,9 @@
 #include <cstdio>
 #include <iostream>
 #include "test_runner.h"
+#ifdef SIMIT_HAVE_REPL
+#include "terminal.h"
+#endif
 
 #ifndef SIMIT_VERSION
 #define SIMIT_VERSION "unknown"
@@ -28,6 +31,8 @@ struct Commands {
   CLI::App* check = nullptr;
   CLI::App* test = nullptr;
   CLI::App* run = nullptr;
+  CLI::App* repl = nullptr;
+  std::string repl_file;
   CheckOptions check_options;
   std::vector<std::string> test_paths;
   TestOptions test_options;
@@ -101,6 +106,16 @@ void add_run(CLI::App& app, Commands& c) {
       "the run stops with a run-time error, 2 on a usage error.\n");
 }
 
+#ifdef SIMIT_HAVE_REPL
+void add_repl(CLI::App& app, Commands& c) {
+  c.repl = app.add_subcommand("repl", "Start the interactive REPL (also: simit with no command)");
+  c.repl->add_option("FILE", c.repl_file, "A Simit source file (.sim) to load first");
+  c.repl->footer(
+      "On a terminal: line editing, history in ~/.simit_history, tab completion. Otherwise "
+      "reads lines from stdin with no prompt. :help lists the commands.\n");
+}
+#endif
+
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
@@ -123,11 +138,17 @@ bool names_unknown_command(const CLI::App& app, int argc, const char* const* arg
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
   app.set_version_flag("--version", "simit " SIMIT_VERSION);
-  app.require_subcommand(1);
   Commands c;
   add_check(app, c);
   add_test(app, c);
   add_run(app, c);
+#ifdef SIMIT_HAVE_REPL
+  app.require_subcommand(0, 1);
+  add_repl(app, c);
+  app.footer("With no command, simit starts the REPL.\n");
+#else
+  app.require_subcommand(1);
+#endif
   if (names_unknown_command(app, argc, argv))
     return usage_error(app, std::string("unknown command '") + argv[1] + "'", err);
   try {
@@ -138,6 +159,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   } catch (const CLI::ParseError& e) {
     return usage_error(app, e.what(), err);
   }
+#ifdef SIMIT_HAVE_REPL
+  if (c.repl->parsed()) return repl::run_repl(c.repl_file);
+  if (app.get_subcommands().empty()) return repl::run_repl("");
+#endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
   if (c.run->parsed()) {
     if (ends_with(c.run_options.file, ".toml")) {
