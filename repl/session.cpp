@@ -1,81 +1,31 @@
-// The REPL session: see session.h.
+// The REPL session: inputs, their compilation inside a wrapper function, and runs that keep
+// variables and scene data between inputs. See session.h.
 #include "session.h"
 
 #include <algorithm>
-#include <cctype>
+#include <chrono>
 #include <fstream>
 #include <sstream>
 
 #include "frontend/ast.h"
 #include "frontend/types.h"
-#include "interp/interpreter.h"
+#include "input_text.h"
 #include "interp/printing.h"
 #include "interp/runtime_error.h"
 
 namespace simit::repl {
-namespace {
 
 namespace ast = frontend::ast;
 
-const char* const kCommands[] = {"help", "load", "reload", "type", "reset", "quit"};
-
-const char* const kIntrinsics[] = {"abs", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan2",
-                                   "exp", "log", "pow", "norm", "dot", "cross", "det", "inv",
-                                   "solve", "trace", "print", "println"};
-
-std::string trim(const std::string& s) {
-  size_t b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  size_t e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
+Session::Session(std::ostream& out, std::ostream& err)
+    : out_(out),
+      err_(err),
+      debugger_(out, err, [this](const std::string& prompt) -> std::optional<std::string> {
+        if (!line_source_) return std::nullopt;
+        return line_source_(prompt);
+      }) {
+  refresh_program();
 }
-
-// The words of `text` outside comments and strings, and the bracket depth at its end.
-std::vector<std::string> words(const std::string& text, int& brackets) {
-  std::vector<std::string> out;
-  brackets = 0;
-  for (size_t i = 0; i < text.size();) {
-    char c = text[i];
-    if (c == '%') {
-      while (i < text.size() && text[i] != '\n') ++i;
-    } else if (c == '"') {
-      ++i;
-      while (i < text.size() && text[i] != '"') i += text[i] == '\\' ? 2 : 1;
-      ++i;
-    } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
-      size_t b = i;
-      while (i < text.size() && (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_'))
-        ++i;
-      out.push_back(text.substr(b, i - b));
-    } else {
-      if (c == '(' || c == '[' || c == '{') ++brackets;
-      if (c == ')' || c == ']' || c == '}') --brackets;
-      ++i;
-    }
-  }
-  return out;
-}
-
-std::string first_word(const std::string& text) {
-  int b = 0;
-  std::vector<std::string> w = words(text, b);
-  return w.empty() ? "" : w[0];
-}
-
-const char* kHelp =
-    "Enter declarations (element, extern, func, const) or statements; an expression without a\n"
-    "trailing ';' prints its value and type. Variables assigned at the prompt persist.\n"
-    "Commands (unambiguous prefixes work):\n"
-    "  :help [topic]   this text, or help on a command\n"
-    "  :load FILE.sim  add the declarations of a file\n"
-    "  :reload         read the loaded files again\n"
-    "  :type EXPR      the type of an expression\n"
-    "  :reset          forget every declaration and variable\n"
-    "  :quit           leave (Ctrl-D too)\n";
-
-}  // namespace
-
-Session::Session(std::ostream& out, std::ostream& err) : out_(out), err_(err) {}
 Session::~Session() = default;
 
 bool Session::is_complete(const std::string& text) {
@@ -97,7 +47,8 @@ bool Session::is_complete(const std::string& text) {
 
 bool Session::feed_line(const std::string& line) {
   if (quit_) return false;
-  if (buffer_.empty() && trim(line).empty()) return true;
+  // Blank lines and comments alone are not inputs.
+  if (buffer_.empty() && (trim(line).empty() || trim(line)[0] == '%')) return true;
   if (buffer_.empty() && trim(line)[0] == ':') {
     command(trim(line));
     return !quit_;
@@ -110,33 +61,6 @@ bool Session::feed_line(const std::string& line) {
   handle(input);
   return !quit_;
 }
-
-namespace {
-// True when `text` has an `=` outside brackets and strings that is not part of `==`, `<=`,
-// `>=` or `!=`: the statement form `a = e` or `a, b = f(x)`.
-bool has_top_level_assignment(const std::string& text) {
-  int depth = 0;
-  bool in_string = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    char c = text[i];
-    if (in_string) {
-      if (c == '\\') ++i;
-      else if (c == '"') in_string = false;
-      continue;
-    }
-    if (c == '%') return false;  // the rest is a comment
-    if (c == '"') in_string = true;
-    else if (c == '(' || c == '[') ++depth;
-    else if (c == ')' || c == ']') --depth;
-    else if (c == '=' && depth == 0) {
-      char prev = i > 0 ? text[i - 1] : ' ';
-      char next = i + 1 < text.size() ? text[i + 1] : ' ';
-      if (next != '=' && prev != '=' && prev != '<' && prev != '>' && prev != '!') return true;
-    }
-  }
-  return false;
-}
-}  // namespace
 
 void Session::handle(const std::string& input) {
   static const char* const kDecl[] = {"element", "extern", "func", "export", "const", "proc"};
@@ -171,26 +95,66 @@ std::unique_ptr<frontend::Compilation> Session::compile(const std::string& prefi
   return frontend::compile_source("<repl>", std::move(text));
 }
 
+// Where the lines of a compiled text come from: each loaded file, the declarations typed
+// at the prompt (`<declarations>`), and the current input (`<repl>`). The wrapper around
+// the input has no line of its own: it counts as the input's first line.
+std::vector<LineSegment> Session::segments(const frontend::SourceFile& file, int input_offset) const {
+  auto line_of = [&](size_t offset) { return file.locate(static_cast<uint32_t>(offset)).line; };
+  std::vector<LineSegment> out;
+  size_t begin = 0;
+  for (size_t k = 0; k < file_texts_.size(); ++k) {
+    out.push_back({line_of(begin), files_[k], 1});
+    begin += file_texts_[k].size() + 1;
+  }
+  if (!decls_.empty()) out.push_back({line_of(begin), "<declarations>", 1});
+  if (input_offset >= 0 && static_cast<size_t>(input_offset) <= file.text().size()) {
+    const int first = line_of(input_offset);
+    const int header = line_of(begin + decls_.size());
+    out.push_back({header, "<repl>", 1 - (first - header)});  // shown as line 1
+    out.push_back({first, "<repl>", 1});
+  }
+  return out;
+}
+
+// A place in the compiled text, in the user's terms: `file:line:col`.
+std::string Session::location(const frontend::SourceSpan& span, int input_offset) const {
+  if (!span.valid()) return "";
+  frontend::LineCol lc = span.start();
+  LineMap::Place p = LineMap(segments(*span.file, input_offset)).place(lc.line);
+  return p.file + ":" + std::to_string(std::max(1, p.line)) + ":" + std::to_string(lc.column);
+}
+
 // Diagnostics inside the input are shown with the input's own line numbers.
 void Session::report(const frontend::Compilation& c, int input_offset) {
   const frontend::SourceFile* file = c.source.get();
-  int base = file->locate(static_cast<uint32_t>(input_offset)).line;
   for (const auto& d : c.diagnostics.items()) {
     if (!d.span.valid() || d.span.begin < static_cast<uint32_t>(input_offset)) {
       err_ << frontend::Diagnostics::render(d);
       continue;
     }
-    frontend::Diagnostic copy = d;
     frontend::LineCol lc = d.span.start();
     std::string line(file->line_text(lc.line));
-    err_ << "<repl>:" << (lc.line - base + 1) << ":" << lc.column << ": error: " << d.message
-         << "\n  " << line << "\n  ";
+    err_ << location(d.span, input_offset) << ": error: " << d.message << "\n  " << line << "\n  ";
     for (int i = 0; i + 1 < lc.column && i < static_cast<int>(line.size()); ++i)
       err_ << (line[i] == '\t' ? '\t' : ' ');
     size_t first = static_cast<size_t>(lc.column - 1);
     size_t width = d.span.end > d.span.begin ? d.span.end - d.span.begin : 1;
     width = std::max<size_t>(1, std::min(width, line.size() > first ? line.size() - first : 1));
     err_ << '^' << std::string(width - 1, '~') << "\n";
+  }
+}
+
+void Session::report_runtime(const interp::RuntimeError& e, int input_offset) {
+  std::string where = location(e.where(), input_offset);
+  err_ << (where.empty() ? "" : where + ": ") << "runtime error: " << e.message() << "\n";
+  for (const auto& f : e.stack()) {
+    // The wrapper function around the input is the input itself.
+    err_ << "  in " << (f.func.starts_with("__repl_") ? std::string("<input>") : f.func);
+    if (f.at.valid()) {
+      std::string at = location(f.at, input_offset);
+      err_ << " (" << at.substr(0, at.rfind(':')) << ")";
+    }
+    err_ << "\n";
   }
 }
 
@@ -202,6 +166,7 @@ void Session::declarations(const std::string& input) {
     return;
   }
   decls_ += input;
+  refresh_program();
   names_.clear();
   for (const auto& d : c->program->decls) {
     if (auto* f = dynamic_cast<const ast::FuncDecl*>(d.get())) names_.push_back(f->name);
@@ -209,6 +174,73 @@ void Session::declarations(const std::string& input) {
     if (auto* e = dynamic_cast<const ast::ExternDecl*>(d.get())) names_.push_back(e->name);
     if (auto* e = dynamic_cast<const ast::ConstDecl*>(d.get())) names_.push_back(e->decl->name);
   }
+}
+
+interp::Options Session::run_options() {
+  interp::Options o;
+  o.out = &out_;
+  o.float32 = options_.float32;
+  o.check_finite = options_.check_finite;
+  o.trap = &debugger_.trap();
+  return o;
+}
+
+void Session::refresh_program() {
+  int offset = 0;
+  program_ = compile("", "", "", offset);
+  restore_program();
+}
+
+void Session::restore_program() {
+  if (program_ && program_->ok())
+    debugger_.set_program(program_->program.get(), segments(*program_->source, -1));
+  else
+    debugger_.set_program(nullptr);
+}
+
+bool Session::debug_run(const frontend::Compilation& c, int input_offset,
+                        const std::function<void()>& body) {
+  debugger_.set_program(c.program.get(), segments(*c.source, input_offset));
+  debugger_.begin_run();
+  bool completed = true;
+  try {
+    body();
+  } catch (const interp::Interrupted& e) {
+    completed = false;
+    if (!debugger_.end_run()) {
+      err_ << "interrupted at " << location(e.where(), input_offset)
+           << " (what ran so far stays done)\n";
+    }
+    restore_program();
+    return false;
+  } catch (const interp::RuntimeError& e) {
+    completed = false;
+    if (!debugger_.end_run()) report_runtime(e, input_offset);
+    restore_program();
+    return false;
+  }
+  debugger_.end_run();
+  restore_program();
+  return completed;
+}
+
+// The scene's sets and tensors go to the externs of the same names the program declares.
+void Session::bind_scene(interp::Interpreter& in, const ast::Program& program) {
+  if (!scene_) return;
+  for (const ast::Variable* g : program.globals) {
+    if (g->kind != ast::Variable::Kind::Extern) continue;
+    for (auto& [name, set] : scene_->sets)
+      if (name == g->name) in.bind_set(*g, *set);
+    for (auto& [name, value] : scene_->tensors)
+      if (name == g->name) in.set_global(*g, value);
+  }
+}
+
+void Session::keep_scene_tensors(const interp::Interpreter& in, const ast::Program& program) {
+  if (!scene_) return;
+  for (const ast::Variable* g : program.globals)
+    for (auto& [name, value] : scene_->tensors)
+      if (g->kind == ast::Variable::Kind::Extern && name == g->name) value = in.global(*g);
 }
 
 void Session::statements(const std::string& input, bool expression, bool type_only) {
@@ -258,13 +290,16 @@ void Session::statements(const std::string& input, bool expression, bool type_on
     report(*second, offset);
     return;
   }
-  try {
-    interp::Options options;
-    options.out = &out_;
-    interp::Interpreter in(*second->program, options);
+  std::vector<interp::Value> res;
+  bool ran = debug_run(*second, offset, [&] {
+    interp::Interpreter in(*second->program, run_options());
+    bind_scene(in, *second->program);
     std::vector<interp::Value> args;
     for (const auto& [n, v] : vars_) args.push_back(v.value);
-    std::vector<interp::Value> res = in.call(*second->program->find_func(name), std::move(args));
+    res = in.call(*second->program->find_func(name), std::move(args));
+    keep_scene_tensors(in, *second->program);
+  });
+  if (ran) {
     size_t i = 0;
     for (auto& [n, v] : vars_) v.value = res[i++];
     for (const auto& [n, t] : fresh) {
@@ -276,8 +311,49 @@ void Session::statements(const std::string& input, bool expression, bool type_on
         vars_[n] = Var{t, value};
       }
     }
-  } catch (const interp::RuntimeError& e) {
-    err_ << e.render();
+  }
+}
+
+void Session::run_function(const frontend::Compilation& c, const std::string& name, int times) {
+  const ast::FuncDecl* f = c.program->find_func(name);
+  if (!f) {
+    err_ << ":run: no function '" << name << "'\n";
+    return;
+  }
+  if (!f->params.empty()) {
+    err_ << ":run: '" << name << "' takes parameters; call it in a statement instead\n";
+    return;
+  }
+  using Clock = std::chrono::steady_clock;
+  std::unique_ptr<interp::Interpreter> in;  // one for all runs: it keeps matrix patterns
+  for (int k = 1; k <= times; ++k) {
+    std::vector<interp::Value> res;
+    const auto t0 = Clock::now();
+    bool ran = debug_run(c, -1, [&] {
+      if (!in) {
+        in = std::make_unique<interp::Interpreter>(*c.program, run_options());
+        bind_scene(*in, *c.program);
+      }
+      try {
+        res = in->call(*f, {});
+      } catch (...) {
+        keep_scene_tensors(*in, *c.program);
+        throw;
+      }
+      keep_scene_tensors(*in, *c.program);
+    });
+    if (!ran) {
+      if (times > 1) err_ << ":run: stopped in run " << k << " of " << times << "\n";
+      return;
+    }
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    std::ostringstream line;
+    line.precision(1);
+    if (times > 1) line << "[" << k << "/" << times << "] ";
+    line << name << ": " << std::fixed << ms << " ms" << std::defaultfloat;
+    for (size_t r = 0; r < f->results.size() && r < res.size(); ++r)
+      line << ", " << f->results[r].name << " = " << interp::literal_text(res[r], false);
+    out_ << line.str() << "\n" << std::flush;
   }
 }
 
@@ -296,101 +372,6 @@ bool Session::load(const std::string& path, std::string& text) {
     return false;
   }
   return true;
-}
-
-void Session::command(const std::string& line) {
-  size_t sp = line.find_first_of(" \t");
-  std::string word = line.substr(1, sp == std::string::npos ? std::string::npos : sp - 1);
-  std::string arg = sp == std::string::npos ? "" : trim(line.substr(sp));
-  std::vector<std::string> matches;
-  for (const char* c : kCommands) {
-    if (word == c) {
-      matches = {c};
-      break;
-    }
-    if (!word.empty() && std::string(c).starts_with(word)) matches.push_back(c);
-  }
-  if (matches.empty()) {
-    err_ << "unknown command ':" << word << "' (:help lists the commands)\n";
-    return;
-  }
-  if (matches.size() > 1) {
-    err_ << "ambiguous command ':" << word << "': could be";
-    for (const auto& m : matches) err_ << " :" << m;
-    err_ << "\n";
-    return;
-  }
-  const std::string& cmd = matches[0];
-  if (cmd == "quit") {
-    quit_ = true;
-  } else if (cmd == "help") {
-    if (arg.empty()) {
-      out_ << kHelp;
-    } else {
-      std::string topic = arg[0] == ':' ? arg.substr(1) : arg;
-      std::istringstream lines(kHelp);
-      std::string l;
-      bool found = false;
-      while (std::getline(lines, l))
-        if (l.starts_with("  :" + topic)) out_ << trim(l) << "\n", found = true;
-      if (!found) out_ << "no help on '" << arg << "'\n";
-    }
-  } else if (cmd == "reset") {
-    files_.clear();
-    file_texts_.clear();
-    decls_.clear();
-    vars_.clear();
-    names_.clear();
-  } else if (cmd == "type") {
-    if (arg.empty()) err_ << ":type needs an expression\n";
-    else statements(arg, true, true);
-  } else if (cmd == "load" || cmd == "reload") {
-    std::vector<std::string> files = files_;
-    if (cmd == "load") {
-      if (arg.empty()) {
-        err_ << ":load needs a file name\n";
-        return;
-      }
-      files.push_back(arg);
-    }
-    std::vector<std::string> texts;
-    for (const auto& path : files) {
-      std::string text;
-      if (!load(path, text)) return;
-      texts.push_back(text);
-    }
-    std::swap(files, files_);
-    std::swap(texts, file_texts_);
-    int offset = 0;
-    auto c = compile("", "", "", offset);
-    if (!c->ok()) {
-      err_ << c->diagnostics.render_all();
-      std::swap(files, files_);
-      std::swap(texts, file_texts_);
-      return;
-    }
-    declarations("");  // refreshes the names
-    out_ << (cmd == "load" ? "loaded " + arg : "reloaded " + std::to_string(files_.size()) + " file(s)")
-         << "\n";
-  }
-}
-
-std::vector<std::string> Session::completions(const std::string& prefix) const {
-  std::vector<std::string> out;
-  if (!prefix.empty() && prefix[0] == ':') {
-    for (const char* c : kCommands)
-      if ((":" + std::string(c)).starts_with(prefix)) out.push_back(":" + std::string(c));
-    return out;
-  }
-  auto add = [&](const std::string& n) {
-    if (n.starts_with(prefix) && !n.starts_with("__")) out.push_back(n);
-  };
-  for (const auto& n : names_) add(n);
-  for (const auto& [n, v] : vars_) add(n);
-  for (const char* n : kIntrinsics) add(n);
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
 }
 
 }  // namespace simit::repl

@@ -1,18 +1,31 @@
 // The REPL's state, with no terminal code: accumulated declarations (as source text),
-// variables kept as values between inputs, and the `:` commands. The terminal front end
-// (repl/terminal.h) feeds it lines; tests feed it strings.
+// variables kept as values between inputs, a bound scene, and the `:` commands. The
+// terminal front end (repl/terminal.h) feeds it lines; tests feed it strings.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "debugger.h"
 #include "frontend/frontend.h"
+#include "interp/interpreter.h"
 #include "interp/value.h"
+#include "line_map.h"
+#include "scene_data.h"
 
 namespace simit::repl {
+
+// Settings changed with `:set NAME VALUE`.
+struct SessionOptions {
+  bool float32 = false;       // round every float to binary32 (scenes are reloaded)
+  bool check_finite = false;  // stop at the first NaN or infinity
+  int print_limit = 20;       // elements `:print SET.FIELD` lists before summarising
+};
 
 class Session {
  public:
@@ -28,11 +41,21 @@ class Session {
   bool quit_requested() const { return quit_; }
 
   // Candidates for tab completion of `prefix`: commands (when it starts with ':'),
-  // declared names, persistent variables and intrinsics.
+  // declared names, persistent variables, intrinsics, and `set.field` after a set name.
   std::vector<std::string> completions(const std::string& prefix) const;
 
   // Whether `text` is a complete input: blocks closed by `end`, brackets closed.
   static bool is_complete(const std::string& text);
+
+  // `:scene` reads scene files through the host's loader (the `simit` tool supplies it).
+  void set_scene_loader(SceneLoader loader) { scene_loader_ = std::move(loader); }
+  // Where the debugger reads its commands while a run is stopped (the terminal or stdin);
+  // without one, a stop ends the run.
+  void set_line_source(Debugger::LineSource source) { line_source_ = std::move(source); }
+  // Stops the computation running now at its next statement (async-signal-safe: Ctrl-C).
+  void interrupt() { debugger_.trap().request_interrupt(); }
+  // Drops a multi-line input being typed (Ctrl-C at the prompt).
+  void cancel_pending() { buffer_.clear(); }
 
  private:
   struct Var {
@@ -40,8 +63,8 @@ class Session {
     interp::Value value;
   };
 
+  // session.cpp: inputs, compilation, runs
   void handle(const std::string& input);
-  void command(const std::string& line);
   void declarations(const std::string& input);
   void statements(const std::string& input, bool expression, bool type_only);
   bool load(const std::string& path, std::string& text);
@@ -50,6 +73,38 @@ class Session {
                                                  const std::string& input,
                                                  const std::string& suffix, int& input_offset);
   void report(const frontend::Compilation& c, int input_offset);
+  void report_runtime(const interp::RuntimeError& e, int input_offset);
+  std::string location(const frontend::SourceSpan& span, int input_offset) const;
+  std::vector<LineSegment> segments(const frontend::SourceFile& file, int input_offset) const;
+  interp::Options run_options();
+  // Runs `body` (which runs `c`) under the debugger; reports its run-time error. False when
+  // the run did not complete.
+  bool debug_run(const frontend::Compilation& c, int input_offset, const std::function<void()>& body);
+  // The program alone (files and declarations), for breakpoints set between runs: compiled
+  // again when declarations change, and given back to the debugger after each run.
+  void refresh_program();
+  void restore_program();
+  void bind_scene(interp::Interpreter& in, const frontend::ast::Program& program);
+  void keep_scene_tensors(const interp::Interpreter& in, const frontend::ast::Program& program);
+  // Runs `func` (no parameters) of `c` `times` times; prints its results after each run.
+  void run_function(const frontend::Compilation& c, const std::string& name, int times);
+
+  // commands.cpp: the `:` commands
+  void command(const std::string& line);
+  void help(const std::string& topic);
+  void load_files(const std::string& cmd, const std::string& arg);
+  void scene(const std::string& path);
+  void set_option(const std::string& arg);
+  void time_statement(const std::string& arg);
+  void run_command(const std::string& arg);
+
+  // inspect.cpp: :sets, :fields, :print over the bound scene
+  void list_sets();
+  void list_fields(const std::string& set_name);
+  void print_field(const std::string& arg);
+  const runtime::Set* bound_set(const std::string& name) const;
+  std::string field_type(const std::string& set_name, const runtime::Field& f);
+  std::vector<std::string> set_names() const;
 
   std::ostream& out_;
   std::ostream& err_;
@@ -61,6 +116,12 @@ class Session {
   std::vector<std::string> names_;     // declared names (for completion)
   bool quit_ = false;
   int counter_ = 0;
+  SessionOptions options_;
+  SceneLoader scene_loader_;
+  std::optional<SceneData> scene_;
+  Debugger::LineSource line_source_;
+  Debugger debugger_;
+  std::unique_ptr<frontend::Compilation> program_;  // see refresh_program
 };
 
 }  // namespace simit::repl

@@ -4,11 +4,12 @@ SIMIT_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 # Installs missing Debian packages: directly as root, through sudo otherwise. When
 # everything is present install_deps.sh succeeds without root and sudo is not needed.
+# Arguments go to install_deps.sh (--tests: also the test-only packages).
 ensure_deps() {
   if [ "$(id -u)" -eq 0 ]; then
-    "$SIMIT_ROOT/scripts/install_deps.sh"
-  elif ! "$SIMIT_ROOT/scripts/install_deps.sh" 2>/dev/null; then
-    sudo "$SIMIT_ROOT/scripts/install_deps.sh"
+    "$SIMIT_ROOT/scripts/install_deps.sh" "$@"
+  elif ! "$SIMIT_ROOT/scripts/install_deps.sh" "$@" 2>/dev/null; then
+    sudo "$SIMIT_ROOT/scripts/install_deps.sh" "$@"
   fi
 }
 

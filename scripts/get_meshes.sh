@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# Makes the larger dragon meshes of the fem example by refining dragon40k with TetGen
-# (Debian package `tetgen`); dragon40k itself comes from the original Simit project's
-# apps/data folder (dragon40k.node and dragon40k.ele, MIT license).
+# Makes larger dragon meshes of the fem example by refining dragon40k with TetGen (Debian
+# package `tetgen`); dragon40k itself comes from the original Simit project's apps/data
+# folder (dragon40k.node and dragon40k.ele, MIT license) and ships in examples/data, as does
+# dragon160k (made with `dragon160k 4.85e-4`).
 # Usage: scripts/get_meshes.sh INDIR [OUTDIR] [NAME MAXVOL]...
-#   INDIR holds dragon40k.node and dragon40k.ele; OUTDIR defaults to examples/data.
-# Without NAME/MAXVOL pairs it makes dragon160k (~160.6k tets, the size of the dragon in the
-# Simit paper) and dragon1m (~994k tets, about 45 MB).
+#   INDIR holds dragon40k.node and dragon40k.ele (examples/data does); OUTDIR defaults to
+#   examples/data.
+# Without NAME/MAXVOL pairs it makes dragon1m (~994k tets, about 45 MB, not stored).
 #   -r refine an existing mesh, -z number from 0, -q quality bound,
 #   -Y keep the boundary (TetGen 1.5.0 aborts on this mesh without it),
 #   -a maximum tet volume, -Q quiet.
@@ -20,7 +21,7 @@ for f in dragon40k.node dragon40k.ele; do
   [ -f "$in/$f" ] || { echo "$in/$f is missing" >&2; exit 1; }
 done
 command -v tetgen >/dev/null || { echo "tetgen is missing: apt-get install -y tetgen" >&2; exit 1; }
-[ $# -gt 0 ] || set -- dragon160k 4.85e-4 dragon1m 5.8e-5
+[ $# -gt 0 ] || set -- dragon1m 5.8e-5
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 cp "$in/dragon40k.node" "$in/dragon40k.ele" "$work/"
 while [ $# -ge 2 ]; do

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs every build and test dependency of Simit from Debian packages (run as root; idempotent).
+# With --tests also the packages only the tests use (scripts/test.sh passes it).
 set -euo pipefail
 
 packages=(
@@ -8,6 +9,11 @@ packages=(
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
   libpng-dev libtinyobjloader-dev llvm-19-dev clang libclang-rt-14-dev tmux python3
 )
+# Test-only: VTK's Python reader, which the scene tests open the .vtu frames with.
+test_packages=(python3-vtk9)
+if [ "${1:-}" = "--tests" ]; then
+  packages+=("${test_packages[@]}")
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "check_command.h"
+#include "debug_command.h"
 #include "interp_executor.h"
 #include "run_command.h"
 #include "scene_command.h"
@@ -33,6 +34,8 @@ struct Commands {
   CLI::App* run = nullptr;
   CLI::App* repl = nullptr;
   std::string repl_file;
+  CLI::App* debug = nullptr;
+  DebugOptions debug_options;
   CheckOptions check_options;
   std::vector<std::string> test_paths;
   TestOptions test_options;
@@ -95,6 +98,9 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
   c.run->add_option("--final-csv", so.final_csv,
                     "Scenes: write the last frame's positions to this CSV file (x,y,z lines)");
+  c.run->add_option("--png", so.png,
+                    "Scenes: write a quick-look picture of the last frame to this PNG file "
+                    "(instead of [output] png)");
   c.run->footer(
       "A .toml FILE is a scene (see README.md, 'Scenes'): its sets are built from mesh files, "
       "its init procedure runs once and its step procedure once per frame, and the output is a "
@@ -109,10 +115,32 @@ void add_run(CLI::App& app, Commands& c) {
 #ifdef SIMIT_HAVE_REPL
 void add_repl(CLI::App& app, Commands& c) {
   c.repl = app.add_subcommand("repl", "Start the interactive REPL (also: simit with no command)");
-  c.repl->add_option("FILE", c.repl_file, "A Simit source file (.sim) to load first");
+  c.repl->add_option("FILE", c.repl_file,
+                     "A Simit source file (.sim) to load, or a scene (.toml) to bind, first");
   c.repl->footer(
-      "On a terminal: line editing, history in ~/.simit_history, tab completion. Otherwise "
-      "reads lines from stdin with no prompt. :help lists the commands.\n");
+      "On a terminal: line editing, history in ~/.simit_history, tab completion of commands, "
+      "names and set.field. Otherwise reads lines from stdin with no prompt. Ctrl-C stops a "
+      "running computation; Ctrl-D or :quit leaves. :help lists the commands.\n");
+}
+
+void add_debug(CLI::App& app, Commands& c) {
+  DebugOptions& o = c.debug_options;
+  c.debug = app.add_subcommand("debug", "Step-debug a scene (FILE.toml) or a Simit program (FILE.sim)");
+  c.debug->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
+  c.debug->add_flag("--echo", o.echo,
+                    "Print each command read after the prompt (for transcripts; without a terminal "
+                    "no prompt is shown otherwise)");
+  c.debug->add_flag("--float32", o.float32, "Run with 32-bit floats");
+  c.debug->footer(
+      "Reads gdb-style commands from stdin ('help' lists them): break FILE:LINE | LINE | FUNC "
+      "[if COND], tbreak, break on nan, watch SET.FIELD[i], delete, info breakpoints|locals|"
+      "display, run, continue, next, step, finish, kill, print, display, undisplay, backtrace, "
+      "up, down, frame, list, quit. In a condition an element compared with an int compares its "
+      "index: break tet_force if t == 17.\n"
+      "A scene runs with 'run [FRAMES]' (its init, then FRAMES frames, default the scene's), "
+      "writing no output files; a .sim file with 'run FUNC ARGS...' (an exported function, "
+      "literal arguments as for simit run --call). Ctrl-C stops a run at its next statement.\n"
+      "Exit status: 0, or 1 when the program does not compile.\n");
 }
 #endif
 
@@ -145,6 +173,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 #ifdef SIMIT_HAVE_REPL
   app.require_subcommand(0, 1);
   add_repl(app, c);
+  add_debug(app, c);
   app.footer("With no command, simit starts the REPL.\n");
 #else
   app.require_subcommand(1);
@@ -160,8 +189,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     return usage_error(app, e.what(), err);
   }
 #ifdef SIMIT_HAVE_REPL
-  if (c.repl->parsed()) return repl::run_repl(c.repl_file);
-  if (app.get_subcommands().empty()) return repl::run_repl("");
+  if (c.debug->parsed()) return run_debug(c.debug_options, std::cin, out, err);
+  if (c.repl->parsed()) return repl::run_repl(c.repl_file, load_scene_data);
+  if (app.get_subcommands().empty()) return repl::run_repl("", load_scene_data);
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
   if (c.run->parsed()) {

@@ -71,6 +71,7 @@ int run_function(const RunOptions& options, std::ostream& out, std::ostream& err
   run_options.float32 = options.float32;
   run_options.check_finite = options.check_finite;
   run_options.out = &out;
+  run_options.trap = options.trap;
   try {
     interp::Interpreter interpreter(*c->program, run_options);
     std::vector<interp::Value> results = interpreter.call(*f, std::move(args));

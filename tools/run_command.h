@@ -6,6 +6,10 @@
 #include <string>
 #include <vector>
 
+namespace simit::interp {
+class Trap;
+}
+
 namespace simit::tools {
 
 struct RunOptions {
@@ -14,6 +18,7 @@ struct RunOptions {
   std::vector<std::string> args;  // one literal per parameter, e.g. `2.5`, `[1.0, 2.0]'`
   bool float32 = false;
   bool check_finite = false;
+  interp::Trap* trap = nullptr;  // simit debug: the interpreter's trap point switch
 };
 
 // Prints what the program prints, then one `name = literal` line per result, to `out`.

@@ -21,12 +21,15 @@
 #include <toml++/toml.h>  // Debian names the header toml.h (upstream also ships toml.hpp)
 
 #include "api/binding_check.h"
+#include "api/tensor_values.h"
 #include "frontend/ast.h"
 #include "frontend/frontend.h"
 #include "frontend/types.h"
+#include "runtime/mesh/atomic_file.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/pvd_writer.h"
+#include "runtime/mesh/quicklook.h"
 #include "runtime/mesh/topology.h"
 #include "scene_expr.h"
 #include "simit/simit.h"
@@ -84,6 +87,11 @@ class Scene {
  public:
   explicit Scene(const SceneOptions& options) : options_(options) {}
   int run(std::ostream& out, std::ostream& err);
+#ifdef SIMIT_HAVE_REPL
+  // Reads and builds the scene without output or frames (the REPL's :scene); `owner` keeps
+  // this scene alive for as long as the REPL holds its sets.
+  std::optional<repl::SceneData> session_data(std::shared_ptr<void> owner, std::ostream& err);
+#endif
 
  private:
   [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
@@ -112,6 +120,8 @@ class Scene {
   void fill_field(SceneSet& s, const ast::FieldDecl& decl, const toml::node& value,
                   const std::string& key);
   void check_output();
+  void check_png(const toml::table* output);
+  void open_output();
   void bind(simit::Function& f, const std::string& what);
   void write_frame(int frame);
   void write_final_csv();
@@ -130,6 +140,7 @@ class Scene {
   std::map<std::string, std::unique_ptr<SceneTensor>> tensors_;
   // output
   std::string out_folder_, out_name_, csv_path_;
+  std::string png_path_;  // the quick-look picture of the last frame, when asked for
   SceneSet* points_ = nullptr;
   SceneSet* cells_ = nullptr;
   std::string position_field_;
@@ -202,7 +213,7 @@ void Scene::load() {
   load_program();
   load_tensors();
   build_sets();
-  check_output();
+  if (!options_.load_only && !options_.quiet) check_output();
 }
 
 void Scene::load_program() {
@@ -609,12 +620,14 @@ void Scene::fill_field(SceneSet& s, const ast::FieldDecl& decl, const toml::node
 
 void Scene::check_output() {
   const toml::node* node = doc_.get("output");
+  if (!node && !options_.png.empty())
+    fail(nullptr, "--png needs an [output] table (its points are what the picture shows)");
   if (!node) return;  // no output: run the frames only
   const toml::table* t = node->as_table();
   if (!t) fail(node, "output: expected a table");
   const std::string tname = "[output]";
   check_keys(*t, tname, {"folder", "name", "points", "position", "cells", "point_fields",
-                         "cell_fields", "every", "csv"});
+                         "cell_fields", "every", "csv", "png"});
   out_folder_ = options_.output_dir.empty() ? required_string(*t, tname, "folder") : options_.output_dir;
   out_name_ = required_string(*t, tname, "name");
   std::string points = required_string(*t, tname, "points");
@@ -666,10 +679,45 @@ void Scene::check_output() {
     every_ = static_cast<int>(*n->value<int64_t>());
   }
   if (auto csv = optional_string(*t, tname, "csv")) csv_path_ = (fs::path(out_folder_) / *csv).string();
+  check_png(t);
+}
+
+// [output] png (relative to the output folder) or --png (relative to the current folder): a
+// .png name in the output folder or in a folder that exists.
+void Scene::check_png(const toml::table* t) {
+  const std::optional<std::string> key_value = optional_string(*t, "[output]", "png");
+  const bool cli = !options_.png.empty();
+  const toml::node* at = cli ? nullptr : t->get("png");
+  const std::string key = cli ? "--png" : "[output] png";
+  if (cli) png_path_ = options_.png;
+  else if (key_value) png_path_ = (fs::path(out_folder_) / *key_value).string();
+  else return;
+  const fs::path path(png_path_);
+  if (path.extension() != ".png") fail(at, key + ": '" + png_path_ + "' is not a .png file name");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) fail(at, key + ": '" + png_path_ + "' is a folder");
+  const fs::path folder = (path.parent_path().empty() ? fs::path(".") : path.parent_path());
+  const fs::path out = (fs::path(out_folder_) / "x").parent_path();
+  if (folder.lexically_normal() != out.lexically_normal() && !fs::is_directory(folder, ec))
+    fail(at, key + ": the folder '" + folder.string() + "' does not exist");
+}
+
+// Creates the output folder once everything is checked (so a scene error leaves nothing
+// behind), then makes sure the quick-look picture can be written there before any frame runs.
+void Scene::open_output() {
+  if (!points_) return;
+  const toml::table& t = *doc_["output"].as_table();
   std::error_code ec;
   fs::create_directories(out_folder_, ec);
-  if (ec) fail(t->get("folder"), tname + " folder: cannot create '" + out_folder_ + "': " + ec.message());
+  if (ec) fail(t.get("folder"), "[output] folder: cannot create '" + out_folder_ + "': " + ec.message());
   pvd_ = std::make_unique<runtime::PvdWriter>((fs::path(out_folder_) / (out_name_ + ".pvd")).string());
+  if (png_path_.empty()) return;
+  try {
+    runtime::AtomicFile probe(png_path_);  // removed again: only a test that the folder takes it
+  } catch (const runtime::MeshError& e) {
+    fail(options_.png.empty() ? t.get("png") : nullptr,
+         std::string(options_.png.empty() ? "[output] png" : "--png") + ": cannot write: " + e.what());
+  }
 }
 
 void Scene::bind(simit::Function& f, const std::string& what) {
@@ -759,6 +807,9 @@ void Scene::write_frame(int frame) {
   if (cells_)
     for (const std::string& f : cell_fields_) cell_data.push_back(store.add(cells_->set->runtime(), f));
   pvd_->write_frame(frame * frame_time_, m, point_data, cell_data);
+  std::string png_error;
+  if (frame == frames_ && !png_path_.empty() && !runtime::write_quicklook(m, png_path_, png_error))
+    throw SceneError(options_.file + ": error: writing the quick-look picture: " + png_error);
 }
 
 void Scene::write_final_csv() {
@@ -793,6 +844,7 @@ int Scene::run(std::ostream& out, std::ostream& err) {
     popts.float_size = options_.float32 ? 4 : 8;
     popts.check_finite = options_.check_finite;
     popts.out = &out;
+    popts.trap = options_.trap;
     simit::Program program(popts);
     program.load_file(program_path_);
     simit::Function init_fn;
@@ -802,6 +854,7 @@ int Scene::run(std::ostream& out, std::ostream& err) {
     }
     simit::Function step_fn = program.compile(step_name_);
     bind(step_fn, "step");
+    open_output();
     std::ofstream csv;
     if (!csv_path_.empty()) {
       csv.open(csv_path_);
@@ -809,6 +862,9 @@ int Scene::run(std::ostream& out, std::ostream& err) {
       csv.precision(17);
       csv << "frame,time,ms";
       for (const std::string& s : stat_names_) csv << ',' << s;
+      // Last, so the columns before them keep their places: the frame's time in outermost
+      // map/apply assemblies, and the rest of it (mostly the CG solve).
+      csv << ",assembly_ms,solve_ms";
       csv << '\n';
     }
     std::string sizes;
@@ -822,8 +878,10 @@ int Scene::run(std::ostream& out, std::ostream& err) {
     double total_ms = 0.0;
     for (int frame = 1; frame <= frames_; ++frame) {
       const auto t0 = Clock::now();
+      step_fn.reset_stats();
       step_fn.run();
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      const double assembly_ms = std::min(ms, 1e3 * step_fn.stats().assembly_seconds);
       total_ms += ms;
       std::vector<double> stats;
       for (const std::string& s : stat_names_) {
@@ -839,8 +897,10 @@ int Scene::run(std::ostream& out, std::ostream& err) {
       if (csv.is_open()) {
         csv << frame << ',' << frame * frame_time_ << ',' << ms;
         for (double s : stats) csv << ',' << s;
+        csv << ',' << assembly_ms << ',' << ms - assembly_ms;
         csv << '\n' << std::flush;
       }
+      if (options_.quiet) continue;
       const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
       const double eta = elapsed / frame * (frames_ - frame);
       char line[160];
@@ -862,6 +922,7 @@ int Scene::run(std::ostream& out, std::ostream& err) {
     char summary[160];
     std::snprintf(summary, sizeof summary, "%d frames, %.1f ms/frame", frames_,
                   frames_ ? total_ms / frames_ : 0.0);
+    if (options_.quiet) std::snprintf(summary, sizeof summary, "%d frames", frames_);
     out << summary;
     if (pvd_) out << "; wrote " << pvd_->path();
     out << "\n";
@@ -893,7 +954,51 @@ int Scene::run(std::ostream& out, std::ostream& err) {
   return 0;
 }
 
+#ifdef SIMIT_HAVE_REPL
+std::optional<repl::SceneData> Scene::session_data(std::shared_ptr<void> owner, std::ostream& err) {
+  try {
+    load();
+  } catch (const SceneError& e) {
+    err << e.what() << "\n";
+    return std::nullopt;
+  } catch (const std::exception& e) {
+    err << options_.file << ": error: " << e.what() << "\n";
+    return std::nullopt;
+  }
+  repl::SceneData d;
+  d.path = options_.file;
+  d.program_path = program_path_;
+  d.init = init_name_;
+  d.step = step_name_;
+  for (const auto& s : sets_) d.sets.emplace_back(s->name, &s->set->runtime());
+  for (const ast::Variable* g : compilation_->program->globals) {
+    auto t = tensors_.find(g->name);
+    if (g->kind == ast::Variable::Kind::Extern && t != tensors_.end())
+      d.tensors.emplace_back(g->name, api::to_value(t->second->slot, *g->type));
+  }
+  d.owner = std::move(owner);
+  return d;
+}
+#endif
+
 }  // namespace
+
+#ifdef SIMIT_HAVE_REPL
+std::optional<repl::SceneData> load_scene_data(const std::string& path, bool float32,
+                                               std::ostream& err) {
+  struct Holder {
+    SceneOptions options;
+    std::unique_ptr<Scene> scene;
+  };
+  auto holder = std::make_shared<Holder>();
+  holder->options.file = path;
+  holder->options.float32 = float32;
+  holder->options.load_only = true;
+  holder->scene = std::make_unique<Scene>(holder->options);
+  Scene& scene = *holder->scene;
+  return scene.session_data(std::move(holder), err);
+}
+#endif
 
 int run_scene(const SceneOptions& options, std::ostream& out, std::ostream& err) {
   Scene scene(options);

@@ -19,6 +19,9 @@ namespace simit {
 namespace api {
 struct LoadedProgram;
 }
+namespace interp {
+class Trap;
+}
 
 // Settings of one Program and the Functions compiled from it (there is no process-wide
 // configuration).
@@ -34,6 +37,9 @@ struct Options {
   bool check_finite = false;
   // Where `print` writes; null means standard output.
   std::ostream* out = nullptr;
+  // The interpreter's statement trap point switch (interp/hook.h), for a host that debugs
+  // or interrupts runs (Ctrl-C); null when unused.
+  interp::Trap* trap = nullptr;
 };
 
 // Options from the original's `init(backend, floatSize)` spelling ("cpu", "interpreter",
@@ -106,6 +112,13 @@ class SystemMatrixView {
 
 class Program;
 
+// Where a Function's runs spent their time, accumulated over runs (Function::stats()).
+struct RunStats {
+  int64_t runs = 0;
+  double assembly_seconds = 0.0;  // wall time in outermost `map`/`apply` assemblies
+  int64_t assemblies = 0;         // outermost maps and applies run
+};
+
 // One compiled function and its bindings. Bind every extern it uses (and its parameters),
 // call init() once, then run() per step; sets are read and written in place.
 class Function {
@@ -145,6 +158,11 @@ class Function {
   // as one component), or a system matrix.
   runtime::Tensor result(const std::string& name) const;
   SystemMatrixView matrix(const std::string& name) const;
+
+  // Time accounting of the runs since compile() or reset_stats() (cheap, always on): the rest
+  // of a run's wall time is everything outside assembly (solves, vector algebra, control).
+  RunStats stats() const;
+  void reset_stats();
 
   // The spellings of the original API: on this in-process backend running is always safe
   // and there is nothing to map (API.md §8.7).

@@ -3,6 +3,7 @@
 #include <map>
 
 #include "binding_check.h"
+#include "tensor_values.h"
 #include "interp/interpreter.h"
 #include "loaded_program.h"
 #include "runtime/fault.h"
@@ -55,6 +56,10 @@ runtime::Complex complex_component(const TensorSlot& s, size_t i) {
                   : static_cast<const runtime::Complex*>(s.data)[i];
 }
 
+}  // namespace
+
+namespace api {
+
 // The host tensor's value as an interpreter value of type `t` (already checked to match).
 Value to_value(const TensorSlot& s, const Type& t) {
   if (t.kind == Type::Kind::Scalar) {
@@ -105,7 +110,10 @@ void from_value(const Value& v, const TensorSlot& s) {
   }
 }
 
-}  // namespace
+}  // namespace api
+
+using api::from_value;
+using api::to_value;
 
 struct Function::Impl {
   std::shared_ptr<const api::LoadedProgram> loaded;
@@ -116,6 +124,7 @@ struct Function::Impl {
   std::unique_ptr<interp::Interpreter> interpreter;
   std::vector<std::pair<const runtime::Set*, uint64_t>> topology;  // at init
   std::vector<Value> results;
+  RunStats stats;
 
   Slot& slot(const std::string& name) {
     auto it = slots.find(name);
@@ -243,6 +252,7 @@ void Function::Impl::init() {
   io.float32 = options.float_size == 4;
   io.check_finite = options.check_finite;
   io.out = options.out;
+  io.trap = options.trap;
   interpreter = std::make_unique<interp::Interpreter>(loaded->program(), io);
   topology.clear();
   try {
@@ -269,13 +279,23 @@ void Function::Impl::run() {
     if (s.role == Slot::Role::Extern) interpreter->set_global(*s.var, to_value(*s.tensor, *s.var->type));
     if (s.role == Slot::Role::Param) args[s.index] = to_value(*s.tensor, *s.var->type);
   }
+  interpreter->reset_stats();
+  // Counted on the way out too, so that a failed run's time is not lost.
+  auto account = [&] {
+    ++stats.runs;
+    stats.assembly_seconds += interpreter->stats().assembly_seconds;
+    stats.assemblies += interpreter->stats().maps;
+  };
   try {
     results = interpreter->call(*func, std::move(args));
   } catch (const interp::RuntimeError& e) {
+    account();
     throw RuntimeError(e.render(), e.line());
   } catch (const runtime::Fault& e) {
+    account();
     throw RuntimeError(std::string("runtime error: ") + e.what(), 0);
   }
+  account();
   for (const auto& [n, s] : slots) {
     if (!s.tensor) continue;
     if (s.role == Slot::Role::Extern) from_value(interpreter->global(*s.var), *s.tensor);
@@ -294,6 +314,9 @@ runtime::Tensor Function::result(const std::string& name) const {
   if (!v.is_scalar() && !v.is_tensor()) throw Error("result '" + name + "' is not a tensor");
   return v.to_tensor();
 }
+
+RunStats Function::stats() const { return impl().stats; }
+void Function::reset_stats() { impl().stats = RunStats{}; }
 
 SystemMatrixView Function::matrix(const std::string& name) const {
   Impl& im = impl();

@@ -249,6 +249,8 @@ TypeRef Checker::check_compare(ast::Compare& c) {
   std::vector<TypeRef> types;
   for (auto& o : c.operands) {
     TypeRef t = o ? check_value(*o, "an operand") : nullptr;
+    // Debugger conditions such as `t == 17` name an element by its index.
+    if (t && debug_expr_ && t->kind == Type::Kind::Element) t = make_scalar(ScalarKind::Int);
     if (!t || !operands_ok(c, {t.get()})) return nullptr;
     types.push_back(t);
   }

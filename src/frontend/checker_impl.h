@@ -76,6 +76,10 @@ class Checker {
  public:
   Checker(ast::Program& program, Diagnostics& diags) : program_(program), diags_(&diags) {}
   void run();
+  // checker_debug.cpp: a debugger expression in the scope of `func` (may be null) with
+  // `locals` visible, outermost first (frontend/debug_expr.h).
+  TypeRef check_debug_expr(ast::Expr& e, const ast::FuncDecl* func,
+                           const std::vector<const ast::Variable*>& locals);
 
  private:
   // checker.cpp: program elements
@@ -186,6 +190,8 @@ class Checker {
   std::unordered_set<std::string> undeclared_;  // "<what> <name>" already reported
   ast::FuncDecl* func_ = nullptr;               // the function whose header or body is checked
   FuncInfo* info_ = nullptr;
+
+  bool debug_expr_ = false;  // a debugger expression: an element compares as its index
 
   // Index notation of the assignment being checked.
   bool in_index_ = false;  // division banned, `*` multiplies components

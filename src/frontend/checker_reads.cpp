@@ -82,6 +82,8 @@ bool Checker::check_set_index(ast::TensorRead& r, ast::Expr& index, const Type& 
           "expected an integral index but got an index of type " + quoted(t));
     return false;
   }
+  // A debugger expression may name an element by its index: `print verts.x(3)`.
+  if (debug_expr_ && is_int(t)) return true;
   std::string set_desc = dim.kind == IndexSet::Kind::Set
                              ? "an element of set '" + index_set_name(dim) + "'"
                              : "an element of '" + index_set_name(dim) + "'";

@@ -37,6 +37,7 @@ class Parser {
  public:
   Parser(const std::vector<Token>& tokens, Diagnostics& diags);
   std::unique_ptr<ast::Program> run();
+  ast::ExprPtr run_expression(const std::vector<ExprName>& names);  // parser_debug.cpp
 
  private:
   friend class DepthGuard;

@@ -1,11 +1,33 @@
 // `map` and `apply` (LANGUAGE.md §8.5-8.7): the mapped function runs once per element with
 // its result variables bound to the global results, which start at zero; assembly writes
 // land in place through the precomputed block positions of the pattern.
+#include <chrono>
+
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/map_context.h"
 
 namespace simit::interp {
+
+// Times the outermost running map or apply into Interpreter::stats(); inner ones only nest.
+class Interpreter::AssemblyTimer {
+ public:
+  explicit AssemblyTimer(Interpreter& in) : in_(in) {
+    if (in_.assembly_depth_++ == 0) start_ = std::chrono::steady_clock::now();
+  }
+  ~AssemblyTimer() {
+    if (--in_.assembly_depth_ != 0) return;
+    in_.stats_.assembly_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    ++in_.stats_.maps;
+  }
+  AssemblyTimer(const AssemblyTimer&) = delete;
+  AssemblyTimer& operator=(const AssemblyTimer&) = delete;
+
+ private:
+  Interpreter& in_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 namespace ast = frontend::ast;
 using frontend::IndexSet;
@@ -22,6 +44,7 @@ bool is_system_matrix_type(const Type& t) {
 }  // namespace
 
 std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
+  AssemblyTimer timer(*this);
   MapContext ctx;
   ctx.reduce = m.reduce;
   run_assembly(m.assembly, m.through_set, &ctx, m.span);
@@ -33,6 +56,7 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
 }
 
 void Interpreter::exec_apply(const ast::Apply& a) {
+  AssemblyTimer timer(*this);
   MapContext ctx;
   run_assembly(a.assembly, nullptr, &ctx, a.span);
 }
@@ -41,6 +65,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
                                MapContext* ctx, const SourceSpan& at) {
   if (!a.callee || !a.target_set) fail(at, "map of an unresolved function or set");
   const ast::FuncDecl& f = *a.callee;
+  ctx->assembly = &a;
+  ctx->at = at;
   ctx->target = var(*a.target_set).binding();
   if (!ctx->target) fail(at, "set '" + a.target_set->name + "' has no value (the host did not bind it)");
   if (through) {
@@ -65,6 +91,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
     Frame& callee = *frames_[depth_ + 1];
     callee.func = &f;
     callee.call_site = at;
+    callee.map = ctx;
+    callee.activation = ++activations_;
     const size_t n = static_cast<size_t>(f.frame_size);
     if (callee.slots.size() < n) {
       callee.slots.resize(n);

@@ -89,6 +89,8 @@ Interpreter::Frame& Interpreter::enter(const ast::FuncDecl& f, size_t arg_base, 
   Frame& callee = *frames_[depth_ + 1];
   callee.func = &f;
   callee.call_site = c ? c->span : SourceSpan{};
+  callee.map = nullptr;
+  callee.activation = ++activations_;
   const size_t n = static_cast<size_t>(f.frame_size);
   if (callee.slots.size() < n) {
     callee.slots.resize(n);

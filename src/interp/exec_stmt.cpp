@@ -16,10 +16,23 @@ void Interpreter::exec_block(const ast::Block& b) {
 }
 
 void Interpreter::exec(const ast::Stmt& s) {
-  // The one trap point of the evaluation loop.
-  if (options_.hook) [[unlikely]]
-    options_.hook->before_statement(s, *frame().func, depth_ - 1, *this);
+#if SIMIT_STATEMENT_HOOK
+  // The one trap point of the evaluation loop: one load and one branch when nothing is armed.
+  if (trap_->armed()) [[unlikely]]
+    return exec_trapped(s);
+#endif
   exec_node(s);
+}
+
+// Out of line so that exec() stays small enough to inline into the block loop.
+[[gnu::noinline]] void Interpreter::exec_trapped(const ast::Stmt& s) {
+  if (trap_->take_interrupt()) throw Interrupted(s.span, "interrupted");
+  const ast::FuncDecl& func = *frame().func;
+  const int depth = depth_ - 1;
+  if (StatementHook* h = trap_->hook()) h->before_statement(s, func, depth, *this);
+  exec_node(s);
+  // Read again: the hook may have removed itself, or been installed, meanwhile.
+  if (StatementHook* h = trap_->hook()) h->after_statement(s, func, depth, *this);
 }
 
 void Interpreter::exec_node(const ast::Stmt& s) {

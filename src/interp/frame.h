@@ -16,6 +16,8 @@ struct Interpreter::Frame {
   // parameter passed by reference.
   std::vector<Value*> refs;
   frontend::SourceSpan call_site;  // the call that created this activation
+  MapContext* map = nullptr;       // the map or apply this activation serves, if any
+  uint64_t activation = 0;         // numbers activations (the debugger tells them apart)
 };
 
 // An inout argument: a whole variable is passed by reference (the callee's slot points at

@@ -31,6 +31,10 @@ ComponentKind component_of(ScalarKind k) {
 Interpreter::Interpreter(const ast::Program& program, Options options)
     : program_(program), options_(options) {
   post_process_ = options_.float32 || options_.check_finite;
+  if (options_.trap)
+    trap_ = options_.trap;
+  else if (options_.hook)
+    own_trap_.install(options_.hook);
   globals_.resize(program.globals.size());
   frames_.push_back(std::make_unique<Frame>());
   plan_hoisting();

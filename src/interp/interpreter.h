@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "frontend/ast.h"
+#include "interp/hook.h"
+#include "interp/inspect.h"
 #include "interp/options.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
@@ -65,6 +67,30 @@ class Interpreter {
   const Value* local(const frontend::ast::Variable& var) const;
 
   const Options& options() const { return options_; }
+
+  // ---- Inspection of a paused run, for hooks (the step debugger). Level 0 is the innermost
+  // active call (gdb's numbering); frame_count() is 0 when nothing runs. See interp/inspect.h.
+  const frontend::ast::Program& program() const { return program_; }
+  int frame_count() const { return depth_; }
+  FrameView frame_view(int level) const;
+  // The value of `var` in frame `level`: a parameter, result or local of that frame's
+  // function, or a global. Null when it has no value (yet).
+  const Value* frame_value(int level, const frontend::ast::Variable& var) const;
+  // Evaluates a checked debugger expression (frontend/debug_expr.h) in frame `level`
+  // without disturbing the paused run: it runs no statement and writes nothing, and the
+  // check-finite option is off (a NaN is a value to look at). Calls of user functions and
+  // maps are refused. Throws RuntimeError.
+  Value evaluate(const frontend::ast::Expr& expr, int level) const;
+
+  // Wall time spent in outermost `map`/`apply` assemblies (entry to exit, so including the
+  // mapped functions and the pattern lookups; nested maps count once, in their outer one).
+  // Two clock reads per outermost map and nothing per statement, so always on.
+  struct Stats {
+    double assembly_seconds = 0.0;
+    long maps = 0;  // outermost maps and applies run
+  };
+  const Stats& stats() const { return stats_; }
+  void reset_stats() { stats_ = Stats{}; }
 
  private:
   struct Frame;
@@ -140,6 +166,7 @@ class Interpreter {
   // exec_stmt.cpp: statements
   void exec_block(const frontend::ast::Block& b);
   void exec(const frontend::ast::Stmt& s);
+  void exec_trapped(const frontend::ast::Stmt& s);  // the trap point's slow path
   void exec_node(const frontend::ast::Stmt& s);
   void exec_var_decl(const frontend::ast::VarDecl& d);
   void exec_assign(const frontend::ast::Assign& a);
@@ -192,9 +219,18 @@ class Interpreter {
   std::vector<std::unique_ptr<SetBinding>> bindings_;
   MapContext* map_ = nullptr;  // the innermost running map
   int map_depth_ = -1;         // the depth of its mapped function's frame
+  // Assembly timing: maps can nest (a mapped function may call a function that maps), so
+  // only the transition from no running assembly to one is timed.
+  class AssemblyTimer;
+  int assembly_depth_ = 0;
+  Stats stats_;
 
   const frontend::ast::Program& program_;
   Options options_;
+  // The trap point's switch: the host's (Options::trap) or our own, holding Options::hook.
+  Trap own_trap_;
+  Trap* trap_ = &own_trap_;
+  uint64_t activations_ = 0;  // numbers every call and mapped element (FrameView::activation)
   bool post_process_ = false;  // float32 or check_finite: results need a second look
   std::vector<Value> globals_;
   std::vector<std::unique_ptr<Frame>> frames_;  // reused by depth; index 0 is a base frame

@@ -10,6 +10,8 @@
 namespace simit::interp {
 
 struct Interpreter::MapContext {
+  const frontend::ast::Assembly* assembly = nullptr;
+  frontend::SourceSpan at;  // the map expression or apply statement
   SetBinding* target = nullptr;
   int element = 0;
   bool reduce = false;

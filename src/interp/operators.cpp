@@ -301,6 +301,9 @@ bool compare(frontend::ast::Compare::Op op, const Value& l, const Value& r) {
   using C = frontend::ast::Compare::Op;
   switch (l.kind()) {
     case Value::Kind::Int: return ordered(op, l.as_int(), r.as_int());
+    // Debugger expressions compare an element with an int by its index (`t == 17`); an
+    // element value keeps its index where as_int() reads it.
+    case Value::Kind::Element: return ordered(op, l.index(), r.as_int());
     case Value::Kind::Float: return ordered(op, l.as_float(), r.as_float());
     case Value::Kind::Bool: return ordered(op, l.as_bool(), r.as_bool());
     case Value::Kind::String: return ordered(op, l.as_string(), r.as_string());

@@ -6,6 +6,7 @@
 namespace simit::interp {
 
 class StatementHook;
+class Trap;
 
 struct Options {
   // Round every float to binary32 when it is produced (the program's float type is float32).
@@ -14,8 +15,12 @@ struct Options {
   bool check_finite = false;
   // Where `print` and `println` write; null means standard output.
   std::ostream* out = nullptr;
-  // Called before every statement (the step debugger, hot counters); null when unused.
+  // Called around every statement for the interpreter's whole life (hot counters, tests);
+  // null when unused. Ignored when `trap` is set.
   StatementHook* hook = nullptr;
+  // A host-owned switch of the trap point (interp/hook.h): the debugger installs and removes
+  // its hook there while a run goes on, and Ctrl-C requests an interrupt through it.
+  Trap* trap = nullptr;
 };
 
 }  // namespace simit::interp

@@ -63,7 +63,7 @@ TEST(Session, ErrorsLeaveTheSessionAlive) {
 TEST(Session, Commands) {
   Repl r;
   EXPECT_NE(r.feed(":help").find(":load"), std::string::npos);
-  EXPECT_EQ(r.feed(":h :type"), ":type EXPR      the type of an expression\n");
+  EXPECT_EQ(r.feed(":h :type"), "  :type EXPR            the type of an expression\n");
   EXPECT_EQ(r.feed(":type [1.0, 2.0]"), "vector[2](float)'\n");
   EXPECT_EQ(r.feed(":frob"), "unknown command ':frob' (:help lists the commands)\n");
   EXPECT_EQ(r.feed(":re"), "ambiguous command ':re': could be :reload :reset\n");
@@ -87,6 +87,94 @@ TEST(Session, LoadAndReload) {
   EXPECT_EQ(r.feed("half(3.0)"), "1.5 : float\n");
   EXPECT_EQ(r.feed(":reload"), "reloaded 1 file(s)\n");
   EXPECT_EQ(r.s.completions("hal"), std::vector<std::string>{"half"});
+}
+
+// A scene as the `simit` tool would give it: a vertex set with a position field and a flag.
+struct FakeScene {
+  std::shared_ptr<runtime::Set> verts = std::make_shared<runtime::Set>("verts");
+  FakeScene() {
+    verts->add_many(3);
+    verts->add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+    verts->add_field("pinned", runtime::FieldType{runtime::ComponentKind::Bool, {}, false});
+    for (int i = 0; i < 3; ++i)
+      for (int d = 0; d < 3; ++d) verts->field(0).at<double>(i)[d] = i + 0.5 * d;
+    verts->field(1).at<bool>(2)[0] = true;
+  }
+  SceneLoader loader(std::string program) {
+    return [this, program](const std::string& path, bool, std::ostream&) {
+      SceneData d;
+      d.path = path;
+      d.program_path = program;
+      d.step = "lift";
+      d.sets.emplace_back("verts", verts.get());
+      d.tensors.emplace_back("dy", interp::Value::of_float(0.25));
+      d.owner = verts;
+      return std::optional<SceneData>(d);
+    };
+  }
+};
+
+std::string scene_program() {
+  std::string path = ::testing::TempDir() + "/repl_scene.sim";
+  std::ofstream f(path);
+  f << "element Vertex\n  x : vector[3](float);\n  pinned : bool;\nend\n"
+       "extern verts : set{Vertex};\nextern dy : float;\n"
+       "func lift_one(inout v : Vertex)\n  if not v.pinned\n    v.x(1) = v.x(1) + dy;\n  end\nend\n"
+       "export func lift() -> (moved : int)\n  apply lift_one to verts;\n  moved = 2;\n  dy = 2.0 * dy;\nend\n";
+  return path;
+}
+
+TEST(Session, SceneSetsFieldsAndRuns) {
+  FakeScene scene;
+  Repl r;
+  r.s.set_scene_loader(scene.loader(scene_program()));
+  EXPECT_NE(r.feed(":scene fake.toml").find("scene fake.toml: verts (3)"), std::string::npos);
+  EXPECT_EQ(r.feed(":print verts.x[1]"), "[1.0, 1.5, 2.0] : vector[3](float)\n");
+  EXPECT_EQ(r.feed(":print verts.pinned[2]"), "true : bool\n");
+  EXPECT_EQ(r.feed(":fields verts"),
+            "verts: 3 elements\n  x : vector[3](float)  min 0  max 3  NaN/Inf 0\n"
+            "  pinned : bool  min 0  max 1  NaN/Inf 0\n");
+  // lift adds dy (0.25) to x(1) of the unpinned vertices, then doubles dy: the extern tensor
+  // keeps its new value for the next run.
+  std::string run = r.feed(":run lift 2");
+  EXPECT_NE(run.find("[2/2] lift: "), std::string::npos) << run;
+  EXPECT_NE(run.find("moved = 2"), std::string::npos) << run;
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(0)[1], 0.5 + 0.25 + 0.5);
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(2)[1], 2.5);  // pinned
+  EXPECT_EQ(r.feed("dy"), "1.0 : float\n");
+  // Statements see the scene's sets too.
+  EXPECT_EQ(r.feed("verts.pinned"), "[false, false, true]' : vector[verts](bool)\n");
+  EXPECT_EQ(r.s.completions("verts.p"), std::vector<std::string>{"verts.pinned"});
+  EXPECT_EQ(r.s.completions("ver"), std::vector<std::string>{"verts"});
+  EXPECT_NE(r.feed(":print verts.x[3]").find("out of range"), std::string::npos);
+}
+
+TEST(Session, RuntimeErrorsNameTheInputLine) {
+  Repl r;
+  r.feed("v = [1.0, 2.0]';");
+  // One input of four lines; the bad index is on its third.
+  std::string e = r.feed("if true\n  w = 2.0 * v;\n  z = v(5);\nend");
+  EXPECT_NE(e.find("<repl>:3:9: runtime error"), std::string::npos) << e;
+  EXPECT_NE(e.find("runtime error"), std::string::npos) << e;
+  EXPECT_EQ(r.feed("v(1)"), "2.0 : float\n");
+}
+
+TEST(Session, Options) {
+  Repl r;
+  EXPECT_EQ(r.feed(":set float32 on"), "");
+  EXPECT_EQ(r.feed("1.0 / 3.0"), "0.3333333432674408 : float\n");  // binary32's 1/3
+  EXPECT_EQ(r.feed(":set float32 off"), "");
+  EXPECT_EQ(r.feed(":set check_finite on"), "");
+  EXPECT_NE(r.feed("x = 0.0 / 0.0;").find("runtime error"), std::string::npos);
+  EXPECT_NE(r.feed(":set float32 maybe").find("expected on or off"), std::string::npos);
+  EXPECT_NE(r.feed(":set nope 1").find("no option 'nope'"), std::string::npos);
+}
+
+TEST(Session, TimeRunsTheStatement) {
+  Repl r;
+  std::string t = r.feed(":time x = 6 * 7;");
+  EXPECT_TRUE(t.starts_with("time: ")) << t;
+  EXPECT_EQ(r.feed("x"), "42 : int\n");
 }
 
 }  // namespace

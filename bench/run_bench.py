@@ -1,0 +1,393 @@
+#!/usr/bin/env python3
+"""The examples' benchmark table: every executor of `simit` against the Eigen baselines.
+
+Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
+                          [--only SUBSTRING] [--executors interpreter,...] [--out FILE]...
+
+For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon160k;
+springs: bunny; cloth: the generated N x N square for each --cloth size) it runs the scene
+once per executor (`simit run SCENE`, which writes a per-frame CSV) and the hand-written
+baseline (bench/baselines/EXAMPLE_baseline.cpp) once, for the same number of frames, and
+prints one row per run:
+
+  ms/frame     median over the frames of the frame's wall time (set-up, reading the mesh,
+               `init` and writing output are outside it);
+  assembly     median of the time in outermost map/apply assemblies (simit's assembly_ms
+               column; the baselines' "assembly", for cloth "forces");
+  solve        median of the rest of the frame (simit's solve_ms: everything outside the
+               maps, mostly the CG solve; the baselines' "solve", for cloth "integration").
+               The two medians need not add up to the ms/frame median;
+  CG it/frame  median CG iterations per frame ("-": cloth is explicit, no solve);
+  rel. resid.  the last frame's relative residual |r| / |b| at CG exit. fem.sim and
+               springs.sim return it as cg_residual (sqrt(r'r / b'b)) and the baselines
+               print the same quantity, so no conversion is needed;
+  peak MB      the child's peak resident set (ru_maxrss from os.wait4);
+  LOC          non-blank, non-comment lines of the .sim program or of the baseline's own
+               .cpp (the helpers every baseline shares, baseline_common.{h,cpp}, are counted
+               once in the footnote);
+  vs baseline  ms/frame divided by the baseline's ms/frame measured in this run.
+
+Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
+iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through --cg-tol and
+--cg-max. The script compares the iteration counts frame by frame and prints the frames
+where they differ.
+
+Not a test: nothing here passes or fails on time. The machine's load shows in the numbers;
+the medians damp it. The default (about 10 minutes with the interpreter on a 2-core machine)
+runs 5 frames of each example; --frames changes that for all of them.
+"""
+import argparse
+import csv
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def scene_run(executor_flags):
+    """The argv of `simit run` with extra flags selecting an executor."""
+    def argv(simit, scene, frames, outdir):
+        return ([simit, "run"] + executor_flags +
+                ["--frames", str(frames), "--output", outdir, scene])
+    return argv
+
+
+# Executors of simit, in table order: name -> (argv builder, availability check). A JIT is
+# added here once `simit run` can select it, e.g.
+#   "cpu-jit": (scene_run(["--backend", "cpu"]), lambda simit: help_mentions(simit, "--backend")),
+EXECUTORS = {
+    "interpreter": (scene_run([]), lambda simit: True),
+}
+
+
+def help_mentions(simit, flag):
+    """Whether `simit run --help` lists FLAG (for executors that need a newer simit)."""
+    out = subprocess.run([simit, "run", "--help"], capture_output=True, text=True)
+    return flag in out.stdout
+
+
+def count_loc(path):
+    """Non-blank lines that are not only comments (.sim: % and %{ %}; C++: // and /* */)."""
+    text = open(path).read()
+    if path.endswith(".sim"):
+        text = re.sub(r"%\{.*?%\}", "", text, flags=re.S)
+        text = re.sub(r"%.*", "", text)
+    else:
+        text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+        text = re.sub(r"//.*", "", text)
+    return sum(1 for line in text.splitlines() if line.strip())
+
+
+def run_child(argv, log_path, timeout):
+    """Runs argv with stdout and stderr into log_path; returns (exit code, peak RSS in MB,
+    wall seconds). The peak comes from the child's own rusage (os.wait4)."""
+    start = time.monotonic()
+    with open(log_path, "w") as log:
+        child = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT)
+    deadline = start + timeout
+    while True:
+        pid, status, usage = os.wait4(child.pid, os.WNOHANG)
+        if pid:
+            break
+        if time.monotonic() > deadline:
+            child.kill()
+            pid, status, usage = os.wait4(child.pid, 0)
+            break
+        time.sleep(0.05)
+    child.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
+    return child.returncode, usage.ru_maxrss / 1024.0, time.monotonic() - start
+
+
+def median(values):
+    return statistics.median(values) if values else float("nan")
+
+
+class Case:
+    """One example on one mesh: its scene (maybe generated) and its baseline's input."""
+
+    def __init__(self, example, mesh, scene, baseline_input, default_frames):
+        self.example, self.mesh = example, mesh
+        self.scene, self.baseline_input = scene, baseline_input
+        self.default_frames = default_frames
+        with open(scene, "rb") as f:
+            doc = tomllib.load(f)
+        self.program = os.path.normpath(os.path.join(os.path.dirname(scene), doc["program"]))
+        self.tensors = doc.get("tensors", {})
+        self.baseline_source = os.path.join(ROOT, "bench", "baselines", example + "_baseline.cpp")
+
+    @property
+    def name(self):
+        return self.example + "/" + self.mesh
+
+
+def bench_scene(source, workdir, name, cloth_n=None):
+    """SOURCE itself when it already writes a per-frame CSV; else a copy in WORKDIR with the
+    program and mesh paths made absolute, [output] csv added and, for the cloth, n points per
+    side (the example ships n = 32)."""
+    with open(source, "rb") as f:
+        doc = tomllib.load(f)
+    if "csv" in doc.get("output", {}) and cloth_n in (None, 32):
+        return source
+    base = os.path.dirname(os.path.abspath(source))
+    text = open(source).read()
+    absolute = lambda m: '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
+    text = re.sub(r'(?m)^(program|mesh) = "([^"]+)"', absolute, text)
+    if cloth_n is not None:
+        text = re.sub(r"(?m)^n = \d+", "n = %d" % cloth_n, text)
+    if "csv" not in doc.get("output", {}):
+        if "output" not in doc:
+            sys.exit("%s has no [output] table; the benchmark needs one (points, csv)" % source)
+        text = re.sub(r"(?m)^\[output\]", '[output]\ncsv = "stats.csv"', text, count=1)
+    path = os.path.join(workdir, name + ".toml")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def cases(args, workdir):
+    ex = os.path.join(ROOT, "examples")
+    data = os.path.join(ex, "data")
+
+    def case(example, mesh, scene, baseline_input, frames):
+        return Case(example, mesh, bench_scene(os.path.join(ex, example, scene), workdir,
+                                               example + "-" + mesh),
+                    baseline_input, frames)
+
+    out = [case("fem", "bunny", "bunny.toml", os.path.join(data, "bunny.1.node"), 5),
+           case("fem", "dragon40k", "dragon40k.toml", os.path.join(data, "dragon40k.node"), 5)]
+    if args.dragon160k:
+        out.append(case("fem", "dragon160k", "dragon160k.toml",
+                        os.path.join(data, "dragon160k.node"), 3))
+    out.append(case("springs", "bunny", "bunny.toml", os.path.join(data, "bunny.1.node"), 5))
+    for n in args.cloth:
+        scene = bench_scene(os.path.join(ex, "cloth", "square.toml"), workdir, "square%d" % n, n)
+        out.append(Case("cloth", "square%d" % n, scene, str(n), 5))
+    return [c for c in out if not args.only or args.only in c.name]
+
+
+def read_simit_csv(outdir):
+    names = [f for f in os.listdir(outdir) if f.endswith(".csv")]
+    if len(names) != 1:
+        raise RuntimeError("expected one per-frame CSV in %s, found %s" % (outdir, names))
+    with open(os.path.join(outdir, names[0])) as f:
+        rows = list(csv.DictReader(f))
+    num = lambda r, k: float(r[k]) if r.get(k) not in (None, "") else None
+    return {"ms": [num(r, "ms") for r in rows],
+            "assembly": [num(r, "assembly_ms") for r in rows],
+            "solve": [num(r, "solve_ms") for r in rows],
+            "iterations": [int(num(r, "cg_iterations")) for r in rows if "cg_iterations" in r],
+            "residual": [num(r, "cg_residual") for r in rows if "cg_residual" in r]}
+
+
+FRAME_LINE = re.compile(r"^frame (\d+): \w+ ([\d.]+) ms, \w+ ([\d.]+) ms"
+                        r"(?:, cg (\d+) iterations, residual ([-+\d.e]+))?")
+
+
+def read_baseline_log(path):
+    frames = {"ms": [], "assembly": [], "solve": [], "iterations": [], "residual": []}
+    for line in open(path):
+        m = FRAME_LINE.match(line)
+        if not m:
+            continue
+        a, s = float(m.group(2)), float(m.group(3))
+        frames["assembly"].append(a)
+        frames["solve"].append(s)
+        frames["ms"].append(a + s)
+        if m.group(4):
+            frames["iterations"].append(int(m.group(4)))
+            frames["residual"].append(float(m.group(5)))
+    return frames
+
+
+def row_of(case, who, frames_run, code, peak, data, loc):
+    ok = code == 0 and len(data["ms"]) == frames_run
+    return {
+        "example": case.example, "mesh": case.mesh, "runner": who,
+        "frames": len(data["ms"]), "ok": ok,
+        "ms": median(data["ms"]), "assembly": median(data["assembly"]),
+        "solve": median(data["solve"]),
+        "iterations": median(data["iterations"]) if data["iterations"] else None,
+        "residual": data["residual"][-1] if data["residual"] else None,
+        "peak_mb": peak, "loc": loc, "ratio": None,
+    }
+
+
+def measure(case, args, workdir, notes):
+    frames = args.frames or case.default_frames
+    rows = []
+    # The baseline first: its numbers are the reference of this case's ratios.
+    base_log = os.path.join(workdir, case.example + "-" + case.mesh + "-baseline.log")
+    argv = [os.path.join(args.build, "bench", case.example + "_baseline")]
+    if "cg_tol" in case.tensors:
+        argv += ["--cg-tol", repr(float(case.tensors["cg_tol"]))]
+    if "cg_max" in case.tensors:
+        argv += ["--cg-max", str(int(case.tensors["cg_max"]))]
+    argv += ["--csv", os.path.join(workdir, "baseline_positions.csv"), case.baseline_input,
+             str(frames)]
+    print("  " + " ".join(argv), flush=True)
+    code, peak, _ = run_child(argv, base_log, args.timeout)
+    base = read_baseline_log(base_log)
+    if code != 0:
+        notes.append("%s baseline exited with %d (log %s)" % (case.name, code, base_log))
+    base_row = row_of(case, "baseline", frames, code, peak, base, count_loc(case.baseline_source))
+    base_row["ratio"] = 1.0
+    for name in args.executors:
+        make_argv, available = EXECUTORS[name]
+        if not available(args.simit):
+            notes.append("%s: executor %s is not available in this simit" % (case.name, name))
+            continue
+        outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" + name)
+        shutil.rmtree(outdir, ignore_errors=True)
+        argv = make_argv(args.simit, case.scene, frames, outdir)
+        print("  " + " ".join(argv), flush=True)
+        code, peak, wall = run_child(argv, outdir + ".log", args.timeout)
+        try:
+            data = read_simit_csv(outdir)
+        except (OSError, RuntimeError) as e:
+            data = {"ms": [], "assembly": [], "solve": [], "iterations": [], "residual": []}
+            notes.append("%s %s: %s" % (case.name, name, e))
+        if code != 0:
+            notes.append("%s %s exited with %d after %.0f s (log %s.log)"
+                         % (case.name, name, code, wall, outdir))
+        row = row_of(case, name, frames, code, peak, data, count_loc(case.program))
+        if base_row["ms"] > 0:
+            row["ratio"] = row["ms"] / base_row["ms"]
+        # Same stopping rule, same iterates: the iteration counts should match frame by frame.
+        if data["iterations"] or base["iterations"]:
+            diffs = [(k + 1, a, b) for k, (a, b) in
+                     enumerate(zip(data["iterations"], base["iterations"])) if a != b]
+            if diffs or len(data["iterations"]) != len(base["iterations"]):
+                notes.append("%s %s: CG iterations differ from the baseline in frames %s"
+                             % (case.name, name, ", ".join("%d (%d vs %d)" % d for d in diffs)
+                                or "(frame counts differ)"))
+        rows.append(row)
+    rows.append(base_row)
+    return rows
+
+
+COLUMNS = [("example", "example"), ("mesh", "mesh"), ("runner", "runner"),
+           ("frames", "frames"), ("ms", "ms/frame"), ("assembly", "assembly ms"),
+           ("solve", "solve ms"), ("iterations", "CG it/frame"), ("residual", "rel. resid."),
+           ("peak_mb", "peak MB"), ("loc", "LOC"), ("ratio", "vs baseline")]
+
+
+def cell(row, key):
+    v = row[key]
+    if v is None:
+        return "-"
+    if key in ("ms", "assembly", "solve"):
+        return "%.1f" % v if v >= 10 else "%.3f" % v
+    if key == "iterations":
+        return "%g" % v
+    if key == "residual":
+        return "%.2e" % v
+    if key == "peak_mb":
+        return "%.0f" % v
+    if key == "ratio":
+        return "%.1fx" % v if v >= 10 else "%.2fx" % v
+    if key == "runner" and not row["ok"]:
+        return v + " (failed)"
+    return str(v)
+
+
+def render_text(rows):
+    table = [[title for _, title in COLUMNS]] + [[cell(r, k) for k, _ in COLUMNS] for r in rows]
+    widths = [max(len(line[i]) for line in table) for i in range(len(COLUMNS))]
+    lines = []
+    for n, line in enumerate(table):
+        lines.append("  ".join(c.rjust(w) if i >= 3 else c.ljust(w)
+                               for i, (c, w) in enumerate(zip(line, widths))).rstrip())
+        if n == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def render_markdown(rows):
+    out = ["| " + " | ".join(t for _, t in COLUMNS) + " |",
+           "|" + "|".join("---" if i < 3 else "---:" for i in range(len(COLUMNS))) + "|"]
+    for r in rows:
+        out.append("| " + " | ".join(cell(r, k) for k, _ in COLUMNS) + " |")
+    return "\n".join(out)
+
+
+def write_csv(rows, path):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow([k for k, _ in COLUMNS])
+        for r in rows:
+            w.writerow(["" if r[k] is None else r[k] for k, _ in COLUMNS])
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--build", default=os.path.join(ROOT, "build"),
+                   help="the build folder with tools/simit and bench/*_baseline (default build)")
+    p.add_argument("--frames", type=int, default=0,
+                   help="frames per run (default: 5; 3 for dragon160k)")
+    p.add_argument("--dragon160k", action="store_true", help="also fem on dragon160k (slow)")
+    p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
+    p.add_argument("--only", default="", help="run only the cases whose example/mesh contains this")
+    p.add_argument("--executors", default=",".join(EXECUTORS),
+                   help="comma-separated, from: " + ", ".join(EXECUTORS))
+    p.add_argument("--out", action="append", default=[],
+                   help="also write the table to FILE: .md as markdown, anything else as CSV")
+    p.add_argument("--keep", default="", help="keep the runs' output in this folder")
+    p.add_argument("--timeout", type=float, default=1800, help="seconds per run (default 1800)")
+    args = p.parse_args()
+    args.build = os.path.abspath(args.build)
+    args.simit = os.path.join(args.build, "tools", "simit")
+    args.cloth = [int(n) for n in args.cloth.split(",") if n.strip()]
+    args.executors = [e for e in args.executors.split(",") if e]
+    for e in args.executors:
+        if e not in EXECUTORS:
+            p.error("unknown executor '%s' (known: %s)" % (e, ", ".join(EXECUTORS)))
+    missing = [f for f in [args.simit] + [os.path.join(args.build, "bench", x + "_baseline")
+                                          for x in ("fem", "springs", "cloth")]
+               if not os.access(f, os.X_OK)]
+    if missing:
+        sys.exit("missing: %s (build the targets simit and *_baseline in %s)"
+                 % (", ".join(missing), args.build))
+
+    workdir = os.path.abspath(args.keep) if args.keep else tempfile.mkdtemp(prefix="simit-bench-")
+    os.makedirs(workdir, exist_ok=True)
+    rows, notes = [], []
+    started = time.monotonic()
+    try:
+        for case in cases(args, workdir):
+            print("%s (%d frames)" % (case.name, args.frames or case.default_frames), flush=True)
+            rows += measure(case, args, workdir, notes)
+    finally:
+        if not args.keep:
+            shutil.rmtree(workdir, ignore_errors=True)
+    print()
+    print(render_text(rows))
+    common = sum(count_loc(os.path.join(ROOT, "bench", "baselines", f))
+                 for f in ("baseline_common.h", "baseline_common.cpp"))
+    print("\nms: medians over the frames; solve = frame - assembly (simit: everything outside "
+          "the maps, mostly CG).")
+    print("Baseline LOC excludes baseline_common.{h,cpp} (%d lines shared by the three)." % common)
+    # Linux counts the launcher's resident set at exec into the child's ru_maxrss.
+    _, floor, _ = run_child(["true"], os.devnull, 10)
+    print("Peak MB has a floor of %.0f MB (this script's own RSS, which Linux counts into the "
+          "child's peak at exec)." % floor)
+    print("Total wall time %.0f s." % (time.monotonic() - started))
+    for n in notes:
+        print("note: " + n)
+    for path in args.out:
+        if path.endswith(".md"):
+            with open(path, "w") as f:
+                f.write(render_markdown(rows) + "\n")
+        else:
+            write_csv(rows, path)
+        print("wrote " + path)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,223 @@
+// `simit debug`: a command loop around repl::Debugger that runs scenes and functions.
+#include "debug_command.h"
+
+#ifdef SIMIT_HAVE_REPL
+
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "debugger.h"
+#include "frontend/frontend.h"
+#include "run_command.h"
+#include "scene_command.h"
+
+namespace simit::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+interp::Trap* g_trap = nullptr;  // what SIGINT interrupts while a run goes on
+
+extern "C" void interrupt_run(int) {
+  if (g_trap) g_trap->request_interrupt();
+}
+
+// Ctrl-C during a run stops it at its next statement (a run-time error, "interrupted").
+class InterruptScope {
+ public:
+  explicit InterruptScope(interp::Trap& trap) {
+    g_trap = &trap;
+    struct sigaction sa {};
+    sa.sa_handler = interrupt_run;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;  // reading a command while stopped goes on
+    sigaction(SIGINT, &sa, &saved_);
+  }
+  ~InterruptScope() {
+    sigaction(SIGINT, &saved_, nullptr);
+    g_trap = nullptr;
+  }
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+
+ private:
+  struct sigaction saved_ {};
+};
+
+constexpr int kNotStarted = -1;  // `run` with arguments that do not fit: nothing ran
+
+bool is_scene(const std::string& file) { return file.ends_with(".toml"); }
+
+// The program a scene names, resolved against the scene's folder.
+std::string scene_program(const std::string& scene, std::string& why) {
+  try {
+    toml::table doc = toml::parse_file(scene);
+    std::optional<std::string> program = doc["program"].value<std::string>();
+    if (!program) {
+      why = scene + ": error: the scene: missing key 'program'";
+      return "";
+    }
+    fs::path p(*program);
+    if (p.is_relative()) p = fs::path(scene).parent_path() / p;
+    return p.lexically_normal().string();
+  } catch (const toml::parse_error& e) {
+    why = scene + ": error: " + std::string(e.description());
+    return "";
+  }
+}
+
+// `FUNC ARGS...` with arguments that may hold spaces inside brackets or quotes.
+std::vector<std::string> split_args(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  int depth = 0;
+  bool quoted = false;
+  for (char c : text) {
+    if (c == '"') quoted = !quoted;
+    if (!quoted && (c == '[' || c == '(' || c == '<')) ++depth;
+    if (!quoted && (c == ']' || c == ')' || c == '>')) --depth;
+    if (!quoted && depth <= 0 && (c == ' ' || c == '\t')) {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+      continue;
+    }
+    cur += c;
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+class DebugSession {
+ public:
+  DebugSession(const DebugOptions& options, std::istream& in, std::ostream& out, std::ostream& err)
+      : options_(options),
+        in_(in),
+        out_(out),
+        err_(err),
+        tty_(&in == &std::cin && isatty(fileno(stdin))),
+        debugger_(out, err, [this](const std::string& prompt) { return read(prompt); }) {}
+
+  int run();
+
+ private:
+  std::optional<std::string> read(const std::string& prompt) {
+    if (tty_) out_ << prompt << std::flush;
+    std::string line;
+    if (!std::getline(in_, line)) {
+      if (tty_) out_ << "\n";
+      return std::nullopt;
+    }
+    if (options_.echo && !tty_) out_ << prompt << line << "\n";
+    return line;
+  }
+  void start(const std::string& args);
+  int run_scene_frames(const std::string& args, std::ostream& errors);
+  int run_call(const std::string& args, std::ostream& errors);
+
+  const DebugOptions& options_;
+  std::istream& in_;
+  std::ostream& out_;
+  std::ostream& err_;
+  bool tty_;
+  repl::Debugger debugger_;
+};
+
+int DebugSession::run() {
+  std::string program_path = options_.file, why;
+  if (is_scene(options_.file)) program_path = scene_program(options_.file, why);
+  if (program_path.empty()) {
+    err_ << why << "\n";
+    return 1;
+  }
+  std::unique_ptr<frontend::Compilation> c = frontend::compile_file(program_path);
+  if (!c->ok()) {
+    err_ << c->diagnostics.render_all();
+    return 1;
+  }
+  debugger_.set_program(c->program.get(), {{1, fs::path(program_path).filename().string(), 1}});
+  if (tty_)
+    out_ << "Debugging " << options_.file << ". 'help' lists the commands, 'run' starts "
+         << (is_scene(options_.file) ? "the scene ('run FRAMES')" : "a function ('run FUNC ARGS...')")
+         << ".\n";
+  std::string args;
+  while (!debugger_.quit_requested()) {
+    std::optional<std::string> line = read(repl::Debugger::kPrompt);
+    if (!line) break;
+    repl::Debugger::Outcome outcome = debugger_.command(*line, args);
+    if (outcome == repl::Debugger::Outcome::Quit) break;
+    if (outcome == repl::Debugger::Outcome::Run) start(args);
+  }
+  return 0;
+}
+
+void DebugSession::start(const std::string& args) {
+  std::ostringstream errors;  // a run the debugger ended reports no error
+  int rc = 0;
+  {
+    InterruptScope interrupts(debugger_.trap());
+    debugger_.begin_run();
+    rc = is_scene(options_.file) ? run_scene_frames(args, errors) : run_call(args, errors);
+  }
+  if (debugger_.end_run()) {
+    out_ << "[run ended by the debugger]\n";
+    return;
+  }
+  out_.flush();
+  err_ << errors.str() << std::flush;
+  if (rc == kNotStarted) return;
+  out_ << (rc == 0 ? "[program exited normally]\n" : "[program stopped with an error]\n");
+}
+
+int DebugSession::run_scene_frames(const std::string& args, std::ostream& errors) {
+  SceneOptions so;
+  so.file = options_.file;
+  so.float32 = options_.float32;
+  so.quiet = true;
+  so.trap = &debugger_.trap();
+  if (!args.empty()) {
+    std::vector<std::string> words = split_args(args);
+    char* end = nullptr;
+    long frames = words.size() == 1 ? std::strtol(words[0].c_str(), &end, 10) : -1;
+    if (frames < 0 || !end || *end) {
+      errors << "run: a scene takes the number of frames to run, e.g. 'run 2'\n";
+      return kNotStarted;
+    }
+    so.frames = static_cast<int>(frames);
+  }
+  return run_scene(so, out_, errors);
+}
+
+int DebugSession::run_call(const std::string& args, std::ostream& errors) {
+  std::vector<std::string> words = split_args(args);
+  if (words.empty()) {
+    errors << "run: a .sim file needs the function to call: run FUNC ARGS...\n";
+    return kNotStarted;
+  }
+  RunOptions ro;
+  ro.file = options_.file;
+  ro.func = words[0];
+  ro.args.assign(words.begin() + 1, words.end());
+  ro.float32 = options_.float32;
+  ro.trap = &debugger_.trap();
+  return run_function(ro, out_, errors);
+}
+
+}  // namespace
+
+int run_debug(const DebugOptions& options, std::istream& in, std::ostream& out, std::ostream& err) {
+  DebugSession session(options, in, out, err);
+  return session.run();
+}
+
+}  // namespace simit::tools
+
+#endif  // SIMIT_HAVE_REPL
