@@ -153,8 +153,7 @@ void Image::set(int x, int y, Rgb c) {
 }
 
 void Image::line(double x0, double y0, double x1, double y1, Rgb c, int thickness) {
-  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1))
-    return;
+  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1)) return;
   thickness = std::max(thickness, 1);
   const int lo = -(thickness - 1) / 2, hi = thickness / 2;
   auto stamp = [&](double x, double y) {
@@ -171,16 +170,18 @@ void Image::line(double x0, double y0, double x1, double y1, Rgb c, int thicknes
   auto clip = [&](double p, double q) {  // Liang-Barsky: keep p t <= q
     if (p == 0.0) return q >= 0.0;
     const double r = q / p;
-    if (p < 0.0) t0 = std::max(t0, r);
-    else t1 = std::min(t1, r);
+    if (p < 0.0)
+      t0 = std::max(t0, r);
+    else
+      t1 = std::min(t1, r);
     return t0 <= t1;
   };
   if (!clip(-dx, x0 - xmin) || !clip(dx, xmax - x0) || !clip(-dy, y0 - ymin) ||
       !clip(dy, ymax - y0))
     return;
   const double ax = x0 + t0 * dx, ay = y0 + t0 * dy, bx = x0 + t1 * dx, by = y0 + t1 * dy;
-  const int steps = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(bx - ax),
-                                                                    std::abs(by - ay)))));
+  const int steps =
+      std::max(1, static_cast<int>(std::ceil(std::max(std::abs(bx - ax), std::abs(by - ay)))));
   for (int k = 0; k <= steps; ++k) {
     const double t = double(k) / steps;
     stamp(ax + t * (bx - ax), ay + t * (by - ay));

@@ -39,9 +39,9 @@ class Image {
   // than the z-buffer's, so the picture does not depend on the drawing order of triangles at
   // different depths. A triangle of zero area draws nothing.
   void triangle(const double x[3], const double y[3], const double z[3], Rgb c);
-  // Text in a built-in 5x7 bitmap font (digits, letters, . - + e : / ( ) , = % and space), scale >= 1.
-  // (x, y) is the top-left corner of the first character cell; each character advances 6 *
-  // scale pixels. Also has _ [ ] < > * ' ? ! ; characters without a glyph draw as '?'.
+  // Text in a built-in 5x7 bitmap font (digits, letters, . - + e : / ( ) , = % and space),
+  // scale >= 1; also _ [ ] < > * ' ? ! ; and any other character draws as '?'. (x, y) is the
+  // top-left corner of the first character cell; each character advances 6 * scale pixels.
   void text(int x, int y, const std::string& s, Rgb c, int scale = 1);
   // The width in pixels of `s` as drawn by text(): 6 * scale per character, less the one
   // blank column after the last (0 for an empty string).
@@ -58,7 +58,8 @@ class Image {
   std::vector<double> depth_;  // empty until the first triangle
 };
 
-// Writes an 8-bit RGB PNG atomically (temporary name, then rename). Returns false and sets `error` on failure.
+// Writes an 8-bit RGB PNG atomically (temporary name, then rename). Returns false and sets `error`
+// on failure.
 bool write_png(const Image& image, const std::string& path, std::string& error);
 
 }  // namespace simit::runtime

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
+#include <thread>
 #include <sstream>
 
 namespace simit::repl {
@@ -168,6 +170,24 @@ TEST(Session, Options) {
   EXPECT_NE(r.feed("x = 0.0 / 0.0;").find("runtime error"), std::string::npos);
   EXPECT_NE(r.feed(":set float32 maybe").find("expected on or off"), std::string::npos);
   EXPECT_NE(r.feed(":set nope 1").find("no option 'nope'"), std::string::npos);
+}
+
+// Ctrl-C (Session::interrupt, from another thread here) stops an endless loop at its next
+// statement; the variables keep their values from before the input.
+TEST(Session, InterruptStopsARunAndKeepsTheSession) {
+  Repl r;
+  r.feed("i = 5;");
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    r.s.interrupt();
+  });
+  std::string e = r.feed("while true\n  i = i + 1;\nend");
+  stopper.join();
+  EXPECT_TRUE(e.starts_with("interrupted at <repl>:")) << e;
+  EXPECT_EQ(r.feed("i"), "5 : int\n");
+  // A stale request (Ctrl-C at the prompt) does not stop the next input.
+  r.s.interrupt();
+  EXPECT_EQ(r.feed("i + 1"), "6 : int\n");
 }
 
 TEST(Session, TimeRunsTheStatement) {

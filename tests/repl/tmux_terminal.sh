@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Drives `simit repl` on a real terminal under tmux (a ctest): history recall (within a
-# session and from the history file of an earlier one) and tab completion of commands,
-# intrinsics and set.field names.  tmux_terminal.sh SIMIT SOURCE_DIR
+# session and from the history file of an earlier one), tab completion of commands,
+# intrinsics and set.field names, and Ctrl-C.  tmux_terminal.sh SIMIT SOURCE_DIR
 set -euo pipefail
 simit="$1"
 source_dir="$2"
@@ -64,6 +64,25 @@ if [ "$(pane | grep -c 'true : bool')" -lt 2 ]; then
   pane
   exit 1
 fi
+# Ctrl-C at the prompt drops the line being typed.
+keys 'abc' C-c '2.0 + 3.0' Enter
+wait_for "5.0 : float"
+if pane | grep -q "abc2.0"; then
+  echo "FAIL: Ctrl-C did not drop the typed text"
+  pane
+  exit 1
+fi
+# Ctrl-C stops a long computation and returns to the prompt with the session intact.
+keys ':run init' Enter ':run step 1000' Enter
+wait_for "[1/1000] step:"
+keys C-c
+wait_for "interrupted at examples/fem/fem.sim:"
+keys ':print verts.pinned[1]' Enter
+for _ in $(seq 100); do
+  [ "$(pane | grep -c 'true : bool')" -ge 3 ] && break
+  sleep 0.1
+done
+[ "$(pane | grep -c 'true : bool')" -ge 3 ] || { echo "FAIL: no prompt after Ctrl-C"; pane; exit 1; }
 quit
 grep -qF 'y = 6.0 * 7.0;' "$work/.simit_history" || {
   echo "FAIL: the history file does not have the session's lines:"
@@ -73,7 +92,8 @@ grep -qF 'y = 6.0 * 7.0;' "$work/.simit_history" || {
 # A new session recalls the last session's lines from the history file.
 start
 keys Up
-wait_for "simit> :print verts.pinned[0]"  # the last line of the first session
+wait_for "simit> :print verts.pinned[1]"  # the last line of the first session
 keys C-u
 quit
-echo "PASS: completion of :scene, verts.pinned and sqrt; history recall in and across sessions"
+echo "PASS: completion of :scene, verts.pinned and sqrt; history recall in and across sessions;"
+echo "      Ctrl-C drops a typed line and stops a running :run"

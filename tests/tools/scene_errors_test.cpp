@@ -106,7 +106,8 @@ class SceneErrors : public ::testing::Test {
     size_t at = scene.find(marker);
     EXPECT_NE(at, std::string::npos) << marker;
     if (at == std::string::npos) return "?";
-    const size_t line_start = scene.rfind('\n', at) == std::string::npos ? 0 : scene.rfind('\n', at) + 1;
+    const size_t line_start =
+        scene.rfind('\n', at) == std::string::npos ? 0 : scene.rfind('\n', at) + 1;
     const int line = 1 + static_cast<int>(std::count(scene.begin(), scene.begin() + at, '\n'));
     const int col = 1 + static_cast<int>(at - line_start);
     return path("scene.toml") + ":" + std::to_string(line) + ":" + std::to_string(col) +
@@ -179,7 +180,8 @@ TEST_F(SceneErrors, Generate) {
   expect_error(bad, "1\nelements", "[sets.points] n: expected a whole number from 2 to 4096");
   bad = replace(s, "n = 4", "n = \"4\"");
   expect_error(bad, "\"4\"", "[sets.points] n: expected a whole number from 2 to 4096");
-  bad = replace(s, "generate = \"square_cloth\"", "generate = \"square_cloth\"\nmesh = \"tet.node\"");
+  bad =
+      replace(s, "generate = \"square_cloth\"", "generate = \"square_cloth\"\nmesh = \"tet.node\"");
   expect_error(bad, "\"square_cloth\"", "[sets.points]: give either mesh or generate, not both");
   bad = replace(fem_scene(), "mesh = \"tet.node\"", "mesh = \"tet.node\"\nn = 3");
   expect_error(bad, "3\nelements", "[sets.verts] n: only for generate");
@@ -199,7 +201,8 @@ TEST_F(SceneErrors, KeysSetsAndFields) {
                "given");
   expect_error(replace(s, "x = \"position\"", "pinned = \"y <\""), "\"y <\"",
                "[sets.verts.fields] pinned: in \"y <\": ");
-  expect_error(replace(s, "[sets.tets]", "[sets.springs]\nmesh = \"tet.node\"\nelements = \"edges\"\n[sets.tets]"),
+  expect_error(replace(s, "[sets.tets]",
+                       "[sets.springs]\nmesh = \"tet.node\"\nelements = \"edges\"\n[sets.tets]"),
                "", "[sets.springs]: the program declares no extern set 'springs'");
 }
 
@@ -220,8 +223,8 @@ TEST_F(SceneErrors, Meshes) {
 
 TEST_F(SceneErrors, QuickLookPicture) {
   const std::string s = fem_scene();
-  expect_error(s + "png = \"tet.jpg\"\n", "\"tet.jpg\"", "[output] png: '" + path("out/tet.jpg") +
-                                                            "' is not a .png file name");
+  expect_error(s + "png = \"tet.jpg\"\n", "\"tet.jpg\"",
+               "[output] png: '" + path("out/tet.jpg") + "' is not a .png file name");
   expect_error(s + "png = \"pics/tet.png\"\n", "\"pics/tet.png\"",
                "[output] png: the folder '" + path("out/pics") + "' does not exist");
   expect_error(s, "", "--png: the folder '" + path("nowhere") + "' does not exist",

@@ -1,5 +1,6 @@
-// Quick-look rendering: project, fit, draw shaded triangles (or depth-cued lines, or points)
-// on a canvas of twice the size, then average 2 x 2 blocks down for smooth edges.
+// Quick-look rendering: project, fit, draw shaded triangles on a canvas of twice the size and
+// average 2 x 2 blocks down for smooth edges; or depth-cued lines or points, drawn directly
+// in a few shades (dense wireframes smoothed or finely shaded compress badly as PNG).
 #include "runtime/mesh/quicklook.h"
 
 #include <algorithm>
@@ -13,7 +14,8 @@ namespace simit::runtime {
 
 namespace {
 
-constexpr int kSupersample = 2;
+constexpr int kSupersample = 2;  // for surfaces
+constexpr int kDepthShades = 8;  // for lines and points
 constexpr Rgb kBackground{248, 248, 245};
 constexpr double kAmbient = 0.3;
 
@@ -110,6 +112,14 @@ void draw_triangles(Image& canvas, const Mesh& mesh, const Projection& p,
   }
 }
 
+// `near` faded toward the background with depth, in kDepthShades steps.
+Rgb depth_cue(Rgb near, double depth, const Projection& p) {
+  const double range = p.depth_max - p.depth_min;
+  const double far = range > 0 ? (depth - p.depth_min) / range : 0.0;
+  const double step = std::floor(std::clamp(far, 0.0, 1.0) * (kDepthShades - 1) + 0.5);
+  return mix(near, kBackground, 0.65 * step / (kDepthShades - 1));
+}
+
 // Lines drawn far to near, the far ones faded toward the background (depth cueing).
 void draw_edges(Image& canvas, const Mesh& mesh, const Projection& p) {
   const Rgb near{40, 60, 110};
@@ -122,12 +132,9 @@ void draw_edges(Image& canvas, const Mesh& mesh, const Projection& p) {
     order.push_back(e);
   }
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return depth[a] > depth[b]; });
-  const double range = p.depth_max - p.depth_min;
   for (size_t e : order) {
     const Edge& ed = mesh.edges[e];
-    const double far = range > 0 ? (depth[e] - p.depth_min) / range : 0.0;
-    canvas.line(p.x[ed[0]], p.y[ed[0]], p.x[ed[1]], p.y[ed[1]], mix(near, kBackground, 0.65 * far),
-                kSupersample);
+    canvas.line(p.x[ed[0]], p.y[ed[0]], p.x[ed[1]], p.y[ed[1]], depth_cue(near, depth[e], p));
   }
 }
 
@@ -138,11 +145,9 @@ void draw_points(Image& canvas, const Mesh& mesh, const Projection& p) {
     if (finite(mesh.points[i])) order.push_back(i);
   std::sort(order.begin(), order.end(),
             [&](size_t a, size_t b) { return p.depth[a] > p.depth[b]; });
-  const double range = p.depth_max - p.depth_min;
   for (size_t i : order) {
-    const double far = range > 0 ? (p.depth[i] - p.depth_min) / range : 0.0;
     const int x = static_cast<int>(std::floor(p.x[i])), y = static_cast<int>(std::floor(p.y[i]));
-    canvas.fill_rect(x - 1, y - 1, x + 1, y + 1, mix(near, kBackground, 0.65 * far));
+    canvas.fill_rect(x, y, x + 1, y + 1, depth_cue(near, p.depth[i], p));
   }
 }
 
@@ -158,7 +163,8 @@ Image downsample(const Image& big, int width, int height, int k) {
           r += c.r, g += c.g, b += c.b;
         }
       const int n = k * k;
-      out.set(x, y, Rgb{uint8_t((r + n / 2) / n), uint8_t((g + n / 2) / n), uint8_t((b + n / 2) / n)});
+      out.set(x, y,
+              Rgb{uint8_t((r + n / 2) / n), uint8_t((g + n / 2) / n), uint8_t((b + n / 2) / n)});
     }
   return out;
 }
@@ -167,18 +173,23 @@ Image downsample(const Image& big, int width, int height, int k) {
 
 Image render_quicklook(const Mesh& mesh, const QuicklookOptions& options) {
   const int width = std::max(options.width, 1), height = std::max(options.height, 1);
+  const int margin = std::max(options.margin, 0);
+  if (mesh.tets.empty() && mesh.triangles.empty()) {
+    Image canvas(width, height, kBackground);
+    const Projection p = project(mesh, width, height, margin);
+    if (!mesh.edges.empty())
+      draw_edges(canvas, mesh, p);
+    else
+      draw_points(canvas, mesh, p);
+    return canvas;
+  }
   const int k = kSupersample;
   Image canvas(width * k, height * k, kBackground);
-  const Projection p = project(mesh, width * k, height * k, std::max(options.margin, 0) * k);
-  if (!mesh.tets.empty()) {
+  const Projection p = project(mesh, width * k, height * k, margin * k);
+  if (!mesh.tets.empty())
     draw_triangles(canvas, mesh, p, boundary_triangles(mesh), Rgb{214, 172, 112});
-  } else if (!mesh.triangles.empty()) {
+  else
     draw_triangles(canvas, mesh, p, mesh.triangles, Rgb{112, 152, 212});
-  } else if (!mesh.edges.empty()) {
-    draw_edges(canvas, mesh, p);
-  } else {
-    draw_points(canvas, mesh, p);
-  }
   return downsample(canvas, width, height, k);
 }
 
