@@ -27,9 +27,12 @@ the object), and the RMS of |x - x_ref| over the same scale; also the max error 
 the largest displacement of the reference over the K frames (max |x_ref - x_0|), which says
 how much of the motion is wrong.
 
-Writes DIR/fem_accuracy.csv, DIR/fem_accuracy.png (error against ms/frame) and
-DIR/fem_accuracy_tol.png (error against cg_tol), default DIR fem-accuracy: with gnuplot where
-installed, else with the build's bench/plot_png. Not a test; the default sweep takes about
+Writes DIR/fem_accuracy.csv, DIR/fem_accuracy.png (error against the median wall ms/frame),
+DIR/fem_accuracy_cpu.png (against CPU ms/frame: the run's CPU time less that of a run of no
+frames, over K; steadier than wall time when other processes share the machine) and
+DIR/fem_accuracy_tol.png (against cg_tol), default DIR fem-accuracy: with gnuplot where
+installed, else with the build's bench/plot_png. The precisions alternate at each tolerance,
+so that a change of the machine's load hits both alike. Not a test; the default sweep takes about
 10 minutes with the interpreter (about 2 s/frame on the bunny). Note that the interpreter
 emulates float32 by rounding every result, so its float32 times say nothing about the speed
 of single precision; what the float32 series shows is its error floor.
@@ -54,7 +57,8 @@ def make_scene(source, cg_tol, cg_max, workdir, name):
     """A copy of SOURCE with the program and mesh paths made absolute and [tensors] set."""
     base = os.path.dirname(os.path.abspath(source))
     text = open(source).read()
-    absolute = lambda m: '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
+    def absolute(m):
+        return '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
     text = re.sub(r'(?m)^(program|mesh) = "([^"]+)"', absolute, text)
     text, n_tol = re.subn(r"(?m)^cg_tol = \S+", "cg_tol = %r" % cg_tol, text)
     text, n_max = re.subn(r"(?m)^cg_max = \S+", "cg_max = %d" % cg_max, text)
@@ -161,7 +165,7 @@ def main():
     try:
         # Rest positions (0 frames), then the reference, tightened until it is converged.
         scene = make_scene(args.scene, args.ref_tol, 20000, workdir, "rest")
-        _, x0, _ = run(simit, scene, 0, os.path.join(workdir, "rest"), False)
+        _, x0, setup_cpu = run(simit, scene, 0, os.path.join(workdir, "rest"), False)
         ref_tol = args.ref_tol
         for attempt in range(4):
             scene = make_scene(args.scene, ref_tol, 20000, workdir, "reference")
@@ -176,29 +180,37 @@ def main():
                 sys.exit("the reference did not converge to |r|/|b| <= 1e-14")
             ref_tol *= (1e-14 / worst) ** 2 / 4
 
+        # The two precisions alternate, so that a change in the machine's load between the
+        # beginning and the end of the sweep does not separate them.
         results = []
-        for prec in ("float64", "float32"):
-            for tol in tols:
+        for tol in tols:
+            for prec in ("float64", "float32"):
                 scene = make_scene(args.scene, tol, args.cg_max, workdir, "point")
                 rows, x, cpu = run(simit, scene, args.frames, os.path.join(workdir, "point"),
                                    prec == "float32")
                 worst, rms, of_motion = errors(x, ref, x0)
                 its = [int(r["cg_iterations"]) for r in rows]
-                r = {"precision": prec, "cg_tol": tol,
-                     "ms_per_frame": statistics.median(float(r["ms"]) for r in rows),
-                     "assembly_ms": statistics.median(float(r["assembly_ms"]) for r in rows),
-                     "solve_ms": statistics.median(float(r["solve_ms"]) for r in rows),
-                     "cg_iterations": statistics.median(its),
-                     "capped": sum(1 for i in its if i >= args.cg_max),
-                     "rel_residual": float(rows[-1]["cg_residual"]),
-                     "max_rel_error": worst, "rms_rel_error": rms,
-                     "max_error_of_motion": of_motion, "cpu_s": cpu}
-                results.append(r)
+                point = {
+                    "precision": prec, "cg_tol": tol,
+                    "ms_per_frame": statistics.median(float(r["ms"]) for r in rows),
+                    "assembly_ms": statistics.median(float(r["assembly_ms"]) for r in rows),
+                    "solve_ms": statistics.median(float(r["solve_ms"]) for r in rows),
+                    "cg_iterations": statistics.median(its),
+                    "capped": sum(1 for i in its if i >= args.cg_max),
+                    "rel_residual": float(rows[-1]["cg_residual"]),
+                    "max_rel_error": worst, "rms_rel_error": rms,
+                    "max_error_of_motion": of_motion, "cpu_s": cpu,
+                    # CPU time per frame: the run's less that of a run without frames (reading,
+                    # init, output); unlike wall time, other processes on the machine hardly
+                    # change it.
+                    "cpu_ms_per_frame": 1e3 * max(0.0, cpu - setup_cpu) / args.frames}
+                results.append(point)
                 print("%s cg_tol %-7g %8.1f ms/frame (assembly %.1f, solve %.1f), CG %g it%s, "
                       "|r|/|b| %.1e, max rel error %.2e, rms %.2e"
-                      % (prec, tol, r["ms_per_frame"], r["assembly_ms"], r["solve_ms"],
-                         r["cg_iterations"], " (%d frames capped)" % r["capped"] if r["capped"] else "",
-                         r["rel_residual"], worst, rms), flush=True)
+                      % (prec, tol, point["ms_per_frame"], point["assembly_ms"], point["solve_ms"],
+                         point["cg_iterations"],
+                         " (%d frames capped)" % point["capped"] if point["capped"] else "",
+                         point["rel_residual"], worst, rms), flush=True)
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
 
@@ -206,13 +218,16 @@ def main():
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(results[0]))
         w.writeheader()
-        for r in results:
+        for r in sorted(results, key=lambda r: (r["precision"] != "float64", -r["cg_tol"])):
             w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
     print("wrote %s" % csv_path)
-    # The report's plot, and the error against the tolerance itself (free of timing noise).
-    what = "fem on the bunny, %d frames" % args.frames
+    # The report's plot; the same against CPU time, which a busy machine disturbs less; and the
+    # error against the tolerance itself, free of timing noise.
+    what = "fem on %s, %d frames" % (os.path.splitext(os.path.basename(args.scene))[0], args.frames)
     for name, xcol, xlabel, title in (
             ("fem_accuracy.png", "ms_per_frame", "ms/frame (median)", what + ": error vs time"),
+            ("fem_accuracy_cpu.png", "cpu_ms_per_frame", "CPU ms/frame",
+             what + ": error vs CPU time"),
             ("fem_accuracy_tol.png", "cg_tol", "CG tolerance on r'r", what + ": error vs cg_tol")):
         png_path = os.path.join(args.out, name)
         how = plot(csv_path, png_path, build, xcol, xlabel, title)

@@ -2,8 +2,9 @@
 # What the interpreter's statement trap point costs when nothing is armed (no breakpoint, no
 # debugger): the fem example on the bunny, interpreter milliseconds per frame, in a build with
 # the trap point (SIMIT_STATEMENT_HOOK=ON) against one without it (OFF). The two builds run
-# alternately, round after round, so that a change in the machine's load hits both; the
-# medians of every frame's time are compared. A benchmark, not a test.
+# alternately, round after round, so that a change in the machine's load hits both; it prints
+# the medians of each run's CPU time (the steadier figure on a shared machine) and of every
+# frame's wall time. A benchmark, not a test.
 #
 #   bench/hook_overhead.sh [ROUNDS [FRAMES]]        (default 5 rounds of 3 frames per build)
 #
@@ -24,32 +25,40 @@ build() {  # build DIR ON|OFF
   else
     configure_build "$1" Release -DSIMIT_BUILD_TESTS=OFF -DSIMIT_STATEMENT_HOOK="$2" >/dev/null
   fi
-  ninja -C "$1" simit >/dev/null
+  ninja -C "$1" -j "${JOBS:-$(nproc)}" simit >/dev/null
 }
 build "$ON_DIR" ON
 build "$OFF_DIR" OFF
 
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-run() {  # run on|off: appends one line per frame (ms) to $work/NAME.ms
-  local bin=$ON_DIR/tools/simit
-  [ "$1" = off ] && bin=$OFF_DIR/tools/simit
-  rm -rf "$work/out"
-  "$bin" run "$SCENE" --frames "$FRAMES" --output "$work/out" >/dev/null
-  tail -n +2 "$work/out/bunny_stats.csv" | cut -d, -f3 >>"$work/$1.ms"
-}
-for ((r = 1; r <= ROUNDS; r++)); do
-  if ((r % 2)); then run on; run off; else run off; run on; fi
-  echo "round $r/$ROUNDS done" >&2
-done
+python3 - "$ON_DIR/tools/simit" "$OFF_DIR/tools/simit" "$SCENE" "$ROUNDS" "$FRAMES" <<'PY'
+import csv, os, resource, statistics, subprocess, sys, tempfile
 
-python3 - "$work/on.ms" "$work/off.ms" <<'PY'
-import statistics, sys
-on = [float(x) for x in open(sys.argv[1])]
-off = [float(x) for x in open(sys.argv[2])]
-m_on, m_off = statistics.median(on), statistics.median(off)
-print(f"fem on the bunny, {len(on)} frames per build")
-print(f"trap point compiled in (no hook armed): median {m_on:.1f} ms/frame (min {min(on):.1f})")
-print(f"trap point compiled out:                median {m_off:.1f} ms/frame (min {min(off):.1f})")
-print(f"overhead: {100.0 * (m_on / m_off - 1.0):+.2f}% (medians), {100.0 * (min(on) / min(off) - 1.0):+.2f}% (minima)")
+on_bin, off_bin, scene, rounds, frames = sys.argv[1:6]
+rounds, frames = int(rounds), int(frames)
+cpu = {"on": [], "off": []}   # CPU seconds of a whole run (user + system)
+wall = {"on": [], "off": []}  # ms of every frame (the scene's CSV)
+with tempfile.TemporaryDirectory() as work:
+    def run(name):
+        out = os.path.join(work, name)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([on_bin if name == "on" else off_bin, "run", scene, "--frames", str(frames),
+                        "--output", out], check=True, stdout=subprocess.DEVNULL)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu[name].append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+        with open(os.path.join(out, "bunny_stats.csv")) as f:
+            wall[name] += [float(row["ms"]) for row in csv.DictReader(f)]
+    for r in range(rounds):
+        for name in (("on", "off") if r % 2 == 0 else ("off", "on")):
+            run(name)
+        print(f"round {r + 1}/{rounds} done", file=sys.stderr)
+
+def line(what, on, off, unit):
+    m_on, m_off = statistics.median(on), statistics.median(off)
+    print(f"{what}: compiled in {m_on:.3f} {unit}, compiled out {m_off:.3f} {unit}, "
+          f"overhead {100.0 * (m_on / m_off - 1.0):+.2f}% (medians; minima "
+          f"{100.0 * (min(on) / min(off) - 1.0):+.2f}%)")
+
+print(f"fem on the bunny, {rounds} runs of {frames} frames per build, alternating")
+line("CPU time per run (parse, meshes, init and frames)", cpu["on"], cpu["off"], "s")
+line("wall time per frame", wall["on"], wall["off"], "ms")
 PY

@@ -114,6 +114,15 @@ std::string label(double v, bool decade) {
   return buf;
 }
 
+// A rectangle's outline. Axis-parallel strokes are filled rectangles: Image::line samples
+// along the line and can skip a pixel where a sample lands just below a pixel boundary.
+void frame(Image& img, int x0, int y0, int x1, int y1, Rgb c) {
+  img.fill_rect(x0, y0, x1, y0, c);
+  img.fill_rect(x0, y1, x1, y1, c);
+  img.fill_rect(x0, y0, x0, y1, c);
+  img.fill_rect(x1, y0, x1, y1, c);
+}
+
 // Marker shapes by series: square, triangle, diamond, cross.
 void marker(Image& img, int shape, double x, double y, Rgb c) {
   const double r = 5;
@@ -194,14 +203,16 @@ int main(int argc, char** argv) {
       continue;
     }
     const std::string name = si < cells.size() ? cells[si] : ycol;
-    auto it = std::find_if(series.begin(), series.end(), [&](const Series& s) { return s.name == name; });
+    auto it = std::find_if(series.begin(), series.end(),
+                           [&](const Series& s) { return s.name == name; });
     if (it == series.end()) it = series.insert(series.end(), Series{name, {}, {}});
     it->x.push_back(x);
     it->y.push_back(y);
     all_x.push_back(x);
     all_y.push_back(y);
   }
-  if (skipped) std::fprintf(stderr, "plot_png: left out %d row(s) without a plottable point\n", skipped);
+  if (skipped)
+    std::fprintf(stderr, "plot_png: left out %d row(s) without a plottable point\n", skipped);
   if (all_x.empty()) usage("no points to plot in " + positional[0]);
   fit(ax, all_x);
   fit(ay, all_y);
@@ -217,22 +228,19 @@ int main(int argc, char** argv) {
   bool xdec = false, ydec = false;
   for (double t : ticks(ax, xdec)) {
     const double x = px(t);
-    img.line(x, top, x, bottom, grid);
-    img.line(x, bottom, x, bottom + 5, black);
+    img.fill_rect(int(x), top, int(x), bottom, grid);
+    img.fill_rect(int(x), bottom, int(x), bottom + 5, black);
     const std::string s = label(t, xdec);
     img.text(int(x) - img.text_width(s, 2) / 2, bottom + 10, s, black, 2);
   }
   for (double t : ticks(ay, ydec)) {
     const double y = py(t);
-    img.line(left, y, right, y, grid);
-    img.line(left - 5, y, left, y, black);
+    img.fill_rect(left, int(y), right, int(y), grid);
+    img.fill_rect(left - 5, int(y), left, int(y), black);
     const std::string s = label(t, ydec);
     img.text(left - 10 - img.text_width(s, 2), int(y) - Image::text_height(2) / 2, s, black, 2);
   }
-  img.line(left, top, right, top, black);
-  img.line(left, bottom, right, bottom, black);
-  img.line(left, top, left, bottom, black);
-  img.line(right, top, right, bottom, black);
+  frame(img, left, top, right, bottom, black);
   if (!title.empty()) img.text((width - img.text_width(title, 2)) / 2, 14, title, black, 2);
   if (!xlabel.empty())
     img.text((left + right - img.text_width(xlabel, 2)) / 2, height - 26, xlabel, black, 2);
@@ -244,7 +252,8 @@ int main(int argc, char** argv) {
     const Rgb c = palette[k % 6];
     for (size_t i = 1; i < s.x.size(); ++i)
       img.line(px(s.x[i - 1]), py(s.y[i - 1]), px(s.x[i]), py(s.y[i]), c, 1);
-    for (size_t i = 0; i < s.x.size(); ++i) marker(img, static_cast<int>(k), px(s.x[i]), py(s.y[i]), c);
+    for (size_t i = 0; i < s.x.size(); ++i)
+      marker(img, static_cast<int>(k), px(s.x[i]), py(s.y[i]), c);
   }
   // Legend: in the corner of the frame that covers the fewest points (top right on a tie).
   int legend_w = 0;
@@ -264,14 +273,11 @@ int main(int argc, char** argv) {
     if (covered < 0 || n < covered) covered = n, lx = cx, ly = cy;
   }
   img.fill_rect(lx, ly, lx + legend_w, ly + legend_h, white);
-  img.line(lx, ly, lx + legend_w, ly, black);
-  img.line(lx, ly + legend_h, lx + legend_w, ly + legend_h, black);
-  img.line(lx, ly, lx, ly + legend_h, black);
-  img.line(lx + legend_w, ly, lx + legend_w, ly + legend_h, black);
+  frame(img, lx, ly, lx + legend_w, ly + legend_h, black);
   for (size_t k = 0; k < series.size(); ++k) {
     const int y = ly + 14 + row_h * int(k);
     const Rgb c = palette[k % 6];
-    img.line(lx + 8, y, lx + 40, y, c, 2);
+    img.fill_rect(lx + 8, y - 1, lx + 40, y, c);
     marker(img, static_cast<int>(k), lx + 24, y, c);
     img.text(lx + 50, y - Image::text_height(2) / 2, series[k].name, black, 2);
   }

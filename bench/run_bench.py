@@ -137,7 +137,8 @@ def bench_scene(source, workdir, name, cloth_n=None):
         return source
     base = os.path.dirname(os.path.abspath(source))
     text = open(source).read()
-    absolute = lambda m: '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
+    def absolute(m):
+        return '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
     text = re.sub(r'(?m)^(program|mesh) = "([^"]+)"', absolute, text)
     if cloth_n is not None:
         text = re.sub(r"(?m)^n = \d+", "n = %d" % cloth_n, text)

@@ -29,17 +29,21 @@ std::string number(double x) {
 
 // `<vector[verts](vector[3](float)), 81 components: min -1, max 2, 3 NaN>`.
 std::string tensor_summary(const runtime::Tensor& t, const frontend::Type* type) {
-  std::string what = type && type->kind == frontend::Type::Kind::Tensor ? frontend::to_string(*type)
-                                                                        : t.shape().str() + " tensor";
+  std::string what = type && type->kind == frontend::Type::Kind::Tensor
+                         ? frontend::to_string(*type)
+                         : t.shape().str() + " tensor";
   std::string out = "<" + what + ", " + std::to_string(t.size()) + " components";
   if (t.kind() != runtime::ComponentKind::Float) return out + ">";
   const double* x = t.floats();
   double lo = INFINITY, hi = -INFINITY;
   size_t nan = 0, inf = 0;
   for (size_t i = 0; i < t.size(); ++i) {
-    if (std::isnan(x[i])) ++nan;
-    else if (std::isinf(x[i])) ++inf;
-    else lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
+    if (std::isnan(x[i]))
+      ++nan;
+    else if (std::isinf(x[i]))
+      ++inf;
+    else
+      lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
   }
   if (lo <= hi) out += ": min " + number(lo) + ", max " + number(hi);
   if (nan) out += ", " + std::to_string(nan) + " NaN";
@@ -95,7 +99,8 @@ bool all_finite(const interp::Value& v) {
   using K = interp::Value::Kind;
   switch (v.kind()) {
     case K::Float: return std::isfinite(v.as_float());
-    case K::Complex: return std::isfinite(v.as_complex().real()) && std::isfinite(v.as_complex().imag());
+    case K::Complex:
+      return std::isfinite(v.as_complex().real()) && std::isfinite(v.as_complex().imag());
     case K::Tensor: {
       const runtime::Tensor& t = v.tensor();
       if (t.kind() == runtime::ComponentKind::Float) return finite(t.floats(), t.size());

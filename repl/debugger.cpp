@@ -16,15 +16,16 @@ namespace ast = frontend::ast;
 
 namespace {
 
-const char* const kCommands[] = {"backtrace", "break",  "continue", "delete", "display", "down",
-                                 "finish",    "frame",  "help",     "info",   "kill",    "list",
-                                 "next",      "print",  "quit",     "run",    "step",    "tbreak",
-                                 "undisplay", "up",     "watch",    "where"};
+const char* const kCommands[] = {"backtrace", "break", "continue", "delete", "display", "down",
+                                 "finish",    "frame", "help",     "info",   "kill",    "list",
+                                 "next",      "print", "quit",     "run",    "step",    "tbreak",
+                                 "undisplay", "up",    "watch"};
 
 const std::pair<const char*, const char*> kAliases[] = {
-    {"b", "break"}, {"br", "break"}, {"bt", "backtrace"}, {"c", "continue"}, {"cont", "continue"},
-    {"d", "delete"}, {"f", "frame"}, {"h", "help"}, {"i", "info"}, {"k", "kill"}, {"l", "list"},
-    {"n", "next"}, {"p", "print"}, {"q", "quit"}, {"r", "run"}, {"s", "step"},
+    {"b", "break"},        {"br", "break"}, {"bt", "backtrace"}, {"c", "continue"},
+    {"cont", "continue"},  {"d", "delete"}, {"f", "frame"},      {"h", "help"},
+    {"i", "info"},         {"k", "kill"},   {"l", "list"},       {"n", "next"},
+    {"p", "print"},        {"q", "quit"},   {"r", "run"},        {"s", "step"},
     {"where", "backtrace"}};
 
 std::string trim(const std::string& s) {
@@ -41,14 +42,17 @@ std::string command_name(const std::string& word) {
   std::string found;
   for (const char* c : kCommands) {
     if (word == c) return c;
-    if (!word.empty() && std::string(c).starts_with(word)) found += (found.empty() ? "" : " ") + std::string(c);
+    if (!word.empty() && std::string(c).starts_with(word))
+      found += (found.empty() ? "" : " ") + std::string(c);
   }
   if (found.find(' ') != std::string::npos) return "?" + found;
   return found;
 }
 
 bool positive_int(const std::string& s, int& n) {
-  if (s.empty() || s.size() > 9 || !std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }))
+  if (s.empty() || s.size() > 9 || !std::all_of(s.begin(), s.end(), [](char c) {
+        return std::isdigit(static_cast<unsigned char>(c));
+      }))
     return false;
   n = std::stoi(s);
   return true;
@@ -141,7 +145,8 @@ void Debugger::error(const std::string& message) const {
 
 bool Debugger::need_stop(const char* what) const {
   if (stopped_) return true;
-  error(std::string("No frame: ") + what + " needs a stopped program (the program is not running).");
+  error(std::string("No frame: ") + what +
+        " needs a stopped program (the program is not running).");
   return false;
 }
 
@@ -150,7 +155,8 @@ Debugger::Action Debugger::execute(const std::string& raw, std::string& run_args
   if (line.starts_with("#")) return Action::None;  // a comment, as in gdb scripts
   if (line.empty()) {
     // An empty line repeats a command that moves on, as in gdb.
-    if (last_command_ != "next" && last_command_ != "step" && last_command_ != "list") return Action::None;
+    if (last_command_ != "next" && last_command_ != "step" && last_command_ != "list")
+      return Action::None;
     line = last_command_;
   }
   size_t sp = line.find_first_of(" \t");
@@ -196,17 +202,26 @@ Debugger::Action Debugger::dispatch(const std::string& cmd, const std::string& a
   if (cmd == "next") return cmd_resume(Mode::Next, arg);
   if (cmd == "step") return cmd_resume(Mode::Step, arg);
   if (cmd == "finish") return cmd_resume(Mode::Finish, arg);
-  if (cmd == "break" || cmd == "tbreak") cmd_break(arg, cmd == "tbreak");
-  else if (cmd == "watch") cmd_watch(arg);
-  else if (cmd == "delete") cmd_delete(arg);
-  else if (cmd == "info") cmd_info(arg);
-  else if (cmd == "list") cmd_list(arg);
-  else if (cmd == "print") cmd_print(arg);
-  else if (cmd == "display") cmd_display(arg);
+  if (cmd == "break" || cmd == "tbreak")
+    cmd_break(arg, cmd == "tbreak");
+  else if (cmd == "watch")
+    cmd_watch(arg);
+  else if (cmd == "delete")
+    cmd_delete(arg);
+  else if (cmd == "info")
+    cmd_info(arg);
+  else if (cmd == "list")
+    cmd_list(arg);
+  else if (cmd == "print")
+    cmd_print(arg);
+  else if (cmd == "display")
+    cmd_display(arg);
   else if (cmd == "undisplay") {
     int n = 0;
-    if (arg.empty()) displays_.clear();
-    else if (!positive_int(arg, n) || std::erase_if(displays_, [&](const Display& d) { return d.number == n; }) == 0)
+    if (arg.empty())
+      displays_.clear();
+    else if (!positive_int(arg, n) ||
+             std::erase_if(displays_, [&](const Display& d) { return d.number == n; }) == 0)
       error("No display number " + arg + ".");
   } else if (cmd == "backtrace") {
     if (need_stop("backtrace")) {
@@ -215,10 +230,14 @@ Debugger::Action Debugger::dispatch(const std::string& cmd, const std::string& a
         if (std::string m = map_line(level); !m.empty()) out_ << "    " << m << "\n";
       }
     }
-  } else if (cmd == "up") cmd_frame_move(1, arg, false);
-  else if (cmd == "down") cmd_frame_move(-1, arg, false);
-  else if (cmd == "frame") cmd_frame_move(0, arg, true);
-  else if (cmd == "help") help();
+  } else if (cmd == "up")
+    cmd_frame_move(1, arg, false);
+  else if (cmd == "down")
+    cmd_frame_move(-1, arg, false);
+  else if (cmd == "frame")
+    cmd_frame_move(0, arg, true);
+  else if (cmd == "help")
+    help();
   return Action::None;
 }
 
@@ -228,7 +247,8 @@ Debugger::Action Debugger::cmd_resume(Mode mode, const std::string& arg) {
     return Action::None;
   }
   int n = 1;
-  if (!arg.empty() && (mode == Mode::Continue || mode == Mode::Finish || !positive_int(arg, n) || n < 1)) {
+  if (!arg.empty() &&
+      (mode == Mode::Continue || mode == Mode::Finish || !positive_int(arg, n) || n < 1)) {
     error("unexpected argument '" + arg + "'");
     return Action::None;
   }
@@ -282,7 +302,8 @@ void Debugger::cmd_break(const std::string& arg, bool temporary) {
       return;
     }
     b->line = frame_compiled_line(selected_);
-  } else if (std::isdigit(static_cast<unsigned char>(spec[0])) || spec.find(':') != std::string::npos) {
+  } else if (std::isdigit(static_cast<unsigned char>(spec[0])) ||
+             spec.find(':') != std::string::npos) {
     std::optional<int> line = parse_line_spec(spec, why);
     if (!line) {
       error(why);
@@ -351,11 +372,13 @@ void Debugger::cmd_delete(const std::string& arg) {
     return numbers.empty() || std::find(numbers.begin(), numbers.end(), b->number) != numbers.end();
   };
   for (int n : numbers)
-    if (std::none_of(breakpoints_.begin(), breakpoints_.end(), [&](const auto& b) { return b->number == n; }))
+    if (std::none_of(breakpoints_.begin(), breakpoints_.end(),
+                     [&](const auto& b) { return b->number == n; }))
       error("No breakpoint number " + std::to_string(n) + ".");
   for (auto& [stmt, list] : at_stmt_)
     std::erase_if(list, [&](Breakpoint* b) {
-      return numbers.empty() || std::find(numbers.begin(), numbers.end(), b->number) != numbers.end();
+      return numbers.empty() ||
+             std::find(numbers.begin(), numbers.end(), b->number) != numbers.end();
     });
   std::erase_if(at_stmt_, [](const auto& entry) { return entry.second.empty(); });
   std::erase_if(breakpoints_, gone);
@@ -392,22 +415,24 @@ void Debugger::cmd_info(const std::string& arg) {
           break;
       }
       if (!b.condition.empty()) out_ << "        stop only if " << b.condition << "\n";
-      if (b.hits)
-        out_ << "        hit " << b.hits << (b.hits == 1 ? " time" : " times") << "\n";
+      if (b.hits) out_ << "        hit " << b.hits << (b.hits == 1 ? " time" : " times") << "\n";
     }
   } else if (what == "locals" || what == "args") {
     if (!need_stop("info locals")) return;
     interp::FrameView v = event_.in->frame_view(selected_);
-    std::vector<const ast::Variable*> vars = frontend::visible_variables(*v.func, frame_offset(selected_));
+    std::vector<const ast::Variable*> vars =
+        frontend::visible_variables(*v.func, frame_offset(selected_));
     // In declaration order; an outer variable that an inner one hides is not shown.
     bool any = false;
     for (size_t i = 0; i < vars.size(); ++i) {
       const ast::Variable& var = *vars[i];
       auto hides = [&](const ast::Variable* later) { return later->name == var.name; };
       if (std::any_of(vars.begin() + static_cast<long>(i) + 1, vars.end(), hides)) continue;
-      if (var.kind == ast::Variable::Kind::Generic || var.kind == ast::Variable::Kind::IndexVar) continue;
+      if (var.kind == ast::Variable::Kind::Generic || var.kind == ast::Variable::Kind::IndexVar)
+        continue;
       const interp::Value* value = event_.in->frame_value(selected_, var);
-      out_ << var.name << " = " << (value ? value_text(*value, var.type.get()) : "<no value>") << "\n";
+      out_ << var.name << " = " << (value ? value_text(*value, var.type.get()) : "<no value>")
+           << "\n";
       any = true;
     }
     if (!any) out_ << "No locals.\n";
@@ -415,7 +440,8 @@ void Debugger::cmd_info(const std::string& arg) {
     if (displays_.empty()) out_ << "There are no auto-display expressions now.\n";
     for (const Display& d : displays_) out_ << d.number << ": " << d.text << "\n";
   } else {
-    error("Undefined info command: \"" + arg + "\".  Try \"info breakpoints\", \"info locals\" or \"info display\".");
+    error("Undefined info command: \"" + arg +
+          "\".  Try \"info breakpoints\", \"info locals\" or \"info display\".");
   }
 }
 
@@ -428,10 +454,14 @@ void Debugger::cmd_list(const std::string& arg) {
   int first = 0;
   std::string why;
   if (arg.empty()) {
-    if (list_next_ > 0) first = list_next_;
-    else if (stopped_) first = frame_compiled_line(selected_) - 5;
-    else first = 1;
-  } else if (std::isdigit(static_cast<unsigned char>(arg[0])) || arg.find(':') != std::string::npos) {
+    if (list_next_ > 0)
+      first = list_next_;
+    else if (stopped_)
+      first = frame_compiled_line(selected_) - 5;
+    else
+      first = 1;
+  } else if (std::isdigit(static_cast<unsigned char>(arg[0])) ||
+             arg.find(':') != std::string::npos) {
     std::optional<int> line = parse_line_spec(arg, why);
     if (!line) return error(why);
     first = *line - 5;
@@ -442,9 +472,11 @@ void Debugger::cmd_list(const std::string& arg) {
     first = f->span.start().line - 1;
   }
   first = std::max(1, first);
-  if (first > file->line_count()) return error("Line number " + std::to_string(map_.place(first).line) + " out of range.");
+  if (first > file->line_count())
+    return error("Line number " + std::to_string(map_.place(first).line) + " out of range.");
   int last = std::min(file->line_count(), first + 9);
-  for (int l = first; l <= last; ++l) out_ << map_.place(l).line << "\t" << file->line_text(l) << "\n";
+  for (int l = first; l <= last; ++l)
+    out_ << map_.place(l).line << "\t" << file->line_text(l) << "\n";
   list_next_ = last + 1;
 }
 
@@ -476,13 +508,15 @@ void Debugger::cmd_display(const std::string& arg) {
 void Debugger::cmd_frame_move(int delta, const std::string& arg, bool absolute) {
   if (!need_stop(absolute ? "frame" : delta > 0 ? "up" : "down")) return;
   int n = 0;
-  if (!arg.empty() && !positive_int(arg, n)) return error("expected a number but got '" + arg + "'");
+  if (!arg.empty() && !positive_int(arg, n))
+    return error("expected a number but got '" + arg + "'");
   if (arg.empty()) n = absolute ? selected_ : 1;
   int target = absolute ? n : selected_ + delta * n;
   const int count = event_.in->frame_count();
   if (absolute && target >= count) return error("No frame at level " + arg + ".");
   if (target >= count) {
-    if (!absolute && selected_ == count - 1) return error("Initial frame selected; you cannot go up.");
+    if (!absolute && selected_ == count - 1)
+      return error("Initial frame selected; you cannot go up.");
     target = count - 1;
   }
   if (target < 0) {

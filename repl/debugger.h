@@ -153,7 +153,7 @@ class Debugger : public interp::StatementHook {
   bool killed_ = false;
   bool quit_ = false;
   const interp::Interpreter* attached_ = nullptr;  // breakpoints are resolved for it
-  std::vector<int> warned_;  // breakpoints this run ignores, reported once
+  std::vector<int> warned_;                        // breakpoints this run ignores, reported once
   std::unordered_map<const frontend::ast::Stmt*, std::vector<Breakpoint*>> at_stmt_;
   Mode mode_ = Mode::Continue;
   int mode_depth_ = 0;
@@ -163,7 +163,7 @@ class Debugger : public interp::StatementHook {
   // The stop.
   bool stopped_ = false;
   Event event_;
-  int selected_ = 0;  // frame level chosen by up / down / frame
+  int selected_ = 0;               // frame level chosen by up / down / frame
   uint64_t shown_activation_ = 0;  // of the frame the last stop reported
   int list_next_ = 0;  // compiled line a bare `list` continues from (0: around the stop)
 };

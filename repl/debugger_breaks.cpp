@@ -61,7 +61,8 @@ Debugger::Location Debugger::statement_at_line(const ast::Program& program,
                                                int compiled_line) const {
   for (const auto& d : program.decls) {
     const auto* f = d->as<ast::FuncDecl>();
-    if (!f || f->is_extern || line_of(f->span) > compiled_line || end_line_of(f->span) < compiled_line)
+    if (!f || f->is_extern || line_of(f->span) > compiled_line ||
+        end_line_of(f->span) < compiled_line)
       continue;
     Location best;
     int best_line = 0;
@@ -167,7 +168,8 @@ void Debugger::attach(const interp::Interpreter& in) {
   for (const auto& bp : breakpoints_) {
     Breakpoint& b = *bp;
     std::string why;
-    bool ok = b.kind == Breakpoint::Kind::Watch ? resolve_watch(b, in, why) : resolve(b, in.program(), why);
+    bool ok = b.kind == Breakpoint::Kind::Watch ? resolve_watch(b, in, why)
+                                                : resolve(b, in.program(), why);
     if (!ok) {
       if (std::find(warned_.begin(), warned_.end(), b.number) == warned_.end())
         error("breakpoint " + std::to_string(b.number) + " is ignored in this run: " + why);

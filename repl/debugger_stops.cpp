@@ -65,9 +65,8 @@ bool Debugger::step_done(const Event& e) {
     case Mode::Continue: return false;
     case Mode::Step: done = !e.after || e.depth < mode_depth_; break;
     case Mode::Next:
-      done = e.depth < mode_depth_ ||
-             (!e.after && e.depth == mode_depth_ &&
-              e.in->frame_view(0).activation == mode_activation_);
+      done = e.depth < mode_depth_ || (!e.after && e.depth == mode_depth_ &&
+                                       e.in->frame_view(0).activation == mode_activation_);
       break;
     case Mode::Finish: done = e.depth < mode_depth_; break;
   }
@@ -90,12 +89,12 @@ std::string Debugger::breakpoint_hit(const Event& e) {
         if (!v.as_bool()) continue;
       } catch (const interp::RuntimeError& err) {
         ++b->hits;
-        return "Error in testing the condition of breakpoint " + std::to_string(b->number) +
-               ": " + err.message() + "\n";
+        return "Error in testing the condition of breakpoint " + std::to_string(b->number) + ": " +
+               err.message() + "\n";
       } catch (const std::exception& err) {
         ++b->hits;
-        return "Error in testing the condition of breakpoint " + std::to_string(b->number) +
-               ": " + err.what() + "\n";
+        return "Error in testing the condition of breakpoint " + std::to_string(b->number) + ": " +
+               err.what() + "\n";
       }
     }
     ++b->hits;
@@ -114,8 +113,8 @@ std::string Debugger::watch_changes(const Event& e) {
     runtime::Tensor now = b.set->get(b.field, b.index);
     if (same_bits(now, *b.last)) continue;
     ++b.hits;
-    out += "Watchpoint " + std::to_string(b.number) + ": " + b.set_name + "." + b.field_name +
-           "[" + std::to_string(b.index) + "]\nOld value = " + tensor_text(*b.last) +
+    out += "Watchpoint " + std::to_string(b.number) + ": " + b.set_name + "." + b.field_name + "[" +
+           std::to_string(b.index) + "]\nOld value = " + tensor_text(*b.last) +
            "\nNew value = " + tensor_text(now) + "\n";
     b.last = std::move(now);
   }
@@ -143,7 +142,8 @@ std::string Debugger::nan_written(const Event& e) {
       }
       const ast::Expr* target = a->targets[i].get();
       // Index notation names its indices by index variables, bound only inside it.
-      if (const auto* r = target->as<ast::TensorRead>(); r && r->index_notation) target = r->base.get();
+      if (const auto* r = target->as<ast::TensorRead>(); r && r->index_notation)
+        target = r->base.get();
       try {
         written.emplace_back(source_of(target->span), e.in->evaluate(*target, 0));
       } catch (const std::exception&) {
@@ -186,6 +186,7 @@ void Debugger::stop(const Event& e, const std::string& reason) {
     if (a == Action::Resume || a == Action::Quit) break;
   }
   stopped_ = false;
+  trap_.take_interrupt();  // a Ctrl-C typed at the prompt does not end the resumed run
   if (killed_) {
     trap_.install(nullptr);
     throw interp::Interrupted(e.stmt->span, "the debugger ended the run");
@@ -201,10 +202,10 @@ void Debugger::update_hook() {
 
 void Debugger::print_stop_location(const std::string& reason) {
   const uint64_t activation = event_.in->frame_view(0).activation;
-  const bool breakpoint = reason.ends_with(", ");
+  // "Breakpoint 1, " leads the frame's line; other reasons are lines of their own. A step
+  // within one activation shows the source line alone, as gdb does.
   out_ << reason;
-  // A step within one activation shows the line alone, as gdb does.
-  if (breakpoint || !reason.empty() || event_.after || activation != shown_activation_)
+  if (!reason.empty() || event_.after || activation != shown_activation_)
     out_ << frame_line(0, true) << "\n";
   shown_activation_ = activation;
   show_source_line(frame_compiled_line(0));
@@ -228,7 +229,8 @@ std::string Debugger::map_line(int level) const {
   interp::FrameView v = event_.in->frame_view(level);
   if (!v.map) return "";
   const interp::MapView& m = *v.map;
-  std::string set = m.assembly && m.assembly->target_set ? m.assembly->target_set->name : m.set->name();
+  std::string set =
+      m.assembly && m.assembly->target_set ? m.assembly->target_set->name : m.set->name();
   std::string s = std::string(m.is_apply ? "apply " : "map ") + v.func->name + " to " + set +
                   ", element " + std::to_string(m.element);
   if (!m.endpoints.empty()) {

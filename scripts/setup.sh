@@ -14,4 +14,5 @@ mapfile -d '' programs < <(example_programs)
 echo "setup: ${#programs[@]} example program(s) check clean"
 "$build/tools/simit" run "$SIMIT_ROOT/examples/fem/bunny.toml" --frames "${FRAMES:-10}" \
   --output "$build/fem-bunny"
-echo "setup: open $build/fem-bunny/bunny.pvd in ParaView; the command is $build/tools/simit"
+echo "setup: open $build/fem-bunny/bunny.pvd in ParaView (bunny.png beside it is a picture of"
+echo "setup: the last frame); the command is $build/tools/simit"

@@ -146,7 +146,8 @@ int DebugSession::run() {
   debugger_.set_program(c->program.get(), {{1, fs::path(program_path).filename().string(), 1}});
   if (tty_)
     out_ << "Debugging " << options_.file << ". 'help' lists the commands, 'run' starts "
-         << (is_scene(options_.file) ? "the scene ('run FRAMES')" : "a function ('run FUNC ARGS...')")
+         << (is_scene(options_.file) ? "the scene ('run FRAMES')"
+                                     : "a function ('run FUNC ARGS...')")
          << ".\n";
   std::string args;
   while (!debugger_.quit_requested()) {

@@ -9,7 +9,7 @@
 namespace simit::tools {
 
 struct DebugOptions {
-  std::string file;  // a scene (.toml) or a Simit source file (.sim)
+  std::string file;   // a scene (.toml) or a Simit source file (.sim)
   bool echo = false;  // print each command after the prompt (transcripts, tests)
   bool float32 = false;
 };

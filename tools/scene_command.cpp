@@ -709,14 +709,18 @@ void Scene::open_output() {
   const toml::table& t = *doc_["output"].as_table();
   std::error_code ec;
   fs::create_directories(out_folder_, ec);
-  if (ec) fail(t.get("folder"), "[output] folder: cannot create '" + out_folder_ + "': " + ec.message());
-  pvd_ = std::make_unique<runtime::PvdWriter>((fs::path(out_folder_) / (out_name_ + ".pvd")).string());
+  if (ec)
+    fail(t.get("folder"),
+         "[output] folder: cannot create '" + out_folder_ + "': " + ec.message());
+  const std::string pvd = (fs::path(out_folder_) / (out_name_ + ".pvd")).string();
+  pvd_ = std::make_unique<runtime::PvdWriter>(pvd);
   if (png_path_.empty()) return;
   try {
     runtime::AtomicFile probe(png_path_);  // removed again: only a test that the folder takes it
   } catch (const runtime::MeshError& e) {
-    fail(options_.png.empty() ? t.get("png") : nullptr,
-         std::string(options_.png.empty() ? "[output] png" : "--png") + ": cannot write: " + e.what());
+    const bool cli = !options_.png.empty();
+    fail(cli ? nullptr : t.get("png"),
+         std::string(cli ? "--png" : "[output] png") + ": cannot write: " + e.what());
   }
 }
 

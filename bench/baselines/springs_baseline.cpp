@@ -84,15 +84,16 @@ int main(int argc, char** argv) {
       const Vec3 t = stiffness * (l - l0[s]) / l * d;
       f[a] += t;
       f[c] -= t;
-      if (pinned[a] || pinned[c]) continue;
-      // K = [-Ks Ks; Ks -Ks]; the transverse term is dropped under compression.
+      // K = [-Ks Ks; Ks -Ks]; the transverse term is dropped under compression. Blocks
+      // coupling to a pinned point are dropped; a free end keeps its own block.
       const Vec3 u = d / l;
       const Mat3 uu = u * u.transpose();
       const Mat3 ks = stiffness * (uu + std::max(0.0, 1.0 - l0[s] / l) * (Mat3::Identity() - uu));
-      pattern.add(a, slots[s][0], ks, h * h);
+      if (!pinned[a]) pattern.add(a, slots[s][0], ks, h * h);
+      if (!pinned[c]) pattern.add(c, slots[s][3], ks, h * h);
+      if (pinned[a] || pinned[c]) continue;
       pattern.add(a, slots[s][1], ks, -h * h);
       pattern.add(c, slots[s][2], ks, -h * h);
-      pattern.add(c, slots[s][3], ks, h * h);
     }
     for (int i = 0; i < n; ++i) {
       const Vec3 bi = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));

@@ -54,7 +54,8 @@ void walk(const ast::Block& block, uint32_t offset, std::vector<const ast::Varia
 // Why the debugger cannot evaluate `e` (it would run statements); empty when it can.
 std::string refusal(const ast::Expr& e) {
   if (const auto* c = e.as<ast::Call>(); c && c->func)
-    return "calls of user functions ('" + c->callee + "') are not supported in debugger expressions";
+    return "calls of user functions ('" + c->callee +
+           "') are not supported in debugger expressions";
   if (e.is<ast::Map>()) return "maps are not supported in debugger expressions";
   std::vector<const ast::Expr*> children;
   auto add = [&](const ast::ExprPtr& c) {

@@ -17,13 +17,14 @@ void Interpreter::exec_block(const ast::Block& b) {
 
 void Interpreter::exec(const ast::Stmt& s) {
 #if SIMIT_STATEMENT_HOOK
-  // The one trap point of the evaluation loop: one load and one branch when nothing is armed.
+  // The one trap point of the evaluation loop: a flag test and a branch when nothing is armed.
   if (trap_->armed()) [[unlikely]]
     return exec_trapped(s);
 #endif
   exec_node(s);
 }
 
+#if SIMIT_STATEMENT_HOOK
 // Out of line so that exec() stays small enough to inline into the block loop.
 [[gnu::noinline]] void Interpreter::exec_trapped(const ast::Stmt& s) {
   if (trap_->take_interrupt()) throw Interrupted(s.span, "interrupted");
@@ -34,6 +35,7 @@ void Interpreter::exec(const ast::Stmt& s) {
   // Read again: the hook may have removed itself, or been installed, meanwhile.
   if (StatementHook* h = trap_->hook()) h->after_statement(s, func, depth, *this);
 }
+#endif
 
 void Interpreter::exec_node(const ast::Stmt& s) {
   switch (s.kind) {

@@ -31,9 +31,8 @@ class StatementHook {
                                 const Interpreter& interpreter) = 0;
   // `stmt` has just completed (not called when it threw); the frame is still the one it ran
   // in. Compound statements (if, loops) complete after their bodies.
-  virtual void after_statement(const frontend::ast::Stmt& stmt,
-                               const frontend::ast::FuncDecl& func, int depth,
-                               const Interpreter& interpreter) {
+  virtual void after_statement(const frontend::ast::Stmt& stmt, const frontend::ast::FuncDecl& func,
+                               int depth, const Interpreter& interpreter) {
     (void)stmt, (void)func, (void)depth, (void)interpreter;
   }
 };

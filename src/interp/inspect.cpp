@@ -57,7 +57,8 @@ FrameView Interpreter::frame_view(int level) const {
     const frontend::Type* type = target && target->type ? target->type.get() : nullptr;
     for (int k = 0; k < m.set->arity(); ++k) {
       MapView::Endpoint ep;
-      if (type && static_cast<size_t>(k) < type->endpoints.size()) ep.set_var = type->endpoints[k].var;
+      if (type && static_cast<size_t>(k) < type->endpoints.size())
+        ep.set_var = type->endpoints[k].var;
       ep.set = &m.set->endpoint_set(k);
       ep.index = m.set->endpoint(m.element, k);
       m.endpoints.push_back(ep);
@@ -70,7 +71,8 @@ FrameView Interpreter::frame_view(int level) const {
 const Value* Interpreter::frame_value(int level, const ast::Variable& var) const {
   const Value* value = nullptr;
   if (is_global(var)) {
-    if (var.slot >= 0 && static_cast<size_t>(var.slot) < globals_.size()) value = &globals_[var.slot];
+    if (var.slot >= 0 && static_cast<size_t>(var.slot) < globals_.size())
+      value = &globals_[var.slot];
   } else if (level >= 0 && level < depth_) {
     const Frame& f = *frames_[depth_ - level];
     if (var.func == f.func && var.slot >= 0 && static_cast<size_t>(var.slot) < f.refs.size())

@@ -15,7 +15,7 @@ namespace simit::interp {
 struct MapView {
   const frontend::ast::Assembly* assembly = nullptr;  // callee and target set variable
   frontend::SourceSpan at;                            // the map expression / apply statement
-  bool is_apply = false;  // the mapped function has no results
+  bool is_apply = false;                              // the mapped function has no results
   const runtime::Set* set = nullptr;                  // the target set
   int element = -1;
   struct Endpoint {

@@ -13,25 +13,25 @@ namespace simit::frontend {
 namespace {
 
 const char* const kSource =
-    "element Vertex\n"                                   // 1
-    "  x : vector[3](float);\n"                          // 2
-    "end\n"                                              // 3
-    "extern verts : set{Vertex};\n"                      // 4
-    "extern edges : set{Vertex}(verts, verts);\n"        // 5
-    "func twice(a : float) -> b : float\n"               // 6
-    "  b = 2.0 * a;\n"                                   // 7
-    "end\n"                                              // 8
+    "element Vertex\n"                                                // 1
+    "  x : vector[3](float);\n"                                       // 2
+    "end\n"                                                           // 3
+    "extern verts : set{Vertex};\n"                                   // 4
+    "extern edges : set{Vertex}(verts, verts);\n"                     // 5
+    "func twice(a : float) -> b : float\n"                            // 6
+    "  b = 2.0 * a;\n"                                                // 7
+    "end\n"                                                           // 8
     "func f(e : Vertex, p : (Vertex * 2), s : float) -> r : float\n"  // 9
-    "  u = s + 1.0;\n"                                   // 10
-    "  for i in 0:3\n"                                   // 11
-    "    w = u * 2.0;\n"                                 // 12
-    "    r = r + w;\n"                                   // 13
-    "  end\n"                                            // 14
-    "  if u > 0.0\n"                                     // 15
-    "    var u : int = 3;\n"                             // 16
-    "    r = r + twice(s);\n"                            // 17
-    "  end\n"                                            // 18
-    "end\n";                                             // 19
+    "  u = s + 1.0;\n"                                                // 10
+    "  for i in 0:3\n"                                                // 11
+    "    w = u * 2.0;\n"                                              // 12
+    "    r = r + w;\n"                                                // 13
+    "  end\n"                                                         // 14
+    "  if u > 0.0\n"                                                  // 15
+    "    var u : int = 3;\n"                                          // 16
+    "    r = r + twice(s);\n"                                         // 17
+    "  end\n"                                                         // 18
+    "end\n";                                                          // 19
 
 class DebugExpr : public ::testing::Test {
  protected:
@@ -109,7 +109,8 @@ TEST_F(DebugExpr, ElementsCompareAsIndicesAndIntsIndexSets) {
 TEST_F(DebugExpr, CallsOfUserFunctionsAreRefused) {
   EXPECT_EQ(type_of("twice(s)", at(10)),
             "error: calls of user functions ('twice') are not supported in debugger expressions");
-  EXPECT_EQ(type_of("sqrt(s) + det([1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 2.0])", at(10)), "float");
+  EXPECT_EQ(type_of("sqrt(s) + det([1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 2.0])", at(10)),
+            "float");
 }
 
 TEST_F(DebugExpr, WithoutAFunctionOnlyGlobalsAreVisible) {

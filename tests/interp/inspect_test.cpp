@@ -20,34 +20,34 @@ namespace {
 namespace ast = frontend::ast;
 
 const char* kProgram =
-    "element Vertex\n"                                   // 1
-    "  x : vector[3](float);\n"                          // 2
-    "end\n"                                              // 3
-    "element Tet\n"                                      // 4
-    "  J : float;\n"                                     // 5
-    "end\n"                                              // 6
-    "extern verts : set{Vertex};\n"                      // 7
-    "extern tets : set{Tet}(verts, verts, verts, verts);\n"  // 8
+    "element Vertex\n"                                          // 1
+    "  x : vector[3](float);\n"                                 // 2
+    "end\n"                                                     // 3
+    "element Tet\n"                                             // 4
+    "  J : float;\n"                                            // 5
+    "end\n"                                                     // 6
+    "extern verts : set{Vertex};\n"                             // 7
+    "extern tets : set{Tet}(verts, verts, verts, verts);\n"     // 8
     "func edges(v : (Vertex * 4)) -> D : matrix[3,3](float)\n"  // 9
-    "  for j in 0:3\n"                                   // 10
-    "    e = v(j).x - v(3).x;\n"                         // 11
-    "    for i in 0:3\n"                                 // 12
-    "      D(i, j) = e(i);\n"                            // 13
-    "    end\n"                                          // 14
-    "  end\n"                                            // 15
-    "end\n"                                              // 16
-    "func jacobian(inout t : Tet, v : (Vertex * 4))\n"   // 17
-    "  D = edges(v);\n"                                  // 18
-    "  t.J = det(D);\n"                                  // 19
-    "end\n"                                              // 20
-    "export func step()\n"                               // 21
-    "  apply jacobian to tets;\n"                        // 22
-    "end\n"                                              // 23
-    "export func spin() -> n : int\n"                    // 24
-    "  while true\n"                                     // 25
-    "    n = n + 1;\n"                                   // 26
-    "  end\n"                                            // 27
-    "end\n";                                             // 28
+    "  for j in 0:3\n"                                          // 10
+    "    e = v(j).x - v(3).x;\n"                                // 11
+    "    for i in 0:3\n"                                        // 12
+    "      D(i, j) = e(i);\n"                                   // 13
+    "    end\n"                                                 // 14
+    "  end\n"                                                   // 15
+    "end\n"                                                     // 16
+    "func jacobian(inout t : Tet, v : (Vertex * 4))\n"          // 17
+    "  D = edges(v);\n"                                         // 18
+    "  t.J = det(D);\n"                                         // 19
+    "end\n"                                                     // 20
+    "export func step()\n"                                      // 21
+    "  apply jacobian to tets;\n"                               // 22
+    "end\n"                                                     // 23
+    "export func spin() -> n : int\n"                           // 24
+    "  while true\n"                                            // 25
+    "    n = n + 1;\n"                                          // 26
+    "  end\n"                                                   // 27
+    "end\n";                                                    // 28
 
 const double kPositions[5][3] = {
     {0.0, 0.0, 0.0}, {1.0, 0.1, 0.0}, {0.2, 1.1, 0.0}, {0.1, 0.3, 0.9}, {1.2, 1.0, 1.3}};
@@ -67,7 +67,8 @@ double edge_det(const int* t) {
 class Fixture {
  public:
   explicit Fixture(StatementHook* hook = nullptr)
-      : c_(testing::compile(kProgram, "inspect.sim")), tets_("tets", {&verts_, &verts_, &verts_, &verts_}) {
+      : c_(testing::compile(kProgram, "inspect.sim")),
+        tets_("tets", {&verts_, &verts_, &verts_, &verts_}) {
     verts_.add_many(5);
     for (const auto& t : kTets) tets_.add({t[0], t[1], t[2], t[3]});
     Options o;
@@ -82,7 +83,8 @@ class Fixture {
   }
   void bind(const std::string& name, runtime::Set& s) {
     const ast::Variable& v = global(name);
-    for (const ast::FieldDecl& f : v.type->element->fields) s.add_field(f.name, field_type_of(*f.type));
+    for (const ast::FieldDecl& f : v.type->element->fields)
+      s.add_field(f.name, field_type_of(*f.type));
     in_->bind_set(v, s);
   }
   const ast::Variable& global(const std::string& name) const {
@@ -108,7 +110,8 @@ int line(const ast::Stmt& s) { return s.span.start().line; }
 // Evaluates debugger text in frame `level` of a paused run, as the debugger does.
 Value eval_text(const Interpreter& in, int level, uint32_t offset, const std::string& text) {
   FrameView v = in.frame_view(level);
-  frontend::DebugExpression e = frontend::check_debug_expression(in.program(), v.func, offset, text);
+  frontend::DebugExpression e =
+      frontend::check_debug_expression(in.program(), v.func, offset, text);
   if (!e.ok()) throw std::runtime_error(text + ": " + e.error);
   return in.evaluate(*e.expr, level);
 }
@@ -118,7 +121,8 @@ class Probe : public StatementHook {
  public:
   void before_statement(const ast::Stmt& stmt, const ast::FuncDecl& func, int depth,
                         const Interpreter& in) override {
-    if (func.name == "jacobian" && line(stmt) == 18) activations.push_back(in.frame_view(0).activation);
+    if (func.name == "jacobian" && line(stmt) == 18)
+      activations.push_back(in.frame_view(0).activation);
     if (func.name != "jacobian" || line(stmt) != 19 || in.frame_view(0).map->element != 1) return;
     seen = true;
     depth_seen = depth;
@@ -209,10 +213,12 @@ TEST(Inspect, NothingRunsNoFrames) {
 class Recorder : public StatementHook {
  public:
   Recorder(Trap* trap, int limit) : trap_(trap), limit_(limit) {}
-  void before_statement(const ast::Stmt& s, const ast::FuncDecl&, int depth, const Interpreter&) override {
+  void before_statement(const ast::Stmt& s, const ast::FuncDecl&, int depth,
+                        const Interpreter&) override {
     note("b", s, depth);
   }
-  void after_statement(const ast::Stmt& s, const ast::FuncDecl&, int depth, const Interpreter&) override {
+  void after_statement(const ast::Stmt& s, const ast::FuncDecl&, int depth,
+                       const Interpreter&) override {
     note("a", s, depth);
   }
   std::vector<std::string> events;
@@ -229,12 +235,12 @@ class Recorder : public StatementHook {
 TEST(Trap, AfterEventsCloseStatementsAndAHookMayRemoveItself) {
   if (!kStatementHook) GTEST_SKIP() << "built with SIMIT_STATEMENT_HOOK=OFF";
   auto c = testing::compile(
-      "func g() -> r : int\n"  // 1
-      "  r = 2;\n"             // 2
-      "end\n"                  // 3
+      "func g() -> r : int\n"                    // 1
+      "  r = 2;\n"                               // 2
+      "end\n"                                    // 3
       "export func f() -> (a : int, b : int)\n"  // 4
-      "  a = g();\n"           // 5
-      "  b = a + 1;\n"         // 6
+      "  a = g();\n"                             // 5
+      "  b = a + 1;\n"                           // 6
       "end\n");
   Trap trap;
   Recorder all(&trap, -1);
@@ -280,7 +286,8 @@ TEST(Trap, InterruptFromASignalHandler) {
   if (!kStatementHook) GTEST_SKIP() << "built with SIMIT_STATEMENT_HOOK=OFF";
   Fixture fx;
   g_alarm_trap = &fx.trap();
-  struct sigaction sa {}, saved {};
+  struct sigaction sa {
+  }, saved{};
   sa.sa_handler = on_alarm;
   sigemptyset(&sa.sa_mask);
   ASSERT_EQ(sigaction(SIGALRM, &sa, &saved), 0);

@@ -22,14 +22,14 @@ const char* const kFileA =
     "end\n"                              // a.sim:3
     "\n";                                // a.sim:4
 const char* const kFileB =
-    "% b.sim\n"                                     // b.sim:1
-    "export func main(a : float) -> r : float\n"    // b.sim:2
-    "  var s = sq(a);\n"                            // b.sim:3
-    "  for i in 0:2\n"                              // b.sim:4
-    "    s = s + 1.0;\n"                            // b.sim:5
-    "  end\n"                                       // b.sim:6
-    "  r = s;\n"                                    // b.sim:7
-    "end\n";                                        // b.sim:8
+    "% b.sim\n"                                   // b.sim:1
+    "export func main(a : float) -> r : float\n"  // b.sim:2
+    "  var s = sq(a);\n"                          // b.sim:3
+    "  for i in 0:2\n"                            // b.sim:4
+    "    s = s + 1.0;\n"                          // b.sim:5
+    "  end\n"                                     // b.sim:6
+    "  r = s;\n"                                  // b.sim:7
+    "end\n";                                      // b.sim:8
 
 class DebugRun {
  public:
@@ -92,7 +92,7 @@ TEST(LineMap, MapsConcatenatedFiles) {
   EXPECT_EQ(m.place(2).file, "a.sim");
   EXPECT_EQ(m.place(7).file, "lib/b.sim");
   EXPECT_EQ(m.place(7).line, 3);
-  EXPECT_EQ(m.compiled_line("b.sim", 3), 7);       // by base name
+  EXPECT_EQ(m.compiled_line("b.sim", 3), 7);  // by base name
   EXPECT_EQ(m.compiled_line("lib/b.sim", 3), 7);
   EXPECT_EQ(m.compiled_line("a.sim", 4), 4);
   EXPECT_EQ(m.compiled_line("a.sim", 5), std::nullopt);  // b.sim's lines are not a.sim's
@@ -102,7 +102,7 @@ TEST(LineMap, MapsConcatenatedFiles) {
 
 TEST(Debugger, BreaksAndReportsInTheRealFilesOfAConcatenatedSource) {
   DebugRun s({"break b.sim:3", "break sq", "run", "backtrace", "print x", "continue", "print s",
-             "next", "print s + 0.5", "info locals", "continue"});
+              "next", "print s + 0.5", "info locals", "continue"});
   double r = s.run_until_done();
   EXPECT_EQ(r, 11.0);
   EXPECT_TRUE(s.armed_at_start());
@@ -159,7 +159,9 @@ TEST(Debugger, KnowsItsCommands) {
   EXPECT_TRUE(Debugger::is_command("bt"));
   EXPECT_TRUE(Debugger::is_command("wat"));
   EXPECT_FALSE(Debugger::is_command("load"));
-  EXPECT_FALSE(Debugger::is_command("d"  "x"));
+  EXPECT_FALSE(
+      Debugger::is_command("d"
+                           "x"));
 }
 
 }  // namespace
