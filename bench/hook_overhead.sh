@@ -10,6 +10,8 @@
 #
 # Build folders: $HOOK_ON_BUILD and $HOOK_OFF_BUILD (default build-hook-on, build-hook-off);
 # an existing folder keeps its other settings and only gets SIMIT_STATEMENT_HOOK set.
+# With COUNT_INSTRUCTIONS=1 (needs valgrind) it also counts the instructions of one run of one
+# frame per build under cachegrind: a figure the machine's load does not disturb.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../scripts/common.sh"
 
@@ -62,3 +64,16 @@ print(f"fem on the bunny, {rounds} runs of {frames} frames per build, alternatin
 line("CPU time per run (parse, meshes, init and frames)", cpu["on"], cpu["off"], "s")
 line("wall time per frame", wall["on"], wall["off"], "ms")
 PY
+
+if [ "${COUNT_INSTRUCTIONS:-0}" = 1 ]; then
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+  for b in on off; do
+    dir=$ON_DIR
+    [ $b = off ] && dir=$OFF_DIR
+    valgrind --tool=cachegrind --cache-sim=no --cachegrind-out-file=/dev/null \
+      "$dir/tools/simit" run "$SCENE" --frames 1 --output "$work/$b" 2>"$work/$b.log" >/dev/null
+    sed -n 's/.*I *refs: *//p' "$work/$b.log" | tr -d , >"$work/$b.ir"
+  done
+  python3 -c "import sys; on, off = (int(open(f).read()) for f in sys.argv[1:3]); print(f'instructions of one run of 1 frame: compiled in {on:,}, compiled out {off:,}, overhead {100.0 * (on / off - 1.0):+.3f}%')" "$work/on.ir" "$work/off.ir"
+fi

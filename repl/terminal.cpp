@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "session.h"
+#include "sigint.h"
 
 #ifdef SIMIT_HAVE_READLINE
 #include <readline/history.h>
@@ -36,23 +37,13 @@ void on_sigint(int) {
 
 class SigintHandler {
  public:
-  explicit SigintHandler(Session& session) {
-    g_interruptible = &session;
-    struct sigaction sa {};
-    sa.sa_handler = on_sigint;
-    sa.sa_flags = SA_RESTART;  // a pipe's getline goes on; select() still returns EINTR
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &previous_);
-  }
-  ~SigintHandler() {
-    sigaction(SIGINT, &previous_, nullptr);
-    g_interruptible = nullptr;
-  }
+  explicit SigintHandler(Session& session) : handler_((g_interruptible = &session, on_sigint)) {}
+  ~SigintHandler() { g_interruptible = nullptr; }
   SigintHandler(const SigintHandler&) = delete;
   SigintHandler& operator=(const SigintHandler&) = delete;
 
  private:
-  struct sigaction previous_ {};
+  SigintScope handler_;
 };
 
 #ifdef SIMIT_HAVE_READLINE

@@ -15,6 +15,7 @@
 #include <toml++/toml.h>
 
 #include "debugger.h"
+#include "sigint.h"
 #include "frontend/frontend.h"
 #include "run_command.h"
 #include "scene_command.h"
@@ -34,23 +35,13 @@ extern "C" void interrupt_run(int) {
 // Ctrl-C during a run stops it at its next statement (a run-time error, "interrupted").
 class InterruptScope {
  public:
-  explicit InterruptScope(interp::Trap& trap) {
-    g_trap = &trap;
-    struct sigaction sa {};
-    sa.sa_handler = interrupt_run;
-    sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESTART;  // reading a command while stopped goes on
-    sigaction(SIGINT, &sa, &saved_);
-  }
-  ~InterruptScope() {
-    sigaction(SIGINT, &saved_, nullptr);
-    g_trap = nullptr;
-  }
+  explicit InterruptScope(interp::Trap& trap) : handler_((g_trap = &trap, interrupt_run)) {}
+  ~InterruptScope() { g_trap = nullptr; }
   InterruptScope(const InterruptScope&) = delete;
   InterruptScope& operator=(const InterruptScope&) = delete;
 
  private:
-  struct sigaction saved_ {};
+  repl::SigintScope handler_;
 };
 
 constexpr int kNotStarted = -1;  // `run` with arguments that do not fit: nothing ran

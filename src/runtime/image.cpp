@@ -161,7 +161,7 @@ void Image::line(double x0, double y0, double x1, double y1, Rgb c, int thicknes
     for (int dy = lo; dy <= hi; ++dy)
       for (int dx = lo; dx <= hi; ++dx) set(px + dx, py + dy, c);
   };
-  // Samples at most one pixel apart along each axis give an 8-connected line. Far-off lines
+  // Samples less than a pixel apart along each axis give a connected line. Far-off lines
   // are clipped coarsely to a margin around the canvas first, so the loop stays short.
   const double margin = thickness + 2.0;
   const double xmin = -margin, xmax = width_ + margin, ymin = -margin, ymax = height_ + margin;
@@ -180,8 +180,10 @@ void Image::line(double x0, double y0, double x1, double y1, Rgb c, int thicknes
       !clip(dy, ymax - y0))
     return;
   const double ax = x0 + t0 * dx, ay = y0 + t0 * dy, bx = x0 + t1 * dx, by = y0 + t1 * dy;
-  const int steps =
-      std::max(1, static_cast<int>(std::ceil(std::max(std::abs(bx - ax), std::abs(by - ay)))));
+  // Half a pixel apart: samples a whole pixel apart can round to k - 0.000001 and k + 1
+  // and skip the pixel between.
+  const int steps = std::max(
+      1, static_cast<int>(std::ceil(2.0 * std::max(std::abs(bx - ax), std::abs(by - ay)))));
   for (int k = 0; k <= steps; ++k) {
     const double t = double(k) / steps;
     stamp(ax + t * (bx - ax), ay + t * (by - ay));

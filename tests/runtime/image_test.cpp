@@ -128,6 +128,15 @@ TEST(Image, LineIncludesBothEndPixelsAndIsConnected) {
   EXPECT_LE(pixels.size(), 26u);
 }
 
+// A long line whose samples fall on whole pixels must still set every pixel it crosses.
+TEST(Image, LongLineSkipsNoPixel) {
+  Image image(800, 10, kWhite);
+  image.line(100.0, 5.5, 796.0, 5.5, kRed);
+  for (int x = 100; x <= 796; ++x) EXPECT_TRUE(image.at(x, 5) == kRed) << "pixel " << x;
+  EXPECT_TRUE(image.at(99, 5) == kWhite);
+  EXPECT_TRUE(image.at(797, 5) == kWhite);
+}
+
 TEST(Image, ThickLineAndClipping) {
   Image image(20, 20, kWhite);
   image.line(10.5, 2.5, 10.5, 12.5, kRed, 3);
