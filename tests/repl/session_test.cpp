@@ -2,6 +2,7 @@
 #include "session.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <fstream>
@@ -79,7 +80,7 @@ TEST(Session, Commands) {
 }
 
 TEST(Session, LoadAndReload) {
-  std::string path = ::testing::TempDir() + "/repl_load.sim";
+  std::string path = ::testing::TempDir() + "/repl_load_" + std::to_string(::getpid()) + ".sim";
   {
     std::ofstream f(path);
     f << "func half(x : float) -> (y : float)\n  y = x / 2.0;\nend\n";
@@ -117,7 +118,7 @@ struct FakeScene {
 };
 
 std::string scene_program() {
-  std::string path = ::testing::TempDir() + "/repl_scene.sim";
+  std::string path = ::testing::TempDir() + "/repl_scene_" + std::to_string(::getpid()) + ".sim";
   std::ofstream f(path);
   f << "element Vertex\n  x : vector[3](float);\n  pinned : bool;\nend\n"
        "extern verts : set{Vertex};\nextern dy : float;\n"

@@ -3,6 +3,7 @@
 #include "interp_executor.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <sstream>
@@ -106,7 +107,10 @@ TEST(ValuesMatch, ExactKindsAndComplexParts) {
 }
 
 std::string write_program(const std::string& text) {
-  std::string path = ::testing::TempDir() + "run_command_test.sim";
+  // One file per test and process: ctest runs the tests of this binary in parallel.
+  std::string path = ::testing::TempDir() + "run_command_" +
+                     ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                     std::to_string(::getpid()) + ".sim";
   std::ofstream(path) << text;
   return path;
 }
