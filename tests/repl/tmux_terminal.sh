@@ -9,6 +9,8 @@ if ! command -v tmux > /dev/null; then
   echo "SKIP: tmux is not installed (scripts/install_deps.sh installs it)"
   exit 77
 fi
+# A detached server needs no terminal, but some tmux builds refuse an unset or dumb TERM.
+case "${TERM:-dumb}" in dumb) export TERM=xterm ;; esac
 work=$(mktemp -d)
 socket="simit-repl-test-$$"
 cleanup() { tmux -L "$socket" kill-server 2> /dev/null || true; rm -rf "$work"; }
