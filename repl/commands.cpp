@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "frontend/ast.h"
+#include "frontend/intrinsics.h"
 #include "input_text.h"
 #include "session.h"
 
@@ -34,9 +35,13 @@ const CommandHelp kCommands[] = {
     {"quit", ":quit", "leave (Ctrl-D too)"},
 };
 
-const char* const kIntrinsics[] = {"abs", "sqrt", "sin", "cos", "tan", "asin", "acos", "atan2",
-                                   "exp", "log", "pow", "norm", "dot", "cross", "det", "inv",
-                                   "solve", "trace", "print", "println"};
+// The intrinsics, from the frontend's own list, and the print statements.
+const char* const kIntrinsics[] = {
+#define SIMIT_INTRINSIC_NAME(id, name) name,
+    SIMIT_INTRINSICS(SIMIT_INTRINSIC_NAME)
+#undef SIMIT_INTRINSIC_NAME
+        "print",
+    "println"};
 
 const char* const kHelpIntro =
     "Enter declarations (element, extern, func, const) or statements; an expression without a\n"

@@ -148,7 +148,58 @@ def read_pvd(path, frames, frame_time):
     return [os.path.join(os.path.dirname(path), d.get("file")) for d in sets]
 
 
-def check_scene(simit, scene_path, outdir, frames, mesh, cell_type, masses, volumes=None):
+def const_value(sim_path, name):
+    """A `const NAME = number;` or a column-vector literal `[a, b, c]'` of the program."""
+    m = re.search(r"^const %s\s*=\s*([^;%%]+);" % name, open(sim_path).read(), re.M)
+    text = m.group(1).strip()
+    if text.startswith("["):
+        return [float(v) for v in text.strip("[]'").split(",")]
+    return float(text)
+
+
+def inverse3(a):
+    det = (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+           - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+           + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
+    cof = [[a[(j + 1) % 3][(i + 1) % 3] * a[(j + 2) % 3][(i + 2) % 3]
+            - a[(j + 1) % 3][(i + 2) % 3] * a[(j + 2) % 3][(i + 1) % 3] for j in range(3)]
+           for i in range(3)]
+    return [[cof[i][j] / det for j in range(3)] for i in range(3)], det
+
+
+def edge_matrix(pts, t):
+    return [[pts[t[j]][i] - pts[t[3]][i] for j in range(3)] for i in range(3)]
+
+
+def fem_energy(sim_path, rest, tets, volumes, xs, v, m):
+    """The total energy of fem.sim's state, computed here from the state alone: Neo-Hookean
+    W psi(F) per tet, psi = mu/2 (tr(F'F) - 3) - mu log J + lambda/2 (log J)^2, with the
+    program's E and nu (mu = E / (2 nu), sic), plus kinetic and gravitational energy."""
+    E, nu, g = const_value(sim_path, "E"), const_value(sim_path, "nu"), const_value(sim_path, "gravity")
+    mu, lam = 0.5 * E / nu, E * nu / ((1 + nu) * (1 - 2 * nu))
+    total = 0.0
+    for t, w in zip(tets, volumes):
+        B, _ = inverse3(edge_matrix(rest, t))
+        D = edge_matrix(xs, t)
+        F = [[sum(D[i][k] * B[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+        _, J = inverse3(F)
+        c = sum(F[i][j] ** 2 for i in range(3) for j in range(3))
+        total += w * (0.5 * mu * (c - 3) - mu * math.log(J) + 0.5 * lam * math.log(J) ** 2)
+    for x, vi, (mi,) in zip(xs, v, m):
+        total += 0.5 * mi * sum(a * a for a in vi) - mi * sum(a * b for a, b in zip(g, x))
+    return total
+
+
+def csv_column(path, name):
+    rows = [line.strip().split(",") for line in open(path) if line.strip()]
+    k = rows[0].index(name)
+    return [float(r[k]) for r in rows[1:]]
+
+
+def check_scene(simit, scene_path, outdir, frames, mesh, cell_type, masses, volumes=None,
+                energy=None):
+    """`energy(xs, point_data)`, when given, computes the last frame's total energy, which must
+    match the `energy` column of the scene's statistics CSV."""
     scene = tomllib.load(open(scene_path, "rb"))
     out = scene["output"]
     points_set = scene["sets"][out["points"]]
@@ -216,6 +267,12 @@ def check_scene(simit, scene_path, outdir, frames, mesh, cell_type, masses, volu
           % (len(files), len(pts), len(cells), sum(pinned), total, sum(masses), worst))
     if not close(total, sum(masses), 1e-12):
         fail("the masses sum to %.17g, expected %.17g" % (total, sum(masses)))
+    if energy:
+        expected = energy(xs, pd)
+        got = csv_column(os.path.join(outdir, out["csv"]), "energy")[-1]
+        print("ok: energy of the last frame %.12g (the program's CSV: %.12g)" % (expected, got))
+        if not close(got, expected, 1e-9):
+            fail("the CSV's energy %.17g differs from %.17g computed from the state" % (got, expected))
 
 
 def main():
@@ -234,8 +291,12 @@ def main():
             masses[i] += 0.25 * density * w
     print("fem bunny: volume %.12g, density %g, mass %.12g" % (sum(volumes), density,
                                                                 density * sum(volumes)))
+    fem_sim = os.path.join(examples, "fem", "fem.sim")
+    energy = lambda xs, pd: fem_energy(
+        fem_sim, pts, tets, volumes, xs, array_values(pd, "v", len(pts), 3, "energy"),
+        array_values(pd, "m", len(pts), 1, "energy"))
     check_scene(simit, os.path.join(examples, "fem", "bunny.toml"), os.path.join(outdir, "fem"),
-                3, (pts, tets), VTK_TETRA, masses, volumes)
+                3, (pts, tets), VTK_TETRA, masses, volumes, energy)
 
     # cloth: density area / 3 per triangle corner; the unit square weighs density.
     scene = tomllib.load(open(os.path.join(examples, "cloth", "square.toml"), "rb"))
@@ -247,8 +308,21 @@ def main():
             masses[i] += density * triangle_area(pts, t) / 3
     print("cloth square: area %.12g, density %g" % (sum(triangle_area(pts, t) for t in tris),
                                                     density))
+    # The flat cloth starts at rest at y = 0 (energy 0), and Velocity Verlet nearly conserves
+    # energy: what the program reports must stay tiny against the kinetic energy it gained,
+    # computed here from the last frame's v and m.
+    def cloth_energy(xs, pd):
+        v = array_values(pd, "v", len(pts), 3, "energy")
+        m = array_values(pd, "m", len(pts), 1, "energy")
+        kinetic = sum(0.5 * mi * sum(a * a for a in vi) for vi, (mi,) in zip(v, m))
+        got = csv_column(os.path.join(outdir, "cloth", scene["output"]["csv"]), "energy")[-1]
+        print("ok: cloth energy %.3g J against a kinetic energy of %.3g J" % (got, kinetic))
+        if not abs(got) <= 1e-5 * kinetic:
+            fail("the cloth's energy drifted to %g J (kinetic %g J)" % (got, kinetic))
+        return got
     check_scene(simit, os.path.join(examples, "cloth", "square.toml"),
-                os.path.join(outdir, "cloth"), 2, (pts, tris), VTK_TRIANGLE, masses)
+                os.path.join(outdir, "cloth"), 2, (pts, tris), VTK_TRIANGLE, masses, None,
+                cloth_energy)
 
 
 main()

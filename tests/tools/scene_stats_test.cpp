@@ -53,13 +53,13 @@ TEST(SceneStats, CsvSplitsEachFrameIntoAssemblyAndSolve) {
   std::ifstream csv(dir / "out" / "stats.csv");
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
-  EXPECT_EQ(line, "frame,time,ms,cg_iterations,cg_residual,assembly_ms,solve_ms");
+  EXPECT_EQ(line, "frame,time,ms,cg_iterations,cg_residual,energy,assembly_ms,solve_ms");
   int rows = 0;
   while (std::getline(csv, line)) {
     const std::vector<std::string> cells = split(line);
-    ASSERT_EQ(cells.size(), 7u) << line;
-    const double ms = std::stod(cells[2]), assembly = std::stod(cells[5]),
-                 solve = std::stod(cells[6]);
+    ASSERT_EQ(cells.size(), 8u) << line;
+    const double ms = std::stod(cells[2]), assembly = std::stod(cells[6]),
+                 solve = std::stod(cells[7]);
     EXPECT_GT(assembly, 0.0) << line;  // fem maps four times per step
     EXPECT_LE(assembly, ms) << line;
     EXPECT_GE(solve, 0.0) << line;
