@@ -116,6 +116,7 @@ void Debugger::begin_run() {
   shown_activation_ = 0;
   warned_.clear();
   trap_.take_interrupt();
+  pause_requested_.store(false, std::memory_order_relaxed);
   for (const auto& b : breakpoints_) {
     b->armed = true;
     b->set = nullptr;

@@ -15,6 +15,7 @@
 // step), so a run without any costs the trap point's one branch per statement.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -65,6 +66,12 @@ class Debugger : public interp::StatementHook {
   void begin_run();
   bool end_run();
   bool running() const { return running_; }
+  // Stops the run at its next statement and reads commands there, as a breakpoint would
+  // (Ctrl-C in `simit debug`). Async-signal-safe: it only stores atomics.
+  void request_pause() {
+    pause_requested_.store(true, std::memory_order_relaxed);
+    trap_.install(this);
+  }
   bool quit_requested() const { return quit_; }
 
   void before_statement(const frontend::ast::Stmt& stmt, const frontend::ast::FuncDecl& func,
@@ -139,6 +146,7 @@ class Debugger : public interp::StatementHook {
   std::ostream& err_;
   LineSource lines_;
   interp::Trap trap_;
+  std::atomic<bool> pause_requested_{false};
   const frontend::ast::Program* program_ = nullptr;
   LineMap map_;
 

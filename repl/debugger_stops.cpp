@@ -42,6 +42,10 @@ void Debugger::before_statement(const ast::Stmt& stmt, const ast::FuncDecl& func
                                 const interp::Interpreter& in) {
   if (&in != attached_) attach(in);
   Event e{&stmt, &func, depth, false, &in};
+  if (pause_requested_.exchange(false, std::memory_order_relaxed)) {
+    stop(e, "Interrupted (Ctrl-C).\n");
+    return;
+  }
   std::string reason = breakpoint_hit(e);
   if (reason.empty() && !step_done(e)) return;
   stop(e, reason);
@@ -186,7 +190,9 @@ void Debugger::stop(const Event& e, const std::string& reason) {
     if (a == Action::Resume || a == Action::Quit) break;
   }
   stopped_ = false;
-  trap_.take_interrupt();  // a Ctrl-C typed at the prompt does not end the resumed run
+  // A Ctrl-C typed at the prompt neither ends nor pauses the resumed run.
+  trap_.take_interrupt();
+  pause_requested_.store(false, std::memory_order_relaxed);
   if (killed_) {
     trap_.install(nullptr);
     throw interp::Interrupted(e.stmt->span, "the debugger ended the run");

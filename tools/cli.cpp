@@ -139,7 +139,8 @@ void add_debug(CLI::App& app, Commands& c) {
       "index: break tet_force if t == 17.\n"
       "A scene runs with 'run [FRAMES]' (its init, then FRAMES frames, default the scene's), "
       "writing no output files; a .sim file with 'run FUNC ARGS...' (an exported function, "
-      "literal arguments as for simit run --call). Ctrl-C stops a run at its next statement.\n"
+      "literal arguments as for simit run --call). Ctrl-C pauses a run at its next statement and "
+      "reads commands there (continue, kill, ...), as gdb does.\n"
       "Exit status: 0, or 1 when the program does not compile.\n");
 }
 #endif

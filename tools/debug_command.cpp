@@ -26,17 +26,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
-interp::Trap* g_trap = nullptr;  // what SIGINT interrupts while a run goes on
+repl::Debugger* g_debugger = nullptr;  // what SIGINT pauses while a run goes on
 
 extern "C" void interrupt_run(int) {
-  if (g_trap) g_trap->request_interrupt();
+  if (g_debugger) g_debugger->request_pause();
 }
 
-// Ctrl-C during a run stops it at its next statement (a run-time error, "interrupted").
+// Ctrl-C during a run pauses it at its next statement, where the debugger reads commands
+// (`continue` goes on, `kill` ends the run), as gdb does.
 class InterruptScope {
  public:
-  explicit InterruptScope(interp::Trap& trap) : handler_((g_trap = &trap, interrupt_run)) {}
-  ~InterruptScope() { g_trap = nullptr; }
+  explicit InterruptScope(repl::Debugger& debugger)
+      : handler_((g_debugger = &debugger, interrupt_run)) {}
+  ~InterruptScope() { g_debugger = nullptr; }
   InterruptScope(const InterruptScope&) = delete;
   InterruptScope& operator=(const InterruptScope&) = delete;
 
@@ -155,7 +157,7 @@ void DebugSession::start(const std::string& args) {
   std::ostringstream errors;  // a run the debugger ended reports no error
   int rc = 0;
   {
-    InterruptScope interrupts(debugger_.trap());
+    InterruptScope interrupts(debugger_);
     debugger_.begin_run();
     rc = is_scene(options_.file) ? run_scene_frames(args, errors) : run_call(args, errors);
   }

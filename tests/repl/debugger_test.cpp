@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <deque>
+#include <thread>
+#include <chrono>
 #include <sstream>
 
 #include "frontend/frontend.h"
@@ -162,6 +164,39 @@ TEST(Debugger, KnowsItsCommands) {
   EXPECT_FALSE(
       Debugger::is_command("d"
                            "x"));
+}
+
+// Ctrl-C in `simit debug` (request_pause, from another thread here) stops an endless loop
+// at its next statement with no breakpoint set; the debugger then reads commands there.
+TEST(Debugger, PauseStopsARunWithoutBreakpoints) {
+  if (!interp::kStatementHook)
+    GTEST_SKIP() << "built with SIMIT_STATEMENT_HOOK=OFF: no trap point to pause at";
+  auto c = frontend::compile_source(
+      "loop.sim", "export func main() -> (n : int)\n  while true\n    n = n + 1;\n  end\nend\n");
+  ASSERT_TRUE(c->ok()) << c->diagnostics.render_all();
+  std::ostringstream out;
+  std::deque<std::string> script = {"print n > 0", "kill"};
+  Debugger d(out, out, [&](const std::string&) -> std::optional<std::string> {
+    if (script.empty()) return std::nullopt;
+    std::string line = script.front();
+    script.pop_front();
+    return line;
+  });
+  d.set_program(c->program.get());
+  interp::Options o;
+  o.trap = &d.trap();
+  interp::Interpreter in(*c->program, o);
+  d.begin_run();
+  EXPECT_FALSE(d.trap().armed());  // nothing set: the loop runs with the hook off
+  std::thread pauser([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    d.request_pause();
+  });
+  EXPECT_THROW(in.call(*c->program->find_func("main"), {}), interp::RuntimeError);
+  pauser.join();
+  EXPECT_TRUE(d.end_run());  // ended by `kill`
+  EXPECT_NE(out.str().find("Interrupted (Ctrl-C)."), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("n > 0 = true"), std::string::npos) << out.str();
 }
 
 }  // namespace
