@@ -87,18 +87,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   MapContext* saved = map_;
   const int saved_depth = map_depth_, base_depth = depth_;
   auto setup = [&](int element) -> Frame& {
-    if (frames_.size() <= static_cast<size_t>(depth_ + 1)) frames_.push_back(std::make_unique<Frame>());
-    Frame& callee = *frames_[depth_ + 1];
-    callee.func = &f;
-    callee.call_site = at;
-    callee.map = ctx;
-    callee.activation = ++activations_;
-    const size_t n = static_cast<size_t>(f.frame_size);
-    if (callee.slots.size() < n) {
-      callee.slots.resize(n);
-      callee.refs.resize(n);
-    }
-    for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
+    Frame& callee = next_frame(f, at, ctx);
     size_t k = 0;
     for (const Value& p : partial) callee.slots[f.params[k++].var->slot] = p;
     if (k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_element(ctx->target, element);

@@ -84,19 +84,7 @@ Interpreter::Frame& Interpreter::enter(const ast::FuncDecl& f, size_t arg_base, 
                                        const ast::Call* c) {
   constexpr int kMaxDepth = 10000;  // recursion is rejected statically; this is a backstop
   if (depth_ + 1 >= kMaxDepth) fail(c ? c->span : f.span, "call depth limit exceeded");
-  if (frames_.size() <= static_cast<size_t>(depth_ + 1))
-    frames_.push_back(std::make_unique<Frame>());
-  Frame& callee = *frames_[depth_ + 1];
-  callee.func = &f;
-  callee.call_site = c ? c->span : SourceSpan{};
-  callee.map = nullptr;
-  callee.activation = ++activations_;
-  const size_t n = static_cast<size_t>(f.frame_size);
-  if (callee.slots.size() < n) {
-    callee.slots.resize(n);
-    callee.refs.resize(n);
-  }
-  for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
+  Frame& callee = next_frame(f, c ? c->span : SourceSpan{}, nullptr);
   size_t inout = inout_base;
   for (size_t i = 0; i < f.params.size(); ++i) {
     const int slot = f.params[i].var->slot;

@@ -118,6 +118,23 @@ const Value* Interpreter::local(const ast::Variable& v) const {
   return value->empty() ? nullptr : value;
 }
 
+Interpreter::Frame& Interpreter::next_frame(const ast::FuncDecl& f, const SourceSpan& call_site,
+                                            MapContext* map) {
+  if (frames_.size() <= static_cast<size_t>(depth_ + 1)) frames_.push_back(std::make_unique<Frame>());
+  Frame& callee = *frames_[depth_ + 1];
+  callee.func = &f;
+  callee.call_site = call_site;
+  callee.map = map;
+  callee.activation = ++activations_;
+  const size_t n = static_cast<size_t>(f.frame_size);
+  if (callee.slots.size() < n) {
+    callee.slots.resize(n);
+    callee.refs.resize(n);
+  }
+  for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
+  return callee;
+}
+
 Value& Interpreter::var(const ast::Variable& v) {
   if (v.kind == ast::Variable::Kind::Extern || v.kind == ast::Variable::Kind::GlobalConst)
     return globals_[v.slot];

@@ -128,6 +128,10 @@ class Interpreter {
   Value eval_user_call(const frontend::ast::Call& c);
   std::vector<Value> eval_multi(const frontend::ast::Expr& e);
   Frame& run_call(const frontend::ast::Call& c);
+  // The frame above the current one, made ready for a call of `f`: slots sized, each
+  // variable referring to its own slot (calls and maps then bind the parameters).
+  Frame& next_frame(const frontend::ast::FuncDecl& f, const frontend::SourceSpan& call_site,
+                    MapContext* map);
   Frame& enter(const frontend::ast::FuncDecl& f, size_t arg_base, size_t inout_base,
                const frontend::ast::Call* c);
   void bind_generics(const frontend::ast::FuncDecl& f, Frame& callee, const frontend::ast::Call* c);
