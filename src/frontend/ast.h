@@ -333,6 +333,9 @@ struct Map : Expr {
 
 struct Stmt : Node {
   using Node::Node;
+  // By the system-statement pass (frontend/system_statements.h): computes on system
+  // tensors without calling user code, so a compiled executor may run it as a whole.
+  bool system_level = false;
 };
 using StmtPtr = std::unique_ptr<Stmt>;
 using Block = std::vector<StmtPtr>;

@@ -6,6 +6,7 @@
 
 #include "frontend/checker.h"
 #include "frontend/hoisting.h"
+#include "frontend/system_statements.h"
 #include "frontend/lexer.h"
 #include "frontend/parser.h"
 
@@ -20,7 +21,10 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
   // A tree with syntax errors is incomplete; checking it would only add noise.
   if (options.check && !c->diagnostics.has_errors()) check(*c->program, c->diagnostics);
   // Analyses, once per program, for every executor.
-  if (c->ok() && options.check) plan_hoisting(*c->program);
+  if (c->ok() && options.check) {
+    plan_hoisting(*c->program);
+    mark_system_statements(*c->program);
+  }
   return c;
 }
 

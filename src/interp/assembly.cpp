@@ -89,7 +89,15 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   auto setup = [&](int element) -> Frame& {
     Frame& callee = next_frame(f, at, ctx);
     size_t k = 0;
-    for (const Value& p : partial) callee.slots[f.params[k++].var->slot] = p;
+    // The partial arguments are the same for every element: parameters refer to them
+    // (an inout one gets its own copy).
+    for (Value& p : partial) {
+      const ast::Param& param = f.params[k++];
+      if (param.inout)
+        callee.slots[param.var->slot] = p;
+      else
+        callee.refs[param.var->slot] = &p;
+    }
     if (k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_element(ctx->target, element);
     if (a.pass_endpoints && k < f.params.size())
       callee.slots[f.params[k++].var->slot] = Value::of_tuple(ctx->target, element);
@@ -97,7 +105,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
     for (size_t i = 0; i < f.generics.size(); ++i)
       callee.slots[f.generics[i].var->slot] = i < generics.size() ? generics[i] : Value();
     for (const ast::Param& p : f.params) {
-      const Value& v = callee.slots[p.var->slot];
+      if (f.generics.empty()) break;  // deduction only binds generic parameters
+      const Value& v = *callee.refs[p.var->slot];
       if (p.var->type && p.var->type->kind == Type::Kind::Tensor && v.is_tensor())
         deduce(*p.var->type, v.tensor().shape(), callee, at);
     }

@@ -12,8 +12,12 @@
 //      for this plan runs it, writes the results into the zeroed result values it is handed
 //      (field arrays and matrix values are the runtime's own, so nothing is copied), and
 //      returns true; returning false leaves the site to the interpreter.
-//   3. While the debugger's trap point is armed (a breakpoint, a watch, stepping, Ctrl-C),
-//      no site is offered: every statement must run interpreted so that it can stop.
+//   3. Statements the frontend marked system-level (frontend/system_statements.h: vector
+//      updates, `A * p`, a whole CG loop) are offered too, through run_statement; the
+//      executor reads and writes the running function's variables through
+//      Interpreter::variable.
+//   4. While the debugger's trap point is armed (a breakpoint, a watch, stepping, Ctrl-C),
+//      nothing is offered: every statement must run interpreted so that it can stop.
 #pragma once
 
 #include <cstdint>
@@ -52,12 +56,20 @@ struct SiteCall {
   std::deque<Value>& results;              // zeroed results to accumulate into
 };
 
+class Interpreter;
+
 class SiteHook {
  public:
   virtual ~SiteHook() = default;
   // Runs the site and returns true, or returns false to let the interpreter run it. May
   // throw a RuntimeError (located at the site or at the failing statement).
   virtual bool run_site(SiteCall& call) = 0;
+  // Runs a system-level statement (Stmt::system_level) and returns true, or returns false
+  // to let the interpreter run it.
+  virtual bool run_statement(const frontend::ast::Stmt& stmt, Interpreter& in) {
+    (void)stmt, (void)in;
+    return false;
+  }
 };
 
 }  // namespace simit::interp

@@ -9,6 +9,17 @@ using frontend::IndexSet;
 using frontend::SourceSpan;
 using frontend::Type;
 
+bool Interpreter::has_inout(const ast::FuncDecl& f) {
+  for (const ast::Param& p : f.params)
+    if (p.inout) return true;
+  return false;
+}
+
+bool Interpreter::is_local(const ast::Variable& v) {
+  using K = ast::Variable::Kind;
+  return v.kind == K::Param || v.kind == K::Result || v.kind == K::Local || v.kind == K::LoopVar;
+}
+
 Value Interpreter::eval_call(const ast::Call& c) {
   if (c.intrinsic != frontend::Intrinsic::None) {
     Value v = call_intrinsic(c);
@@ -49,11 +60,17 @@ Interpreter::Frame& Interpreter::run_call(const ast::Call& c) {
   const ast::FuncDecl& f = *c.func;
   if (f.is_extern) fail(c.span, "external function '" + f.name + "' has no implementation bound");
   const size_t arg_base = arg_stack_.size(), inout_base = inout_stack_.size();
+  const bool by_reference = !has_inout(f);
   for (size_t i = 0; i < c.args.size(); ++i) {
-    if (f.params[i].inout)
+    if (f.params[i].inout) {
       push_inout_arg(*c.args[i], f.params[i].var->slot);
-    else
-      arg_stack_.push_back(eval(*c.args[i]));
+    } else if (const auto* r = c.args[i]->as<ast::VarRef>(); r && by_reference && is_local(*r->var)) {
+      // A read-only parameter sees the caller's variable itself: nothing can change that
+      // variable while the callee runs (no inout parameter aliases it), so no copy is made.
+      arg_stack_.push_back(Arg{Value(), &read_var(*r->var, *r)});
+    } else {
+      arg_stack_.push_back(Arg{eval(*c.args[i]), nullptr});
+    }
   }
   Frame& callee = enter(f, arg_base, inout_base, &c);
   execute_body(f);
@@ -68,7 +85,7 @@ void Interpreter::push_inout_arg(const ast::Expr& arg, int slot) {
     return;
   }
   Place p = resolve_place(arg);
-  arg_stack_.push_back(read_place(p));
+  arg_stack_.push_back(Arg{read_place(p), nullptr});
   inout_stack_.push_back(InoutArg{nullptr, p, true, slot});
 }
 
@@ -95,7 +112,11 @@ Interpreter::Frame& Interpreter::enter(const ast::FuncDecl& f, size_t arg_base, 
         continue;
       }
     }
-    callee.slots[slot] = std::move(arg_stack_[arg_base + i]);
+    Arg& a = arg_stack_[arg_base + i];
+    if (a.ref)
+      callee.refs[slot] = a.ref;
+    else
+      callee.slots[slot] = std::move(a.value);
   }
   arg_stack_.resize(arg_base);
   bind_generics(f, callee, c);

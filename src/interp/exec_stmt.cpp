@@ -21,8 +21,17 @@ void Interpreter::exec(const ast::Stmt& s) {
   if (trap_->armed()) [[unlikely]]
     return exec_trapped(s);
 #endif
+  if (s.system_level && options_.sites && offer_statement(s)) [[unlikely]]
+    return;
   exec_node(s);
 }
+
+// Out of line: only programs run with a compiled executor get here.
+[[gnu::noinline]] bool Interpreter::offer_statement(const ast::Stmt& s) {
+  return options_.sites->run_statement(s, *this);
+}
+
+Value& Interpreter::variable(const ast::Variable& v) { return var(v); }
 
 #if SIMIT_STATEMENT_HOOK
 // Out of line so that exec() stays small enough to inline into the block loop.

@@ -57,7 +57,7 @@ std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Valu
     for (size_t i = 0; i < args.size(); ++i) {
       if (func.params[i].inout)
         inout_stack_.push_back(InoutArg{nullptr, {}, false, func.params[i].var->slot});
-      arg_stack_.push_back(std::move(args[i]));
+      arg_stack_.push_back(Arg{std::move(args[i]), nullptr});
     }
     Frame& callee = enter(func, arg_base, inout_base, nullptr);
     inout_stack_.resize(inout_base);
@@ -164,6 +164,11 @@ int Interpreter::dim_size(const IndexSet& d, const SourceSpan& at) {
 Shape Interpreter::shape_of(const Type& t, const SourceSpan& at) {
   if (t.kind == Type::Kind::Scalar) return Shape();
   if (t.kind != Type::Kind::Tensor) unsupported(at, "values of element, set, tuple or opaque type");
+  // The common case, a small unblocked vector or matrix of fixed size.
+  if (!t.dims.empty() && t.dims.size() <= 2 && (!t.block || t.block->kind == Type::Kind::Scalar) &&
+      t.dims[0].kind == IndexSet::Kind::Fixed &&
+      (t.dims.size() == 1 || t.dims[1].kind == IndexSet::Kind::Fixed))
+    return t.dims.size() == 1 ? Shape{t.dims[0].size} : Shape{t.dims[0].size, t.dims[1].size};
   int dims[Shape::kMaxRank];
   int n = 0;
   for (const IndexSet& d : t.dims) {

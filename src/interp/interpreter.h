@@ -68,6 +68,9 @@ class Interpreter {
   const Value* local(const frontend::ast::Variable& var) const;
 
   const Options& options() const { return options_; }
+  // The storage of a variable of the running function (or a global), for a SiteHook that
+  // runs a statement: reads and writes go straight to the interpreter's own values.
+  Value& variable(const frontend::ast::Variable& var);
 
   // ---- Inspection of a paused run, for hooks (the step debugger). Level 0 is the innermost
   // active call (gdb's numbering); frame_count() is 0 when nothing runs. See interp/inspect.h.
@@ -129,6 +132,8 @@ class Interpreter {
   // calls.cpp: user functions; intrinsic_calls.cpp: intrinsics
   Value eval_call(const frontend::ast::Call& c);
   Value eval_user_call(const frontend::ast::Call& c);
+  static bool has_inout(const frontend::ast::FuncDecl& f);
+  static bool is_local(const frontend::ast::Variable& v);
   std::vector<Value> eval_multi(const frontend::ast::Expr& e);
   Frame& run_call(const frontend::ast::Call& c);
   // The frame above the current one, made ready for a call of `f`: slots sized, each
@@ -171,6 +176,7 @@ class Interpreter {
   void exec_block(const frontend::ast::Block& b);
   void exec(const frontend::ast::Stmt& s);
   void exec_trapped(const frontend::ast::Stmt& s);  // the trap point's slow path
+  bool offer_statement(const frontend::ast::Stmt& s);  // the executor seam for statements
   void exec_node(const frontend::ast::Stmt& s);
   void exec_var_decl(const frontend::ast::VarDecl& d);
   void exec_assign(const frontend::ast::Assign& a);
@@ -247,7 +253,12 @@ class Interpreter {
   std::vector<Value> globals_;
   std::vector<std::unique_ptr<Frame>> frames_;  // reused by depth; index 0 is a base frame
   int depth_ = 0;
-  std::vector<Value> arg_stack_;       // arguments being evaluated for pending calls
+  // Arguments being evaluated for pending calls: a value, or the caller's variable itself.
+  struct Arg {
+    Value value;
+    Value* ref = nullptr;
+  };
+  std::vector<Arg> arg_stack_;
   std::vector<InoutArg> inout_stack_;  // inout arguments of pending calls
   std::vector<std::pair<const frontend::ast::Call*, Value>> hoisted_;  // results waiting
   size_t hoist_base_ = 0;  // the innermost root's results start here

@@ -1,6 +1,7 @@
 // Run-time values of the interpreter.
 #include "interp/value.h"
 
+#include <cstring>
 #include <vector>
 
 #include "runtime/fault.h"
@@ -122,7 +123,11 @@ Value Value::zero(ComponentKind k) {
 
 Value Value::zero(ComponentKind k, const Shape& shape) {
   if (shape.is_scalar()) return zero(k);
-  return of_tensor(Tensor(k, shape));
+  if (k == ComponentKind::String) return of_tensor(Tensor(k, shape));
+  Value v = uninit_tensor(k, shape);
+  Tensor& t = v.tensor();
+  std::memset(t.mutable_ints(), 0, component_bytes(k) * t.size());
+  return v;
 }
 
 Value Value::component(const Tensor& t, size_t i) {

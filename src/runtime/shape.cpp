@@ -20,9 +20,6 @@ void check_dim(int d) {
 
 }  // namespace
 
-Shape::Shape(std::initializer_list<int> dims)
-    : Shape(blocked(dims.begin(), static_cast<int>(dims.size()), Shape())) {}
-
 Shape Shape::of(const std::vector<int>& dims) { return blocked(dims, Shape()); }
 
 Shape Shape::blocked(const std::vector<int>& outer, const Shape& block) {

@@ -17,7 +17,18 @@ class Shape {
   static constexpr int kMaxLevels = 4;  // outer level plus nested blocks
 
   Shape() = default;  // a scalar
-  Shape(std::initializer_list<int> dims);
+  // An unblocked shape (the scalar shape for no dimensions). Inline: the interpreter builds
+  // one for almost every small tensor it computes.
+  Shape(std::initializer_list<int> dims) {
+    if (dims.size() > static_cast<size_t>(kMaxRank)) *this = of(std::vector<int>(dims));
+    for (int d : dims) {
+      if (d < 0) [[unlikely]]
+        *this = of(std::vector<int>(dims));  // throws the negative-dimension fault
+      dims_[rank_++] = d;
+    }
+    level_order_[0] = rank_;
+    levels_ = rank_ ? 1 : 0;
+  }
   static Shape of(const std::vector<int>& dims);
   // `outer` dimensions whose entries are blocks of shape `block`.
   static Shape blocked(const std::vector<int>& outer, const Shape& block);

@@ -32,6 +32,10 @@ end
 export func assembled() -> K : matrix[nodes,nodes](float)
   K = map diag to nodes reduce +;
 end
+export func doubled() -> (y : vector[nodes](float), s : float)
+  y = 2.0 * nodes.m;
+  s = 1.5;
+end
 )";
 
 // Takes over every site of `weigh`, writing 100 + element index into the result (a value
@@ -50,6 +54,22 @@ class TakeOver : public SiteHook {
   int offers = 0;
   long last_runs = 0;
   double scale = 0.0;
+};
+
+// Takes over system-level statements: every one it is offered sets its target to 5.
+class StatementTaker : public SiteHook {
+ public:
+  bool run_site(SiteCall&) override { return false; }
+  bool run_statement(const ast::Stmt& stmt, Interpreter& in) override {
+    offered.push_back(&stmt);
+    const auto& a = static_cast<const ast::Assign&>(stmt);
+    const ast::Variable& y = *a.targets[0]->as<ast::VarRef>()->var;
+    Tensor t(ComponentKind::Float, Shape{4});
+    for (int i = 0; i < 4; ++i) t.mutable_floats()[i] = 5.0;
+    in.variable(y) = Value::of_tensor(std::move(t));
+    return true;
+  }
+  std::vector<const ast::Stmt*> offered;
 };
 
 class NoHook : public StatementHook {
@@ -93,6 +113,22 @@ TEST(SiteHook, HookRunsTheSiteInsteadOfTheInterpreter) {
   auto k = fx.run("stiffness");
   EXPECT_EQ(k[0].as_float(), 100.0);
   EXPECT_EQ(hook.offers, 3);
+}
+
+TEST(SiteHook, SystemLevelStatementsAreOffered) {
+  StatementTaker hook;
+  Options options;
+  options.sites = &hook;
+  Fixture fx(options);
+  auto r = fx.run("doubled");
+  // Only `y = 2.0 * nodes.m` is system-level; `s = 1.5` ran interpreted.
+  ASSERT_EQ(hook.offered.size(), 1u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(r[0].tensor().floats()[i], 5.0);
+  EXPECT_EQ(r[1].as_float(), 1.5);
+  // Without the hook the interpreter computes it: 2 m.
+  Fixture plain(Options{});
+  auto p = plain.run("doubled");
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(p[0].tensor().floats()[i], 2.0 * (1.0 + i));
 }
 
 TEST(SiteHook, ArmedTrapRunsEverySiteInterpreted) {

@@ -1,0 +1,95 @@
+// The frontend's analysis passes: the hoisting plan (frontend/hoisting.h) and the
+// system-statement marks (frontend/system_statements.h), checked on hand-written programs.
+#include <gtest/gtest.h>
+
+#include "frontend/frontend.h"
+
+namespace simit::frontend {
+namespace {
+
+namespace ast = frontend::ast;
+
+std::unique_ptr<Compilation> compile(const char* text) {
+  auto c = compile_source("analyses.sim", text);
+  EXPECT_TRUE(c->ok()) << c->diagnostics.render_all();
+  return c;
+}
+
+const ast::Block& body(const Compilation& c, const char* name) {
+  const ast::FuncDecl* f = c.program->find_func(name);
+  EXPECT_NE(f, nullptr);
+  return f->body;
+}
+
+const ast::Expr& value_of(const ast::Stmt& s) { return *static_cast<const ast::Assign&>(s).value; }
+
+TEST(Hoisting, NestedCallsRunFirstInnermostLeftToRight) {
+  auto c = compile(R"(
+func inc(x : float) -> y : float
+  y = x + 1.0;
+end
+func twice(x : float) -> y : float
+  y = 2.0 * x;
+end
+export func main() -> r : float
+  a = 1.0;
+  r = twice(inc(a)) + inc(a);
+  r = inc(a);
+  r = a + 1.0;
+end
+)");
+  const ast::Block& b = body(*c, "main");
+  // `twice(inc(a)) + inc(a)`: inc (inside twice), twice, then the right inc.
+  const auto& h = value_of(*b[1]).hoisted;
+  ASSERT_EQ(h.size(), 3u);
+  EXPECT_EQ(h[0]->callee, "inc");
+  EXPECT_EQ(h[1]->callee, "twice");
+  EXPECT_EQ(h[2]->callee, "inc");
+  EXPECT_EQ(h[0]->args[0]->kind, ast::NodeKind::VarRef);
+  EXPECT_NE(h[0], h[2]);
+  // A call that is the whole expression runs last anyway; no call, no plan.
+  EXPECT_TRUE(value_of(*b[2]).hoisted.empty());
+  EXPECT_TRUE(value_of(*b[3]).hoisted.empty());
+}
+
+TEST(SystemStatements, VectorUpdatesAndCallFreeLoopsAreMarked) {
+  auto c = compile(R"(
+element V
+  m : float;
+end
+extern verts : set{V};
+func one(p : V) -> o : vector[verts](float)
+  o(p) = 1.0;
+end
+func scale(x : float) -> y : float
+  y = 3.0 * x;
+end
+export func main() -> s : float
+  var x = verts.m;
+  alpha = 0.5;
+  var k = 0;
+  while k < 3
+    x = x + alpha * x;
+    k = k + 1;
+  end
+  o = map one to verts reduce +;
+  s = scale(dot(x, o));
+  y = 2.0 * x;
+end
+)");
+  const ast::Block& b = body(*c, "main");
+  ASSERT_EQ(b.size(), 7u);
+  EXPECT_TRUE(b[0]->system_level);   // var x = verts.m
+  EXPECT_FALSE(b[1]->system_level);  // a scalar
+  EXPECT_FALSE(b[2]->system_level);
+  EXPECT_TRUE(b[3]->system_level);   // the loop: vector updates, no calls
+  const auto& loop = static_cast<const ast::While&>(*b[3]);
+  EXPECT_TRUE(loop.body[0]->system_level);
+  EXPECT_FALSE(loop.body[1]->system_level);
+  EXPECT_FALSE(b[4]->system_level);  // a map runs user code
+  EXPECT_FALSE(b[5]->system_level);  // so does a call
+  EXPECT_TRUE(b[6]->system_level);
+}
+
+}  // namespace
+}  // namespace simit::frontend
