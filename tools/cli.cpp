@@ -39,7 +39,7 @@ struct Commands {
   CheckOptions check_options;
   std::vector<std::string> test_paths;
   TestOptions test_options;
-  interp::Options interp_options;  // `simit test` runs %! tests with the interpreter
+  api::EngineOptions engine_options;  // how `simit test` runs %! tests and graph sections
   RunOptions run_options;
   SceneOptions scene_options;
 };
@@ -70,8 +70,8 @@ void add_test(CLI::App& app, Commands& c) {
       ->type_name("");
   c.test->add_flag("-v,--verbose", c.test_options.verbose,
                    "List every section with PASS, SKIP or FAIL (default: failures only)");
-  c.test->add_flag("--float32", c.interp_options.float32, "Run programs with 32-bit floats");
-  c.test->add_flag("--check-finite", c.interp_options.check_finite,
+  c.test->add_flag("--float32", c.engine_options.float32, "Run programs with 32-bit floats");
+  c.test->add_flag("--check-finite", c.engine_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
@@ -211,7 +211,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     c.run_options.args = c.run->remaining();
     return run_function(c.run_options, out, err);
   }
-  InterpExecutor executor(c.interp_options);
+  InterpExecutor executor(c.engine_options);
   c.test_options.executor = &executor;
   return run_tests(c.test_paths, c.test_options, out, err);
 }
