@@ -16,6 +16,7 @@
 #include <iostream>
 #include "test_runner.h"
 #ifdef SIMIT_HAVE_REPL
+#include "scene_loader.h"
 #include "terminal.h"
 #endif
 
@@ -191,8 +192,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   }
 #ifdef SIMIT_HAVE_REPL
   if (c.debug->parsed()) return run_debug(c.debug_options, std::cin, out, err);
-  if (c.repl->parsed()) return repl::run_repl(c.repl_file, load_scene_data);
-  if (app.get_subcommands().empty()) return repl::run_repl("", load_scene_data);
+  if (c.repl->parsed()) return repl::run_repl(c.repl_file, repl::load_scene);
+  if (app.get_subcommands().empty()) return repl::run_repl("", repl::load_scene);
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
   if (c.run->parsed()) {

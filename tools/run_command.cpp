@@ -55,7 +55,8 @@ bool is_column(const Type& t) {
 }  // namespace
 
 int run_function(const RunOptions& options, std::ostream& out, std::ostream& err) {
-  std::shared_ptr<const api::CompiledProgram> c = api::CompiledProgram::from_file(options.file);
+  std::shared_ptr<const api::CompiledProgram> c =
+      options.program ? options.program : api::CompiledProgram::from_file(options.file);
   if (!c->ok()) {
     err << c->compilation()->diagnostics.render_all();
     return 1;
