@@ -78,23 +78,35 @@ void SceneRun::print_sizes(std::ostream& out, int frames) const {
   out << file_.path << ": " << sizes << "; " << frames << " frames\n";
 }
 
-void SceneRun::run(int frames, std::ostream& out) {
-  using Clock = std::chrono::steady_clock;
-  if (!options_.quiet) output_.configure(sets_);
-  if (!file_.init_name.empty()) check_needs("init", file_.init_name);
-  check_needs("step", file_.step_name);
+api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   api::EngineOptions eo;
   eo.float32 = options_.float32;
   eo.check_finite = options_.check_finite;
   eo.out = &out;
   eo.trap = options_.trap;
-  api::Engine engine(file_.program, eo);
+  return eo;
+}
+
+void SceneRun::run(int frames, std::ostream& out) {
+  if (!options_.quiet) output_.configure(sets_);
+  if (!file_.init_name.empty()) check_needs("init", file_.init_name);
+  check_needs("step", file_.step_name);
+  api::Engine engine(file_.program, engine_options(out));
   bind(engine);
   output_.open(file_.stat_names);
   print_sizes(out, frames);
   // Everything is checked: run.
   if (!file_.init_name.empty()) call(engine, file_.init_name);
   output_.write_frame(meshes_, 0, frames == 0);
+  const double total_ms = run_frames(engine, frames, out);
+  if (options_.progress_line && frames > 0) out << '\n';
+  print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
+  output_.write_final_csv();
+}
+
+// Frames 1 .. frames: step, the output, the progress. Returns the frames' total ms.
+double SceneRun::run_frames(api::Engine& engine, int frames, std::ostream& out) {
+  using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   double total_ms = 0.0;
   for (int frame = 1; frame <= frames; ++frame) {
@@ -111,9 +123,7 @@ void SceneRun::run(int frames, std::ostream& out) {
     print_progress(out, FrameReport{frame, frames, ms, total_ms, elapsed, &file_.stat_names, &stats},
                    options_.progress_line);
   }
-  if (options_.progress_line && frames > 0) out << '\n';
-  print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
-  output_.write_final_csv();
+  return total_ms;
 }
 
 }  // namespace simit::scene

@@ -42,6 +42,8 @@ class SceneRun {
 
  private:
   void check_needs(const std::string& key, const std::string& name) const;
+  api::EngineOptions engine_options(std::ostream& out) const;
+  double run_frames(api::Engine& engine, int frames, std::ostream& out);
   void bind(api::Engine& engine) const;
   std::vector<double> call(api::Engine& engine, const std::string& name);
   void print_sizes(std::ostream& out, int frames) const;
