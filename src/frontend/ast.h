@@ -154,10 +154,14 @@ struct OpaqueTypeExpr : TypeExpr {
 // ---------------------------------------------------------------------------
 // Expressions
 
+struct Call;
 struct Expr : Node {
   using Node::Node;
   TypeRef type;           // by the checker (Void / Multi for calls and maps)
   bool writable = false;  // by the checker: a place that may be assigned or passed inout
+  // By the hoisting pass (frontend/hoisting.h), on root expressions only: the nested
+  // user-function calls that run before the expression is computed, in order.
+  std::vector<const Call*> hoisted;
 };
 using ExprPtr = std::unique_ptr<Expr>;
 

@@ -1,56 +1,12 @@
 // Type checker: expressions (§6) other than calls, maps and reads — literals, names,
 // places, unary and binary operators, comparisons and transposes.
-#include <functional>
-
+#include "frontend/ast_walk.h"
 #include "frontend/checker_impl.h"
 #include "frontend/op_typing.h"
 
 namespace simit::frontend::checker_detail {
 
 using ast::Variable;
-
-// Calls `f` on each direct subexpression of `e`.
-static void for_each_child(const ast::Expr& e, const std::function<void(const ast::Expr&)>& f) {
-  auto visit = [&](const ast::ExprPtr& c) {
-    if (c) f(*c);
-  };
-  switch (e.kind) {
-    case ast::NodeKind::TensorRead: {
-      const auto* r = e.as<ast::TensorRead>();
-      visit(r->base);
-      for (const auto& i : r->indices) visit(i);
-      break;
-    }
-    case ast::NodeKind::TupleRead:
-      visit(e.as<ast::TupleRead>()->base);
-      visit(e.as<ast::TupleRead>()->index);
-      break;
-    case ast::NodeKind::FieldRead: visit(e.as<ast::FieldRead>()->base); break;
-    case ast::NodeKind::SetRead: {
-      const auto* s = e.as<ast::SetRead>();
-      visit(s->base);
-      for (const auto& i : s->first) visit(i);
-      for (const auto& i : s->second) visit(i);
-      break;
-    }
-    case ast::NodeKind::Unary: visit(e.as<ast::Unary>()->operand); break;
-    case ast::NodeKind::Binary:
-      visit(e.as<ast::Binary>()->lhs);
-      visit(e.as<ast::Binary>()->rhs);
-      break;
-    case ast::NodeKind::Compare:
-      for (const auto& o : e.as<ast::Compare>()->operands) visit(o);
-      break;
-    case ast::NodeKind::Transpose: visit(e.as<ast::Transpose>()->operand); break;
-    case ast::NodeKind::Call:
-      for (const auto& a : e.as<ast::Call>()->args) visit(a);
-      break;
-    case ast::NodeKind::Map:
-      for (const auto& a : e.as<ast::Map>()->assembly.args) visit(a);
-      break;
-    default: break;
-  }
-}
 
 ast::Variable* Checker::ivar_named(const ast::Expr& e) const {
   const auto* r = e.as<ast::VarRef>();
@@ -62,7 +18,7 @@ ast::Variable* Checker::ivar_named(const ast::Expr& e) const {
 bool Checker::mentions_ivar(const ast::Expr& e) const {
   if (ivar_named(e)) return true;
   bool found = false;
-  for_each_child(e, [&](const ast::Expr& c) { found = found || mentions_ivar(c); });
+  ast::for_each_child(e, [&](const ast::Expr& c) { found = found || mentions_ivar(c); });
   return found;
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "frontend/checker.h"
+#include "frontend/hoisting.h"
 #include "frontend/lexer.h"
 #include "frontend/parser.h"
 
@@ -18,6 +19,8 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
   c->program = parse(tokens, c->diagnostics);
   // A tree with syntax errors is incomplete; checking it would only add noise.
   if (options.check && !c->diagnostics.has_errors()) check(*c->program, c->diagnostics);
+  // Analyses, once per program, for every executor.
+  if (c->ok() && options.check) plan_hoisting(*c->program);
   return c;
 }
 

@@ -105,6 +105,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       callee.refs[f.results[i].var->slot] = &ctx->values[i];
     return callee;
   };
+  AssemblyPlan& plan = plan_site(a, *ctx);
   map_ = ctx;
   map_depth_ = depth_ + 1;
   try {
@@ -137,9 +138,18 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
           patterns_.assembled(*ctx->target->set, set_of(t.dims[0]), set_of(t.dims[1]));
       const int br = block.order() >= 1 ? block.dim(0) : 1;
       const int bc = block.order() >= 2 ? block.dim(1) : 1;
-      slot = Value::of_matrix(std::make_shared<runtime::SystemMatrix>(pattern, br, bc));
+      slot = Value::of_matrix(result_matrix(plan.results[ctx->blocks.size() - 1], pattern, br, bc));
     }
     --depth_;
+    ++plan.runs;
+    if (options_.sites && !trap_->armed()) {
+      SiteCall call{plan, partial, ctx->values};
+      if (options_.sites->run_site(call)) {
+        map_ = saved;
+        map_depth_ = saved_depth;
+        return;
+      }
+    }
     const int n = ctx->target->set->size();
     for (int e = 0; e < n; ++e) {
       ctx->element = e;
@@ -155,6 +165,40 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   }
   map_ = saved;
   map_depth_ = saved_depth;
+}
+
+// The site's plan, made again when the target set or its topology changed.
+AssemblyPlan& Interpreter::plan_site(const ast::Assembly& a, const MapContext& ctx) {
+  AssemblyPlan& plan = plans_[&a];
+  const runtime::Set& target = *ctx.target->set;
+  if (plan.site != &a || plan.target != &target || plan.topology != target.topology_version()) {
+    plan = AssemblyPlan{};
+    plan.site = &a;
+    plan.func = a.callee;
+    plan.target = &target;
+    plan.topology = target.topology_version();
+    plan.reduce = ctx.reduce;
+    plan.grid = ctx.grid != nullptr;
+    plan.results.resize(a.callee->results.size());
+  }
+  return plan;
+}
+
+// A zero matrix over `pattern` for one result of a site: the site's previous matrix when
+// nothing holds it any more (the program dropped it), otherwise a new one.
+std::shared_ptr<runtime::SystemMatrix> Interpreter::result_matrix(AssemblyPlan::Result& r,
+                                                                  const runtime::PatternPtr& pattern,
+                                                                  int block_rows, int block_cols) {
+  r.is_matrix = true;
+  r.pattern = pattern;
+  auto& last = r.last;
+  if (last && last.use_count() == 1 && last->shared_pattern() == pattern &&
+      last->block_rows() == block_rows && last->block_cols() == block_cols) {
+    last->set_zero();
+    return last;
+  }
+  last = std::make_shared<runtime::SystemMatrix>(pattern, block_rows, block_cols);
+  return last;
 }
 
 bool Interpreter::is_map_result(const Value* v) const {
@@ -178,12 +222,31 @@ std::string element_text(const Value& v) {
 Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   if (r.indices.size() != 2 || !r.indices[0] || !r.indices[1])
     fail(r.span, "a system matrix is written at (row element, column element)");
-  Value row = eval(*r.indices[0]), col = eval(*r.indices[1]);
-  if (row.kind() != Value::Kind::Element || col.kind() != Value::Kind::Element)
-    fail(r.span, "system matrices are indexed by elements");
   MapContext& ctx = *map_;
   size_t res = 0;
   while (&ctx.values[res] != &m) ++res;
+  if (!ctx.grid) {
+    // `K(v(i), v(j))`, `K(p, p)`: the members are known without a search.
+    const int rm = member_of(*r.indices[0]);
+    const int cm = rm < 0 ? -1 : member_of(*r.indices[1]);
+    if (cm >= 0) {
+      const runtime::AssemblyIndex& a = m.matrix()->pattern().assembly();
+      const int rl = local_member(a.row_members, rm), cl = local_member(a.col_members, cm);
+      if (rl >= 0 && cl >= 0 && m.matrix()->pattern().assembled_through(*ctx.target->set)) {
+        Place p;
+        p.whole = false;
+        p.shape = ctx.blocks[res];
+        p.accumulate = ctx.reduce;
+        p.root = &m;
+        p.matrix_position = a.position(ctx.element, rl, cl);
+        p.offset = static_cast<size_t>(p.matrix_position) * p.shape.size();
+        return p;
+      }
+    }
+  }
+  Value row = eval(*r.indices[0]), col = eval(*r.indices[1]);
+  if (row.kind() != Value::Kind::Element || col.kind() != Value::Kind::Element)
+    fail(r.span, "system matrices are indexed by elements");
   const Shape& block = ctx.blocks[res];
   const size_t bsize = block.size();
   Place p;
@@ -219,24 +282,53 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   return p;
 }
 
+// The member of the visited element an index of a matrix write names directly (0: the
+// element parameter, k + 1: endpoint k read from its tuple); -1 for any other index, which
+// the general path evaluates. Evaluates the tuple's index expression (calls in it were
+// hoisted, so evaluating it again on the general path repeats no call).
+int Interpreter::member_of(const ast::Expr& index) {
+  const MapContext& ctx = *map_;
+  if (const auto* t = index.as<ast::TupleRead>()) {
+    const auto* base = t->base->as<ast::VarRef>();
+    if (!base) return -1;
+    const Value& tuple = var(*base->var);
+    if (tuple.kind() != Value::Kind::Tuple || tuple.binding() != ctx.target ||
+        tuple.index() != ctx.element)
+      return -1;
+    int k = t->member_index;
+    if (t->index) {
+      Value i = eval(*t->index);
+      if (i.kind() != Value::Kind::Int) return -1;
+      k = i.as_int();
+    }
+    return k >= 0 && k < ctx.target->set->arity() ? k + 1 : -1;
+  }
+  if (const auto* v = index.as<ast::VarRef>()) {
+    const Value& e = var(*v->var);
+    if (e.kind() == Value::Kind::Element && e.binding() == ctx.target && e.index() == ctx.element)
+      return 0;
+  }
+  return -1;
+}
+
+int Interpreter::local_member(const std::vector<int>& members, int member) {
+  for (size_t i = 0; i < members.size(); ++i)
+    if (members[i] == member) return static_cast<int>(i);
+  return -1;
+}
+
 // A write `r(x)` into a global vector result must name the visited element or an endpoint.
-void Interpreter::check_vector_write(const ast::TensorRead& r, Value* root) {
-  (void)root;
+void Interpreter::check_vector_write(const ast::TensorRead& r, const Value& x) {
   if (map_->grid) return;
   const runtime::Set& t = *map_->target->set;
   const int e = map_->element;
-  for (const auto& index : r.indices) {
-    if (!index || !index->type || index->type->kind != Type::Kind::Element) continue;
-    Value x = eval(*index);
-    if (x.kind() != Value::Kind::Element) continue;
-    const runtime::Set* s = x.binding()->set;
-    bool ok = s == &t && x.index() == e;
-    for (int k = 0; !ok && k < t.arity(); ++k)
-      ok = &t.endpoint_set(k) == s && t.endpoint(e, k) == x.index();
-    if (!ok)
-      fail(r.span, "write to " + element_text(x) + " outside the neighbourhood of element " +
-                       std::to_string(e) + " of " + t.describe());
-  }
+  const runtime::Set* s = x.binding()->set;
+  bool ok = s == &t && x.index() == e;
+  for (int k = 0; !ok && k < t.arity(); ++k)
+    ok = &t.endpoint_set(k) == s && t.endpoint(e, k) == x.index();
+  if (!ok)
+    fail(r.span, "write to " + element_text(x) + " outside the neighbourhood of element " +
+                     std::to_string(e) + " of " + t.describe());
 }
 
 Value Interpreter::finish_grid_result(MapContext& ctx, size_t res) {

@@ -80,7 +80,9 @@ Value Interpreter::eval_node(const ast::Expr& e) {
       const Value& x = operand(*static_cast<const ast::Transpose&>(e).operand, scratch);
       if (x.kind() == Value::Kind::Matrix)
         return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(runtime::transposed(*x.matrix(), &patterns_)));
-      return transpose_value(operand(*static_cast<const ast::Transpose&>(e).operand, scratch));
+      // A vector's transpose has the same components: a temporary is passed on as it is.
+      if (&x == &scratch && (!x.is_tensor() || x.tensor().shape().order() == 1)) return scratch;
+      return transpose_value(x);
     }
     case ast::NodeKind::TupleRead: return eval_tuple_read(static_cast<const ast::TupleRead&>(e));
     case ast::NodeKind::FieldRead: return eval_field_read(static_cast<const ast::FieldRead&>(e));
@@ -177,7 +179,10 @@ Value Interpreter::eval_compare(const ast::Compare& c) {
 }
 
 size_t Interpreter::index_value(const ast::Expr& index, int size) {
-  Value v = eval(index);
+  return checked_index(eval(index), index, size);
+}
+
+size_t Interpreter::checked_index(const Value& v, const ast::Expr& index, int size) {
   int32_t i = 0;
   if (v.kind() == Value::Kind::Element) i = v.index();
   else if (v.kind() == Value::Kind::Int) i = v.as_int();
@@ -217,6 +222,20 @@ Value Interpreter::eval_slice(const ast::TensorRead& r, const Value& base) {
   const Shape& s = t.shape();
   const int order = s.order();
   if (static_cast<int>(r.indices.size()) != order) fail(r.span, "wrong number of indices in slice");
+  if (order == 2 && !s.is_blocked() && t.kind() == ComponentKind::Float &&
+      (r.indices[0] == nullptr) != (r.indices[1] == nullptr)) {
+    // A row `M(i, :)` or a column `M(:, j)` of a matrix: the common case, without the
+    // general walk below.
+    const int rows = s.dim(0), cols = s.dim(1);
+    const bool row = r.indices[0] != nullptr;
+    const int n = row ? cols : rows;
+    const size_t fixed = row ? index_value(*r.indices[0], rows) : index_value(*r.indices[1], cols);
+    Value out = Value::uninit_tensor(ComponentKind::Float, Shape{n});
+    double* o = out.tensor().mutable_floats();
+    const double* x = t.floats();
+    for (int k = 0; k < n; ++k) o[k] = row ? x[fixed * cols + k] : x[k * cols + fixed];
+    return out;
+  }
   std::vector<int> fixed(order, -1), kept;
   for (int k = 0; k < order; ++k) {
     if (r.indices[k])

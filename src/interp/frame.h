@@ -29,4 +29,19 @@ struct Interpreter::InoutArg {
   int slot = -1;  // the callee's parameter slot
 };
 
+// Variables are read on every other node: inline, one indirection through the frame.
+inline Value& Interpreter::var(const frontend::ast::Variable& v) {
+  if (v.kind == frontend::ast::Variable::Kind::Extern ||
+      v.kind == frontend::ast::Variable::Kind::GlobalConst)
+    return globals_[v.slot];
+  return *frames_[depth_]->refs[v.slot];
+}
+
+inline Value& Interpreter::read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at) {
+  Value& value = var(v);
+  if (value.empty()) [[unlikely]]
+    fail_unset(v, at);
+  return value;
+}
+
 }  // namespace simit::interp

@@ -37,7 +37,6 @@ Interpreter::Interpreter(const ast::Program& program, Options options)
     own_trap_.install(options_.hook);
   globals_.resize(program.globals.size());
   frames_.push_back(std::make_unique<Frame>());
-  plan_hoisting();
   for (const auto& decl : program.decls) {
     const auto* c = decl->as<ast::ConstDecl>();
     if (!c || !c->decl || !c->decl->var) continue;
@@ -131,26 +130,21 @@ Interpreter::Frame& Interpreter::next_frame(const ast::FuncDecl& f, const Source
     callee.slots.resize(n);
     callee.refs.resize(n);
   }
-  for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
+  // Every activation starts with empty variables; values of the previous activation at
+  // this depth are released now (a map's matrix can then be reused, assembly_plan.h).
+  for (size_t i = 0; i < n; ++i) {
+    callee.slots[i] = Value();
+    callee.refs[i] = &callee.slots[i];
+  }
   return callee;
 }
 
-Value& Interpreter::var(const ast::Variable& v) {
-  if (v.kind == ast::Variable::Kind::Extern || v.kind == ast::Variable::Kind::GlobalConst)
-    return globals_[v.slot];
-  return *frame().refs[v.slot];
-}
-
-Value& Interpreter::read_var(const ast::Variable& v, const ast::Expr& at) {
-  Value& value = var(v);
-  if (value.empty()) [[unlikely]] {
-    if (v.kind == ast::Variable::Kind::Extern)
-      fail(at.span, "extern '" + v.name + "' has no value (the host did not bind it)");
-    if (v.kind == ast::Variable::Kind::Generic)
-      fail(at.span, "generic parameter '" + v.name + "' is bound to a set, not to a size");
-    fail(at.span, "'" + v.name + "' is read before it has a value");
-  }
-  return value;
+void Interpreter::fail_unset(const ast::Variable& v, const ast::Expr& at) const {
+  if (v.kind == ast::Variable::Kind::Extern)
+    fail(at.span, "extern '" + v.name + "' has no value (the host did not bind it)");
+  if (v.kind == ast::Variable::Kind::Generic)
+    fail(at.span, "generic parameter '" + v.name + "' is bound to a set, not to a size");
+  fail(at.span, "'" + v.name + "' is read before it has a value");
 }
 
 int Interpreter::dim_size(const IndexSet& d, const SourceSpan& at) {

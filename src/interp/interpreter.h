@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "frontend/ast.h"
+#include "interp/assembly_plan.h"
 #include "interp/hook.h"
 #include "interp/inspect.h"
 #include "interp/options.h"
@@ -102,6 +103,7 @@ class Interpreter {
   const Frame& frame() const { return *frames_[depth_]; }
   Value& var(const frontend::ast::Variable& v);
   Value& read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at);
+  [[noreturn]] void fail_unset(const frontend::ast::Variable& v, const frontend::ast::Expr& at) const;
   int dim_size(const frontend::IndexSet& d, const frontend::SourceSpan& at);
   Shape shape_of(const frontend::Type& t, const frontend::SourceSpan& at);
   Value zero_of(const frontend::Type& t, const frontend::SourceSpan& at);
@@ -122,6 +124,7 @@ class Interpreter {
   Value eval_tensor_read(const frontend::ast::TensorRead& r);
   Value eval_slice(const frontend::ast::TensorRead& r, const Value& base);
   size_t index_value(const frontend::ast::Expr& index, int size);
+  size_t checked_index(const Value& v, const frontend::ast::Expr& index, int size);
 
   // calls.cpp: user functions; intrinsic_calls.cpp: intrinsics
   Value eval_call(const frontend::ast::Call& c);
@@ -155,9 +158,6 @@ class Interpreter {
     size_t saved_base_ = 0;
     bool active_ = false;
   };
-  void plan_hoisting();
-  void plan_block(const frontend::ast::Block& block);
-  void plan_root(const frontend::ast::Expr& root);
   bool take_hoisted(const frontend::ast::Call& c, Value& out);
   Value eval_root(const frontend::ast::Expr& e);
 
@@ -209,8 +209,14 @@ class Interpreter {
   void exec_apply(const frontend::ast::Apply& a);
   void run_assembly(const frontend::ast::Assembly& a, const frontend::ast::Variable* through,
                     MapContext* ctx, const frontend::SourceSpan& at);
+  AssemblyPlan& plan_site(const frontend::ast::Assembly& a, const MapContext& ctx);
+  std::shared_ptr<runtime::SystemMatrix> result_matrix(AssemblyPlan::Result& r,
+                                                       const runtime::PatternPtr& pattern,
+                                                       int block_rows, int block_cols);
   Place matrix_place(const frontend::ast::TensorRead& r, Value& m);
-  void check_vector_write(const frontend::ast::TensorRead& r, Value* root);
+  int member_of(const frontend::ast::Expr& index);
+  static int local_member(const std::vector<int>& members, int member);
+  void check_vector_write(const frontend::ast::TensorRead& r, const Value& element);
   bool is_map_result(const Value* v) const;
   Value finish_grid_result(MapContext& ctx, size_t result);
 
@@ -220,6 +226,8 @@ class Interpreter {
   Value solver_intrinsic(const frontend::ast::Call& c, std::vector<Value>& args);
 
   runtime::PatternRegistry patterns_;
+  // One plan per map / apply site (assembly_plan.h).
+  std::unordered_map<const frontend::ast::Assembly*, AssemblyPlan> plans_;
   std::vector<std::unique_ptr<SetBinding>> bindings_;
   MapContext* map_ = nullptr;  // the innermost running map
   int map_depth_ = -1;         // the depth of its mapped function's frame
@@ -241,8 +249,6 @@ class Interpreter {
   int depth_ = 0;
   std::vector<Value> arg_stack_;       // arguments being evaluated for pending calls
   std::vector<InoutArg> inout_stack_;  // inout arguments of pending calls
-  // Root expressions with nested calls, and those calls in the order they run.
-  std::unordered_map<const frontend::ast::Expr*, std::vector<const frontend::ast::Call*>> hoists_;
   std::vector<std::pair<const frontend::ast::Call*, Value>> hoisted_;  // results waiting
   size_t hoist_base_ = 0;  // the innermost root's results start here
 };

@@ -75,21 +75,22 @@ Value dot(const Value& a, const Value& b) {
 Value cross(const Value& a, const Value& b) {
   const double* x = a.tensor().floats();
   const double* y = b.tensor().floats();
-  Tensor out(ComponentKind::Float, Shape{3});
-  double* o = out.mutable_floats();
+  Value out = Value::uninit_tensor(ComponentKind::Float, Shape{3});
+  double* o = out.tensor().mutable_floats();
   o[0] = x[1] * y[2] - x[2] * y[1];
   o[1] = x[2] * y[0] - x[0] * y[2];
   o[2] = x[0] * y[1] - x[1] * y[0];
-  return Value::of_tensor(std::move(out));
+  return out;
 }
 
 }  // namespace
 
 Value Interpreter::call_intrinsic(const ast::Call& c) {
   const Intrinsic id = c.intrinsic;
-  Value a0, a1;
-  if (!c.args.empty()) a0 = eval(*c.args[0]);
-  if (c.args.size() > 1) a1 = eval(*c.args[1]);
+  // Arguments by reference where they are variables: nothing here modifies them.
+  Value s0, s1;
+  const Value& a0 = c.args.empty() ? s0 : operand(*c.args[0], s0);
+  const Value& a1 = c.args.size() > 1 ? operand(*c.args[1], s1) : s1;
   switch (id) {
     case Intrinsic::Mod: {
       int32_t x = a0.as_int(), y = a1.as_int();

@@ -119,7 +119,8 @@ Value elementwise(Arith a, const Value& l, const Value& r) {
   if (l.is_tensor() && r.is_tensor() && l.tensor().shape() != r.tensor().shape())
     throw Fault("element-wise operation on tensors of shapes " + l.tensor().shape().str() +
                 " and " + r.tensor().shape().str());
-  Tensor out(shape_src.kind(), shape_src.shape());
+  Value result = Value::uninit_tensor(shape_src.kind(), shape_src.shape());
+  Tensor& out = result.tensor();
   T* o = mutable_data<T>(out);
   const size_t n = out.size();
   if (l.is_tensor() && r.is_tensor()) {
@@ -134,7 +135,7 @@ Value elementwise(Arith a, const Value& l, const Value& r) {
     const T* y = data<T>(r.tensor());
     for (size_t i = 0; i < n; ++i) o[i] = apply<T>(a, x, y[i]);
   }
-  return Value::of_tensor(std::move(out));
+  return result;
 }
 
 Value elementwise(Arith a, const Value& l, const Value& r) {
@@ -166,7 +167,74 @@ Shape levels_shape(int levels, F pick) {
   return s;
 }
 
+// Unblocked float operands of order 1 or 2, straight into the result: the interpreter's
+// common case (3x3 matrices and 3-vectors). Sums run over k in ascending order
+// (docs/arithmetic.md). False when the operands are not of that form.
+bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value& out) {
+  const Shape &sa = a.shape(), &sb = b.shape();
+  if (a.kind() != ComponentKind::Float || b.kind() != ComponentKind::Float || sa.levels() != 1 ||
+      sb.levels() != 1)
+    return false;
+  const int ao = sa.order(), bo = sb.order();
+  const double *x = a.floats(), *y = b.floats();
+  if (ao == 1 && bo == 1) {
+    const int n = sa.dim(0), m = sb.dim(0);
+    if (arow && !brow) {
+      if (n != m) return false;
+      double s = 0.0;
+      for (int k = 0; k < n; ++k) s += x[k] * y[k];
+      out = Value::of_float(s);
+      return true;
+    }
+    if (arow || !brow) return false;
+    out = Value::uninit_tensor(ComponentKind::Float, Shape{n, m});
+    double* o = out.tensor().mutable_floats();
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < m; ++j) o[i * m + j] = x[i] * y[j];
+    return true;
+  }
+  if (ao == 2 && bo == 1) {
+    const int m = sa.dim(0), n = sa.dim(1);
+    if (sb.dim(0) != n) return false;
+    out = Value::uninit_tensor(ComponentKind::Float, Shape{m});
+    double* o = out.tensor().mutable_floats();
+    for (int i = 0; i < m; ++i) {
+      double s = 0.0;
+      for (int k = 0; k < n; ++k) s += x[i * n + k] * y[k];
+      o[i] = s;
+    }
+    return true;
+  }
+  if (ao == 1 && bo == 2) {
+    const int n = sb.dim(0), m = sb.dim(1);
+    if (sa.dim(0) != n) return false;
+    out = Value::uninit_tensor(ComponentKind::Float, Shape{m});
+    double* o = out.tensor().mutable_floats();
+    for (int j = 0; j < m; ++j) {
+      double s = 0.0;
+      for (int k = 0; k < n; ++k) s += x[k] * y[k * m + j];
+      o[j] = s;
+    }
+    return true;
+  }
+  if (ao == 2 && bo == 2) {
+    const int m = sa.dim(0), n = sa.dim(1), p = sb.dim(1);
+    if (sb.dim(0) != n) return false;
+    out = Value::uninit_tensor(ComponentKind::Float, Shape{m, p});
+    double* o = out.tensor().mutable_floats();
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < p; ++j) {
+        double s = 0.0;
+        for (int k = 0; k < n; ++k) s += x[i * n + k] * y[k * p + j];
+        o[i * p + j] = s;
+      }
+    return true;
+  }
+  return false;
+}
+
 Value product(const Tensor& a, bool arow, const Tensor& b, bool brow) {
+  if (Value fast; float_product(a, arow, b, brow, fast)) return fast;
   const Shape &sa = a.shape(), &sb = b.shape();
   if (sa.levels() != sb.levels() || !sa.uniform() || !sb.uniform())
     throw Fault("product of tensors blocked differently: " + sa.str() + " and " + sb.str());
@@ -238,7 +306,8 @@ Value negate_typed(const Value& v) {
     else
       return make<T>(-scalar<T>(v));
   }
-  Tensor out(v.tensor().kind(), v.tensor().shape());
+  Value result = Value::uninit_tensor(v.tensor().kind(), v.tensor().shape());
+  Tensor& out = result.tensor();
   const T* x = data<T>(v.tensor());
   T* o = mutable_data<T>(out);
   for (size_t i = 0; i < out.size(); ++i) {
@@ -247,7 +316,7 @@ Value negate_typed(const Value& v) {
     else
       o[i] = -x[i];
   }
-  return Value::of_tensor(std::move(out));
+  return result;
 }
 
 template <class T>
@@ -294,6 +363,17 @@ Value negate(const Value& v) {
 
 Value transpose_value(const Value& v) {
   if (!v.is_tensor() || v.tensor().shape().order() == 1) return v;
+  const Tensor& t = v.tensor();
+  const Shape& s = t.shape();
+  if (t.kind() == ComponentKind::Float && s.levels() == 1 && s.order() == 2) {
+    const int rows = s.dim(0), cols = s.dim(1);
+    Value out = Value::uninit_tensor(ComponentKind::Float, Shape{cols, rows});
+    const double* x = t.floats();
+    double* o = out.tensor().mutable_floats();
+    for (int i = 0; i < rows; ++i)
+      for (int j = 0; j < cols; ++j) o[j * rows + i] = x[i * cols + j];
+    return out;
+  }
   return Value::of_tensor(runtime::transpose(v.tensor()));
 }
 

@@ -5,6 +5,7 @@
 
 namespace simit::interp {
 
+class SiteHook;
 class StatementHook;
 class Trap;
 
@@ -21,6 +22,9 @@ struct Options {
   // A host-owned switch of the trap point (interp/hook.h): the debugger installs and removes
   // its hook there while a run goes on, and Ctrl-C requests an interrupt through it.
   Trap* trap = nullptr;
+  // The executor seam (interp/assembly_plan.h): offered every planned map / apply site;
+  // null runs everything in the interpreter.
+  SiteHook* sites = nullptr;
 };
 
 }  // namespace simit::interp

@@ -31,15 +31,13 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
         if (is_map_result(p.root)) return matrix_place(r, *p.root);
         fail(r.span, "a system matrix can only be written by assembly");
       }
-      if (p.whole && is_map_result(p.root)) {
-        check_vector_write(r, p.root);
-        p.accumulate = map_->reduce;
-      }
+      const bool map_result = p.whole && is_map_result(p.root);
+      if (map_result) p.accumulate = map_->reduce;
       if (p.whole && !p.root->is_tensor()) {
         if (p.root->empty()) fail(r.base->span, "assignment into a variable that has no value");
         unsupported(r.span, "writes into non-tensor values");
       }
-      Shape s = p.whole ? p.root->tensor().shape() : p.shape;
+      const Shape& s = p.whole ? p.root->tensor().shape() : p.shape;
       size_t offset = p.whole ? 0 : p.offset;
       if (s.is_scalar() || static_cast<int>(r.indices.size()) != s.order())
         fail(r.span, "wrong number of indices for a tensor of shape " + s.str());
@@ -47,7 +45,10 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
       for (size_t k = 0; k < r.indices.size(); ++k) {
         if (!r.indices[k]) fail(r.span, "a slice cannot be assigned");
         int d = s.dim(static_cast<int>(k));
-        outer = outer * d + index_value(*r.indices[k], d);
+        Value index = eval(*r.indices[k]);
+        // A write into a global vector result must name the visited element or an endpoint.
+        if (map_result && index.kind() == Value::Kind::Element) check_vector_write(r, index);
+        outer = outer * d + checked_index(index, *r.indices[k], d);
       }
       Shape block = s.block();
       p.whole = false;

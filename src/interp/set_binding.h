@@ -28,6 +28,10 @@ struct SetBinding {
   runtime::Set* set = nullptr;
   const frontend::ast::ElementDecl* element = nullptr;
   std::vector<int> fields;  // per field of the element type: its index in `set`
+  std::vector<runtime::Shape> shapes;  // per field of the element type: one element's shape
+  // Per endpoint: the binding of its set, found on the first tuple read (bindings are only
+  // ever added, so the first one found for a set stays the one found).
+  std::vector<SetBinding*> endpoint_bindings;
 };
 
 // The storage type of an element field declared with type `t` (tensor without set dims).

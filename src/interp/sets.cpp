@@ -56,6 +56,7 @@ void Interpreter::bind_set(const ast::Variable& v, runtime::Set& set) {
         fail(v.span, "field '" + f.name + "' of set '" + v.name + "' has type '" + got.str() +
                          "' but the program declares '" + want.str() + "'");
       b->fields.push_back(index);
+      b->shapes.push_back(Shape::of(got.dims));
     }
   }
   const size_t arity = t.endpoints.size();
@@ -99,7 +100,9 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
     }
     throw runtime::Fault("field '" + f.name() + "' cannot be read");
   }
-  Tensor out(t.kind, shape);
+  if (t.kind == ComponentKind::String) return Value::of_tensor(Tensor(t.kind, shape));
+  Value result = Value::uninit_tensor(t.kind, shape);
+  Tensor& out = result.tensor();
   const size_t n = shape.size();
   if (t.single && t.kind == ComponentKind::Float) {
     const float* src = f.data<float>() + offset;
@@ -113,7 +116,7 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
     const size_t w = t.component_bytes();
     std::memcpy(out.mutable_ints(), f.bytes() + offset * w, n * w);
   }
-  return Value::of_tensor(std::move(out));
+  return result;
 }
 
 }  // namespace
@@ -134,7 +137,7 @@ Value Interpreter::eval_field_read(const ast::FieldRead& r) {
     fail(r.span, s.describe() + " has no element " + std::to_string(base.index()));
   const runtime::Field& f = s.field(b.fields[r.field_index]);
   return read_components(f, static_cast<size_t>(base.index()) * f.components(),
-                         Shape::of(f.type().dims));
+                         b.shapes[r.field_index]);
 }
 
 Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
@@ -150,7 +153,12 @@ Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
   if (k < 0 || k >= edges.arity())
     fail(r.span, "tuple index " + std::to_string(k) + " is out of range for " +
                      std::to_string(edges.arity()) + " endpoints");
-  return Value::of_element(&binding_of(edges.endpoint_set(k), r.span), edges.endpoint(t.index(), k));
+  SetBinding& tb = *t.binding();
+  if (tb.endpoint_bindings.size() != static_cast<size_t>(edges.arity())) [[unlikely]]
+    tb.endpoint_bindings.assign(static_cast<size_t>(edges.arity()), nullptr);
+  if (!tb.endpoint_bindings[k]) [[unlikely]]
+    tb.endpoint_bindings[k] = &binding_of(edges.endpoint_set(k), r.span);
+  return Value::of_element(tb.endpoint_bindings[k], edges.endpoint(t.index(), k));
 }
 
 // `g[o;q]` (a link of the grid) and `P[o]` (a point at an offset), relative to the point
@@ -209,7 +217,7 @@ Place Interpreter::field_element_place(const SetBinding& b, int field, int eleme
   p.element = element;
   p.whole = false;
   p.offset = static_cast<size_t>(element) * f.components();
-  p.shape = Shape::of(f.type().dims);
+  p.shape = b.shapes[field];
   return p;
 }
 

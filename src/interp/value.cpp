@@ -1,9 +1,113 @@
 // Run-time values of the interpreter.
 #include "interp/value.h"
 
+#include <vector>
+
 #include "runtime/fault.h"
 
 namespace simit::interp {
+
+namespace {
+
+// Tensor boxes recycled per thread: interpreter temporaries are created and dropped at a
+// high rate, and a box from the free list costs no allocation.
+thread_local bool pool_gone = false;  // values destroyed after the pool free their boxes
+
+class TensorPool {
+ public:
+  ~TensorPool() {
+    pool_gone = true;
+    for (Tensor* t : free_) delete t;
+  }
+  Tensor* acquire() {
+    if (pool_gone || free_.empty()) return new Tensor;
+    Tensor* t = free_.back();
+    free_.pop_back();
+    return t;
+  }
+  void recycle(Tensor* t) noexcept {
+    t->release_shared();
+    if (!pool_gone && free_.size() < kKeep) {
+      try {
+        free_.push_back(t);
+        return;
+      } catch (...) {
+      }
+    }
+    delete t;
+  }
+
+ private:
+  static constexpr size_t kKeep = 4096;
+  std::vector<Tensor*> free_;
+};
+
+TensorPool& pool() {
+  thread_local TensorPool p;
+  return p;
+}
+
+}  // namespace
+
+Value Value::of_string(std::string v) {
+  Value x(Kind::String);
+  x.u_.s = new std::string(std::move(v));
+  return x;
+}
+
+Value Value::of_tensor(Tensor t) {
+  Value x(Kind::Tensor);
+  x.u_.t = pool().acquire();
+  *x.u_.t = std::move(t);
+  return x;
+}
+
+Value Value::uninit_tensor(ComponentKind kind, const Shape& shape) {
+  if (kind == ComponentKind::String) return of_tensor(Tensor(kind, shape));
+  Value x(Kind::Tensor);
+  x.u_.t = pool().acquire();
+  x.u_.t->reset_uninit(kind, shape);
+  return x;
+}
+
+Value Value::of_matrix(std::shared_ptr<runtime::SystemMatrix> m) {
+  Value x(Kind::Matrix);
+  x.u_.m = new std::shared_ptr<runtime::SystemMatrix>(std::move(m));
+  return x;
+}
+
+Value Value::of_opaque(std::shared_ptr<SolverHandle> h) {
+  Value x(Kind::Opaque);
+  x.u_.o = new std::shared_ptr<SolverHandle>(std::move(h));
+  return x;
+}
+
+void Value::copy_from(const Value& o) {
+  kind_ = o.kind_;
+  i_ = o.i_;
+  aux_ = o.aux_;
+  switch (kind_) {
+    case Kind::String: u_.s = new std::string(*o.u_.s); break;
+    case Kind::Tensor:
+      u_.t = pool().acquire();
+      *u_.t = *o.u_.t;
+      break;
+    case Kind::Matrix: u_.m = new std::shared_ptr<runtime::SystemMatrix>(*o.u_.m); break;
+    case Kind::Opaque: u_.o = new std::shared_ptr<SolverHandle>(*o.u_.o); break;
+    default: u_ = o.u_; break;
+  }
+}
+
+void Value::release() noexcept {
+  switch (kind_) {
+    case Kind::String: delete u_.s; break;
+    case Kind::Tensor: pool().recycle(u_.t); break;
+    case Kind::Matrix: delete u_.m; break;
+    case Kind::Opaque: delete u_.o; break;
+    default: break;
+  }
+  kind_ = Kind::Empty;
+}
 
 Value Value::zero(ComponentKind k) {
   switch (k) {
@@ -39,7 +143,7 @@ ComponentKind Value::component_kind() const {
     case Kind::Bool: return ComponentKind::Bool;
     case Kind::Complex: return ComponentKind::Complex;
     case Kind::String: return ComponentKind::String;
-    case Kind::Tensor: return t_.kind();
+    case Kind::Tensor: return u_.t->kind();
     case Kind::Matrix: return ComponentKind::Float;
     default: break;
   }
@@ -47,7 +151,7 @@ ComponentKind Value::component_kind() const {
 }
 
 Tensor Value::to_tensor() const {
-  if (is_tensor()) return t_;
+  if (is_tensor()) return *u_.t;
   Tensor t(component_kind(), Shape());
   fill_into(t, 0, 1);
   return t;
@@ -56,10 +160,10 @@ Tensor Value::to_tensor() const {
 void Value::fill_into(Tensor& t, size_t offset, size_t count) const {
   switch (kind_) {
     case Kind::Int: return t.fill(offset, count, i_);
-    case Kind::Float: return t.fill(offset, count, f_);
-    case Kind::Bool: return t.fill(offset, count, b_);
-    case Kind::Complex: return t.fill(offset, count, Complex(re_, im_));
-    case Kind::String: return t.fill(offset, count, s_);
+    case Kind::Float: return t.fill(offset, count, u_.f);
+    case Kind::Bool: return t.fill(offset, count, u_.b);
+    case Kind::Complex: return t.fill(offset, count, as_complex());
+    case Kind::String: return t.fill(offset, count, *u_.s);
     default: throw runtime::Fault("only a scalar can fill tensor components");
   }
 }
@@ -69,16 +173,16 @@ bool Value::operator==(const Value& o) const {
   switch (kind_) {
     case Kind::Empty: return true;
     case Kind::Int: return i_ == o.i_;
-    case Kind::Float: return f_ == o.f_;
-    case Kind::Bool: return b_ == o.b_;
-    case Kind::Complex: return re_ == o.re_ && im_ == o.im_;
-    case Kind::String: return s_ == o.s_;
-    case Kind::Tensor: return t_ == o.t_;
+    case Kind::Float: return u_.f == o.u_.f;
+    case Kind::Bool: return u_.b == o.u_.b;
+    case Kind::Complex: return as_complex() == o.as_complex();
+    case Kind::String: return *u_.s == *o.u_.s;
+    case Kind::Tensor: return *u_.t == *o.u_.t;
     case Kind::Element:
-    case Kind::Tuple: return set_ == o.set_ && i_ == o.i_;
-    case Kind::Set: return set_ == o.set_;
-    case Kind::Matrix: return m_ == o.m_;
-    case Kind::Opaque: return o_ == o.o_;
+    case Kind::Tuple: return u_.set == o.u_.set && i_ == o.i_;
+    case Kind::Set: return u_.set == o.u_.set;
+    case Kind::Matrix: return *u_.m == *o.u_.m;
+    case Kind::Opaque: return *u_.o == *o.u_.o;
   }
   return false;
 }

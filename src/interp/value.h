@@ -39,7 +39,31 @@ class Value {
     Opaque,   // a solver factorisation
   };
 
-  Value() = default;
+  Value() noexcept = default;
+  Value(const Value& o) { copy_from(o); }
+  Value(Value&& o) noexcept : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) { o.kind_ = Kind::Empty; }
+  Value& operator=(const Value& o) {
+    if (this != &o) {
+      Value copy(o);
+      *this = std::move(copy);
+    }
+    return *this;
+  }
+  Value& operator=(Value&& o) noexcept {
+    if (this != &o) {
+      if (owns()) release();
+      kind_ = o.kind_;
+      i_ = o.i_;
+      aux_ = o.aux_;
+      u_ = o.u_;
+      o.kind_ = Kind::Empty;
+    }
+    return *this;
+  }
+  ~Value() {
+    if (owns()) release();
+  }
+
   static Value of_int(int32_t v) {
     Value x(Kind::Int);
     x.i_ = v;
@@ -47,58 +71,45 @@ class Value {
   }
   static Value of_float(double v) {
     Value x(Kind::Float);
-    x.f_ = v;
+    x.u_.f = v;
     return x;
   }
   static Value of_bool(bool v) {
     Value x(Kind::Bool);
-    x.b_ = v;
+    x.u_.b = v;
     return x;
   }
   static Value of_complex(Complex v) {
     Value x(Kind::Complex);
-    x.re_ = v.real();
-    x.im_ = v.imag();
+    x.u_.c[0] = v.real();
+    x.u_.c[1] = v.imag();
     return x;
   }
-  static Value of_string(std::string v) {
-    Value x(Kind::String);
-    x.s_ = std::move(v);
-    return x;
-  }
-  static Value of_tensor(Tensor t) {
-    Value x(Kind::Tensor);
-    x.t_ = std::move(t);
-    return x;
-  }
+  static Value of_string(std::string v);
+  static Value of_tensor(Tensor t);
+  // A tensor of `kind` and `shape` whose components the caller writes next: no zero-fill
+  // (every component must be written before the value is read).
+  static Value uninit_tensor(ComponentKind kind, const Shape& shape);
   static Value of_element(SetBinding* set, int32_t index, int32_t offset_tag = -1) {
     Value x(Kind::Element);
-    x.set_ = set;
+    x.u_.set = set;
     x.i_ = index;
     x.aux_ = offset_tag;
     return x;
   }
   static Value of_set(SetBinding* set) {
     Value x(Kind::Set);
-    x.set_ = set;
+    x.u_.set = set;
     return x;
   }
   static Value of_tuple(SetBinding* edges, int32_t edge) {
     Value x(Kind::Tuple);
-    x.set_ = edges;
+    x.u_.set = edges;
     x.i_ = edge;
     return x;
   }
-  static Value of_matrix(std::shared_ptr<runtime::SystemMatrix> m) {
-    Value x(Kind::Matrix);
-    x.m_ = std::move(m);
-    return x;
-  }
-  static Value of_opaque(std::shared_ptr<SolverHandle> h) {
-    Value x(Kind::Opaque);
-    x.o_ = std::move(h);
-    return x;
-  }
+  static Value of_matrix(std::shared_ptr<runtime::SystemMatrix> m);
+  static Value of_opaque(std::shared_ptr<SolverHandle> h);
   // The zero of a component kind (0, 0.0, false, <0,0>, "").
   static Value zero(ComponentKind k);
   // Zero of a shape: a scalar for the scalar shape, otherwise a zero tensor.
@@ -112,29 +123,29 @@ class Value {
   bool is_tensor() const { return kind_ == Kind::Tensor; }
 
   int32_t as_int() const { return i_; }
-  double as_float() const { return f_; }
-  bool as_bool() const { return b_; }
-  Complex as_complex() const { return {re_, im_}; }
-  const std::string& as_string() const { return s_; }
-  const Tensor& tensor() const { return t_; }
-  Tensor& tensor() { return t_; }
+  double as_float() const { return u_.f; }
+  bool as_bool() const { return u_.b; }
+  Complex as_complex() const { return {u_.c[0], u_.c[1]}; }
+  const std::string& as_string() const { return *u_.s; }
+  const Tensor& tensor() const { return *u_.t; }
+  Tensor& tensor() { return *u_.t; }
 
-  void set_float(double v) { f_ = v; }
+  void set_float(double v) { u_.f = v; }
 
   // Element, Set, Tuple: the set binding; element / edge index; for grid points read as
   // `P[o]` inside a stencil map, the stencil offset's number (-1 otherwise).
-  SetBinding* binding() const { return set_; }
+  SetBinding* binding() const { return u_.set; }
   int32_t index() const { return i_; }
   int32_t offset_tag() const { return aux_; }
   // Matrix and Opaque payloads (shared: copies of a value share one matrix, which is
   // never modified after it was produced).
-  const std::shared_ptr<runtime::SystemMatrix>& matrix() const { return m_; }
-  const std::shared_ptr<SolverHandle>& opaque() const { return o_; }
+  const std::shared_ptr<runtime::SystemMatrix>& matrix() const { return *u_.m; }
+  const std::shared_ptr<SolverHandle>& opaque() const { return *u_.o; }
 
   // The component kind of a scalar or tensor.
   ComponentKind component_kind() const;
   // The shape of a tensor; the scalar shape for scalars.
-  Shape shape() const { return is_tensor() ? t_.shape() : Shape(); }
+  Shape shape() const { return is_tensor() ? u_.t->shape() : Shape(); }
   // A scalar as a 1-component tensor of `shape` (which must have size 1), or the tensor.
   Tensor to_tensor() const;
   // Writes this scalar into components [offset, offset + count) of `t`.
@@ -145,21 +156,31 @@ class Value {
 
  private:
   explicit Value(Kind k) : kind_(k) {}
+  void copy_from(const Value& o);
+  // String, Tensor, Matrix and Opaque hold their payload out of line.
+  bool owns() const {
+    constexpr unsigned kOwning = 1u << unsigned(Kind::String) | 1u << unsigned(Kind::Tensor) |
+                                 1u << unsigned(Kind::Matrix) | 1u << unsigned(Kind::Opaque);
+    return (kOwning >> unsigned(kind_)) & 1u;
+  }
+  void release() noexcept;
 
+  // A few machine words: scalars, elements and set references inline; tensors, strings
+  // and shared payloads out of line (tensors in recycled boxes, so temporaries cost no
+  // allocation once the interpreter has warmed up).
   Kind kind_ = Kind::Empty;
-  union {
-    double f_ = 0.0;
-    int32_t i_;
-    bool b_;
-    double re_;
-  };
-  double im_ = 0.0;
-  int32_t aux_ = -1;
-  SetBinding* set_ = nullptr;
-  std::string s_;
-  Tensor t_;
-  std::shared_ptr<runtime::SystemMatrix> m_;
-  std::shared_ptr<SolverHandle> o_;
+  int32_t i_ = 0;     // Int; Element and Tuple index
+  int32_t aux_ = -1;  // Element: stencil offset tag
+  union Payload {
+    double f;
+    bool b;
+    double c[2];
+    SetBinding* set;
+    Tensor* t;
+    std::string* s;
+    std::shared_ptr<runtime::SystemMatrix>* m;
+    std::shared_ptr<SolverHandle>* o;
+  } u_{};
 };
 
 }  // namespace simit::interp

@@ -20,7 +20,8 @@ void check_dim(int d) {
 
 }  // namespace
 
-Shape::Shape(std::initializer_list<int> dims) : Shape(of(std::vector<int>(dims))) {}
+Shape::Shape(std::initializer_list<int> dims)
+    : Shape(blocked(dims.begin(), static_cast<int>(dims.size()), Shape())) {}
 
 Shape Shape::of(const std::vector<int>& dims) { return blocked(dims, Shape()); }
 

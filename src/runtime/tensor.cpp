@@ -75,6 +75,14 @@ Storage& Storage::operator=(Storage&& o) noexcept {
   return *this;
 }
 
+void Storage::reset_uninit(size_t bytes) {
+  bytes_ = bytes;
+  if (bytes > kInlineBytes)
+    heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
+  else
+    heap_.reset();
+}
+
 std::byte* Storage::mutable_data() {
   if (!heap_) return inline_;
   if (heap_.use_count() > 1) {
@@ -147,6 +155,19 @@ void Tensor::fill(size_t offset, size_t count, const std::string& v) {
 void Tensor::reshape(const Shape& shape) {
   if (shape.size() != size()) throw Fault("cannot reshape " + shape_.str() + " to " + shape.str());
   shape_ = shape;
+}
+
+void Tensor::reset_uninit(ComponentKind kind, const Shape& shape) {
+  if (kind == ComponentKind::String) throw Fault("string tensors are always initialised");
+  kind_ = kind;
+  shape_ = shape;
+  strings_.reset();
+  storage_.reset_uninit(component_bytes(kind) * shape.size());
+}
+
+void Tensor::release_shared() {
+  strings_.reset();
+  storage_.reset_uninit(0);
 }
 
 bool Tensor::operator==(const Tensor& o) const {

@@ -39,6 +39,9 @@ class Storage {
   ~Storage() = default;
 
   size_t bytes() const { return bytes_; }
+  // Resizes to `bytes` without clearing them (the caller writes every byte) and drops any
+  // shared heap block.
+  void reset_uninit(size_t bytes);
   const std::byte* data() const { return heap_ ? heap_.get() : inline_; }
   std::byte* mutable_data();  // unshares heap storage first
   // The shared heap block (null when the bytes are inline).
@@ -92,6 +95,11 @@ class Tensor {
   void fill(size_t offset, size_t count, const std::string& v);
   // Same components, another shape of the same size.
   void reshape(const Shape& shape);
+  // Makes this a tensor of `kind` and `shape` in place whose components are not cleared:
+  // the caller writes every one before reading (interpreter temporaries). Not for String.
+  void reset_uninit(ComponentKind kind, const Shape& shape);
+  // Drops shared storage (heap block, strings) so the object can be recycled cheaply.
+  void release_shared();
 
   // Exact equality of kind, shape and components (float components compared with ==).
   bool operator==(const Tensor& o) const;

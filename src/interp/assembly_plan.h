@@ -1,0 +1,63 @@
+// The executor seam: a map or apply site planned once and run many times, and the hook
+// through which a compiled executor may take a planned site over from the interpreter.
+//
+// How a site runs (Interpreter::run_assembly):
+//   1. The first time a site (`map f to S` or `apply f to S`) runs on a target set with a
+//      given topology, the interpreter plans it: the mapped function, `reduce`, each
+//      result's kind (system vector or matrix), block shape and matrix pattern (with the
+//      pattern's per-element table of block positions, runtime::AssemblyIndex). The plan
+//      is kept per site and rebuilt only when the target's topology changes.
+//   2. Before running the site element by element, the interpreter offers it to the
+//      SiteHook installed in Options::sites (if any). A compiled executor that has a kernel
+//      for this plan runs it, writes the results into the zeroed result values it is handed
+//      (field arrays and matrix values are the runtime's own, so nothing is copied), and
+//      returns true; returning false leaves the site to the interpreter.
+//   3. While the debugger's trap point is armed (a breakpoint, a watch, stepping, Ctrl-C),
+//      no site is offered: every statement must run interpreted so that it can stop.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <vector>
+
+#include "frontend/ast.h"
+#include "interp/value.h"
+#include "runtime/system_matrix.h"
+
+namespace simit::interp {
+
+struct AssemblyPlan {
+  struct Result {
+    bool is_matrix = false;  // a system matrix (else a system vector or scalar)
+    Shape block;             // one block's shape (scalar for unblocked results)
+    runtime::PatternPtr pattern;  // matrices over edge sets: shared by all their matrices
+    // The matrix this site produced last: reused (zeroed) when nothing else holds it.
+    std::shared_ptr<runtime::SystemMatrix> last;
+  };
+  const frontend::ast::Assembly* site = nullptr;
+  const frontend::ast::FuncDecl* func = nullptr;
+  const runtime::Set* target = nullptr;
+  uint64_t topology = 0;  // the target's topology version the plan was made for
+  bool reduce = false;
+  bool grid = false;  // a stencil map through a grid (its matrices are built afterwards)
+  std::vector<Result> results;
+  long runs = 0;  // how many times the site ran (a compiled executor's hot counter)
+};
+
+// What a compiled executor is handed for one execution of a planned site.
+struct SiteCall {
+  AssemblyPlan& plan;
+  const std::vector<Value>& partial_args;  // the values of `map f(a, b) to S`'s a, b
+  std::deque<Value>& results;              // zeroed results to accumulate into
+};
+
+class SiteHook {
+ public:
+  virtual ~SiteHook() = default;
+  // Runs the site and returns true, or returns false to let the interpreter run it. May
+  // throw a RuntimeError (located at the site or at the failing statement).
+  virtual bool run_site(SiteCall& call) = 0;
+};
+
+}  // namespace simit::interp
