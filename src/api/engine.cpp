@@ -15,9 +15,10 @@ Engine::Engine(const ast::Program& program, EngineOptions options)
 
 Engine::~Engine() = default;
 
-// The one place an executor is constructed. A compiled executor plugs in here: construct
-// the interpreter as below and install the JIT's site hook on it (the interpreter calls it
-// at each planned map and index-expression site and falls back to itself when it declines).
+// The one place an executor is constructed. A compiled executor plugs in here: a new
+// ExecutorKind case makes the JIT's SiteHook (owned by the engine) and sets `o.sites` to it;
+// the interpreter offers it each planned map and apply site and runs the site itself when
+// the hook declines.
 std::unique_ptr<interp::Interpreter> Engine::make_executor() const {
   interp::Options o;
   o.float32 = options_.float32;
@@ -25,6 +26,7 @@ std::unique_ptr<interp::Interpreter> Engine::make_executor() const {
   o.out = options_.out;
   o.trap = options_.trap;
   o.hook = options_.hook;
+  o.sites = options_.sites;
   switch (options_.executor) {
     case ExecutorKind::Interpreter: break;
   }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "api/compiled_program.h"
+#include "interp/assembly_plan.h"
 #include "interp/hook.h"
 #include "interp/interpreter.h"
 #include "interp/value.h"
@@ -17,8 +18,9 @@ namespace simit::api {
 
 // What executes the program's functions. Only the reference interpreter exists today. A
 // compiled executor (the CPU or GPU JIT) becomes a second value here and is wired in by
-// Engine::make_executor: it hangs off the interpreter's site hook, so the interpreter stays
-// the driver of every run and the host-facing calls below do not change.
+// Engine::make_executor: it is the interpreter's site hook (interp/assembly_plan.h), offered
+// every planned map and apply site, so the interpreter stays the driver of every run and the
+// host-facing calls below do not change.
 enum class ExecutorKind { Interpreter };
 
 // Settings of one engine; passed down, never global.
@@ -35,6 +37,9 @@ struct EngineOptions {
   // An observer of every statement for the engine's whole life (benchmarks); ignored when
   // `trap` is set.
   interp::StatementHook* hook = nullptr;
+  // Offered every planned map / apply site before the interpreter runs it (tests of the
+  // executor seam); null with ExecutorKind::Interpreter runs everything in the interpreter.
+  interp::SiteHook* sites = nullptr;
 };
 
 // Runs the functions of one compiled program. Bindings and globals persist between calls,

@@ -149,6 +149,31 @@ TEST(Engine, RunTimeErrorsNameTheLine) {
   EXPECT_EQ(e.call(f.func("divide"), {Value::of_int(2)}).at(0).to_tensor().ints()[0], 3);
 }
 
+// Declines every site it is offered (so the interpreter runs them) and records them.
+class CountingSites : public interp::SiteHook {
+ public:
+  bool run_site(interp::SiteCall& call) override {
+    ++offers;
+    mapped = call.plan.func->name;
+    return false;
+  }
+  int offers = 0;
+  std::string mapped;
+};
+
+TEST(Engine, OffersMapSitesToTheExecutorSeam) {
+  Fixture f;
+  CountingSites sites;
+  EngineOptions o;
+  o.sites = &sites;
+  Engine e(f.compiled, o);
+  f.bind(e);
+  std::vector<Value> r = e.call(f.func("assemble"), {});
+  EXPECT_EQ(sites.offers, 1);
+  EXPECT_EQ(sites.mapped, "stiffness");
+  EXPECT_DOUBLE_EQ(r.at(0).matrix()->component(1, 1), 30.0);  // declined: the interpreter ran it
+}
+
 // A hook installed through the trap switch sees the engine's own interpreter.
 class Counter : public interp::StatementHook {
  public:
