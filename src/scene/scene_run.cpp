@@ -44,22 +44,24 @@ void SceneRun::bind(api::Engine& engine) const {
   }
 }
 
-// Runs `name` and returns its scalar results named in file_.stat_names (for step).
-std::vector<double> SceneRun::call(api::Engine& engine, const std::string& name) {
-  const ast::FuncDecl& f = *file_.program->find_func(name);
-  std::vector<interp::Value> results;
+// Runs the procedure `name`; a run-time error becomes a RunFailure with its full message.
+std::vector<interp::Value> SceneRun::call(api::Engine& engine, const std::string& name) {
   try {
-    results = engine.call(f, {});
+    return engine.call(*file_.program->find_func(name), {});
   } catch (const interp::RuntimeError& e) {
     throw RunFailure(e.render());
   } catch (const runtime::Fault& e) {
     throw RunFailure(std::string("runtime error: ") + e.what());
   }
+}
+
+// The results of step named in file_.stat_names, as numbers.
+std::vector<double> SceneRun::step_stats(const std::vector<interp::Value>& results) const {
+  const ast::FuncDecl& step = *file_.program->find_func(file_.step_name);
   std::vector<double> stats;
-  for (size_t i = 0; i < f.results.size() && name == file_.step_name; ++i) {
-    if (std::find(file_.stat_names.begin(), file_.stat_names.end(), f.results[i].name) ==
-        file_.stat_names.end())
-      continue;
+  for (size_t i = 0; i < step.results.size(); ++i) {
+    const std::vector<std::string>& names = file_.stat_names;
+    if (std::find(names.begin(), names.end(), step.results[i].name) == names.end()) continue;
     runtime::Tensor v = results.at(i).to_tensor();
     switch (v.kind()) {
       case ComponentKind::Int: stats.push_back(v.ints()[0]); break;
@@ -112,10 +114,11 @@ double SceneRun::run_frames(api::Engine& engine, int frames, std::ostream& out) 
   for (int frame = 1; frame <= frames; ++frame) {
     const auto t0 = Clock::now();
     engine.reset_stats();
-    const std::vector<double> stats = call(engine, file_.step_name);
+    const std::vector<interp::Value> results = call(engine, file_.step_name);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const double assembly_ms = std::min(ms, 1e3 * engine.stats().assembly_seconds);
     total_ms += ms;
+    const std::vector<double> stats = step_stats(results);
     if (output_.every_frame(frame) || frame == frames) output_.write_frame(meshes_, frame, frame == frames);
     output_.write_stats(frame, ms, stats, assembly_ms);
     if (options_.quiet) continue;

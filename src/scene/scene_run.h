@@ -45,7 +45,8 @@ class SceneRun {
   api::EngineOptions engine_options(std::ostream& out) const;
   double run_frames(api::Engine& engine, int frames, std::ostream& out);
   void bind(api::Engine& engine) const;
-  std::vector<double> call(api::Engine& engine, const std::string& name);
+  std::vector<interp::Value> call(api::Engine& engine, const std::string& name);
+  std::vector<double> step_stats(const std::vector<interp::Value>& results) const;
   void print_sizes(std::ostream& out, int frames) const;
 
   const SceneFile& file_;
