@@ -25,9 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "frontend/frontend.h"
+#include "api/engine.h"
 #include "interp/hook.h"
-#include "interp/interpreter.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/set.h"
 
@@ -108,15 +107,15 @@ int main(int argc, char** argv) {
   const std::string program_path =
       argc > 3 ? argv[3] : SIMIT_SOURCE_DIR "/bench/programs/neohookean_stiffness.sim";
 
-  auto c = simit::frontend::compile_file(program_path);
+  auto c = simit::api::CompiledProgram::from_file(program_path);
   if (!c->ok()) {
-    std::fputs(c->diagnostics.render_all().c_str(), stderr);
+    std::fputs(c->compilation()->diagnostics.render_all().c_str(), stderr);
     return 1;
   }
-  const ast::FuncDecl* stiffness = c->program->find_func("stiffness");
-  const ast::FuncDecl* element = c->program->find_func("tet_stiffness");
+  const ast::FuncDecl* stiffness = c->find_func("stiffness");
+  const ast::FuncDecl* element = c->find_func("tet_stiffness");
   const ast::Variable *verts_var = nullptr, *tets_var = nullptr;
-  for (const ast::Variable* v : c->program->globals) {
+  for (const ast::Variable* v : c->program().globals) {
     if (v && v->name == "verts") verts_var = v;
     if (v && v->name == "tets") tets_var = v;
   }
@@ -154,7 +153,7 @@ int main(int argc, char** argv) {
               verts.size(), tets.size(), 1e3 * load_s);
 
   // Plain runs.
-  simit::interp::Interpreter interp(*c->program);
+  simit::api::Engine interp(c);
   interp.bind_set(*verts_var, verts);
   interp.bind_set(*tets_var, tets);
   auto first_start = Clock::now();
@@ -187,9 +186,9 @@ int main(int argc, char** argv) {
 
   // One hooked run for the split.
   PhaseTimer timer(*element);
-  simit::interp::Options options;
+  simit::api::EngineOptions options;
   options.hook = &timer;
-  simit::interp::Interpreter hooked(*c->program, options);
+  simit::api::Engine hooked(c, options);
   hooked.bind_set(*verts_var, verts);
   hooked.bind_set(*tets_var, tets);
   hooked.call(*stiffness, {});  // pattern and warm-up

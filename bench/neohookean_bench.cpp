@@ -6,8 +6,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "frontend/frontend.h"
-#include "interp/interpreter.h"
+#include "api/engine.h"
 
 namespace {
 
@@ -26,17 +25,17 @@ int main(int argc, char** argv) {
   const long calls = argc > 1 ? std::atol(argv[1]) : 100000;
   const std::string path =
       argc > 2 ? argv[2] : SIMIT_SOURCE_DIR "/tests/interp/programs/neohookean.sim";
-  auto c = simit::frontend::compile_file(path);
+  auto c = simit::api::CompiledProgram::from_file(path);
   if (!c->ok()) {
-    std::fputs(c->diagnostics.render_all().c_str(), stderr);
+    std::fputs(c->compilation()->diagnostics.render_all().c_str(), stderr);
     return 1;
   }
-  const auto* f = c->program->find_func("neohookean_stress");
+  const auto* f = c->find_func("neohookean_stress");
   if (!f) {
     std::fprintf(stderr, "no function neohookean_stress in %s\n", path.c_str());
     return 1;
   }
-  simit::interp::Interpreter interp(*c->program);
+  simit::api::Engine interp(c);
   const Value mu = Value::of_float(3.5e5), lambda = Value::of_float(1.2e6);
   double checksum = 0.0;
   auto run = [&](long n) {

@@ -176,8 +176,8 @@ void Session::declarations(const std::string& input) {
   }
 }
 
-interp::Options Session::run_options() {
-  interp::Options o;
+api::EngineOptions Session::run_options() {
+  api::EngineOptions o;
   o.out = &out_;
   o.float32 = options_.float32;
   o.check_finite = options_.check_finite;
@@ -225,7 +225,7 @@ bool Session::debug_run(const frontend::Compilation& c, int input_offset,
 }
 
 // The scene's sets and tensors go to the externs of the same names the program declares.
-void Session::bind_scene(interp::Interpreter& in, const ast::Program& program) {
+void Session::bind_scene(api::Engine& in, const ast::Program& program) {
   if (!scene_) return;
   for (const ast::Variable* g : program.globals) {
     if (g->kind != ast::Variable::Kind::Extern) continue;
@@ -236,7 +236,7 @@ void Session::bind_scene(interp::Interpreter& in, const ast::Program& program) {
   }
 }
 
-void Session::keep_scene_tensors(const interp::Interpreter& in, const ast::Program& program) {
+void Session::keep_scene_tensors(const api::Engine& in, const ast::Program& program) {
   if (!scene_) return;
   for (const ast::Variable* g : program.globals)
     for (auto& [name, value] : scene_->tensors)
@@ -292,7 +292,7 @@ void Session::statements(const std::string& input, bool expression, bool type_on
   }
   std::vector<interp::Value> res;
   bool ran = debug_run(*second, offset, [&] {
-    interp::Interpreter in(*second->program, run_options());
+    api::Engine in(*second->program, run_options());
     bind_scene(in, *second->program);
     std::vector<interp::Value> args;
     for (const auto& [n, v] : vars_) args.push_back(v.value);
@@ -325,13 +325,13 @@ void Session::run_function(const frontend::Compilation& c, const std::string& na
     return;
   }
   using Clock = std::chrono::steady_clock;
-  std::unique_ptr<interp::Interpreter> in;  // one for all runs: it keeps matrix patterns
+  std::unique_ptr<api::Engine> in;  // one for all runs: it keeps matrix patterns
   for (int k = 1; k <= times; ++k) {
     std::vector<interp::Value> res;
     const auto t0 = Clock::now();
     bool ran = debug_run(c, -1, [&] {
       if (!in) {
-        in = std::make_unique<interp::Interpreter>(*c.program, run_options());
+        in = std::make_unique<api::Engine>(*c.program, run_options());
         bind_scene(*in, *c.program);
       }
       try {

@@ -13,7 +13,7 @@
 
 #include "debugger.h"
 #include "frontend/frontend.h"
-#include "interp/interpreter.h"
+#include "api/engine.h"
 #include "interp/value.h"
 #include "line_map.h"
 #include "scene_data.h"
@@ -76,7 +76,7 @@ class Session {
   void report_runtime(const interp::RuntimeError& e, int input_offset);
   std::string location(const frontend::SourceSpan& span, int input_offset) const;
   std::vector<LineSegment> segments(const frontend::SourceFile& file, int input_offset) const;
-  interp::Options run_options();
+  api::EngineOptions run_options();
   // Runs `body` (which runs `c`) under the debugger; reports its run-time error. False when
   // the run did not complete.
   bool debug_run(const frontend::Compilation& c, int input_offset, const std::function<void()>& body);
@@ -84,8 +84,8 @@ class Session {
   // again when declarations change, and given back to the debugger after each run.
   void refresh_program();
   void restore_program();
-  void bind_scene(interp::Interpreter& in, const frontend::ast::Program& program);
-  void keep_scene_tensors(const interp::Interpreter& in, const frontend::ast::Program& program);
+  void bind_scene(api::Engine& engine, const frontend::ast::Program& program);
+  void keep_scene_tensors(const api::Engine& engine, const frontend::ast::Program& program);
   // Runs `func` (no parameters) of `c` `times` times; prints its results after each run.
   void run_function(const frontend::Compilation& c, const std::string& name, int times);
 

@@ -12,13 +12,11 @@
 #include <sstream>
 #include <vector>
 
-#include <toml++/toml.h>
-
+#include "api/compiled_program.h"
 #include "debugger.h"
-#include "sigint.h"
-#include "frontend/frontend.h"
 #include "run_command.h"
-#include "scene_command.h"
+#include "sigint.h"
+#include "simit/scene.h"
 
 namespace simit::tools {
 
@@ -49,24 +47,6 @@ class InterruptScope {
 constexpr int kNotStarted = -1;  // `run` with arguments that do not fit: nothing ran
 
 bool is_scene(const std::string& file) { return file.ends_with(".toml"); }
-
-// The program a scene names, resolved against the scene's folder.
-std::string scene_program(const std::string& scene, std::string& why) {
-  try {
-    toml::table doc = toml::parse_file(scene);
-    std::optional<std::string> program = doc["program"].value<std::string>();
-    if (!program) {
-      why = scene + ": error: the scene: missing key 'program'";
-      return "";
-    }
-    fs::path p(*program);
-    if (p.is_relative()) p = fs::path(scene).parent_path() / p;
-    return p.lexically_normal().string();
-  } catch (const toml::parse_error& e) {
-    why = scene + ": error: " + std::string(e.description());
-    return "";
-  }
-}
 
 // `FUNC ARGS...` with arguments that may hold spaces inside brackets or quotes.
 std::vector<std::string> split_args(const std::string& text) {
@@ -112,6 +92,8 @@ class DebugSession {
     if (options_.echo && !tty_) out_ << prompt << line << "\n";
     return line;
   }
+  // Reads the scene or compiles the program, once for every run; false after reporting why.
+  bool open();
   void start(const std::string& args);
   int run_scene_frames(const std::string& args, std::ostream& errors);
   int run_call(const std::string& args, std::ostream& errors);
@@ -122,21 +104,34 @@ class DebugSession {
   std::ostream& err_;
   bool tty_;
   repl::Debugger debugger_;
+  scene::SceneOptions scene_options_;
+  std::unique_ptr<scene::Scene> scene_;                // a .toml file
+  std::shared_ptr<const api::CompiledProgram> program_;  // a .sim file
 };
 
+bool DebugSession::open() {
+  if (is_scene(options_.file)) {
+    scene_options_.file = options_.file;
+    scene_options_.float32 = options_.float32;
+    scene_options_.quiet = true;
+    scene_options_.trap = &debugger_.trap();
+    scene_ = scene::Scene::open(scene_options_, err_);
+    if (!scene_) return false;
+    debugger_.set_program(&scene_->program(),
+                          {{1, fs::path(scene_->program_path()).filename().string(), 1}});
+    return true;
+  }
+  program_ = api::CompiledProgram::from_file(options_.file);
+  if (!program_->ok()) {
+    err_ << program_->compilation()->diagnostics.render_all();
+    return false;
+  }
+  debugger_.set_program(&program_->program(), {{1, fs::path(options_.file).filename().string(), 1}});
+  return true;
+}
+
 int DebugSession::run() {
-  std::string program_path = options_.file, why;
-  if (is_scene(options_.file)) program_path = scene_program(options_.file, why);
-  if (program_path.empty()) {
-    err_ << why << "\n";
-    return 1;
-  }
-  std::unique_ptr<frontend::Compilation> c = frontend::compile_file(program_path);
-  if (!c->ok()) {
-    err_ << c->diagnostics.render_all();
-    return 1;
-  }
-  debugger_.set_program(c->program.get(), {{1, fs::path(program_path).filename().string(), 1}});
+  if (!open()) return 1;
   if (tty_)
     out_ << "Debugging " << options_.file << ". 'help' lists the commands, 'run' starts "
          << (is_scene(options_.file) ? "the scene ('run FRAMES')"
@@ -172,22 +167,18 @@ void DebugSession::start(const std::string& args) {
 }
 
 int DebugSession::run_scene_frames(const std::string& args, std::ostream& errors) {
-  SceneOptions so;
-  so.file = options_.file;
-  so.float32 = options_.float32;
-  so.quiet = true;
-  so.trap = &debugger_.trap();
+  int frames = -1;  // the scene's
   if (!args.empty()) {
     std::vector<std::string> words = split_args(args);
     char* end = nullptr;
-    long frames = words.size() == 1 ? std::strtol(words[0].c_str(), &end, 10) : -1;
-    if (frames < 0 || !end || *end) {
+    long count = words.size() == 1 ? std::strtol(words[0].c_str(), &end, 10) : -1;
+    if (count < 0 || !end || *end) {
       errors << "run: a scene takes the number of frames to run, e.g. 'run 2'\n";
       return kNotStarted;
     }
-    so.frames = static_cast<int>(frames);
+    frames = static_cast<int>(count);
   }
-  return run_scene(so, out_, errors);
+  return scene_->run(out_, errors, frames);
 }
 
 int DebugSession::run_call(const std::string& args, std::ostream& errors) {
@@ -202,6 +193,7 @@ int DebugSession::run_call(const std::string& args, std::ostream& errors) {
   ro.args.assign(words.begin() + 1, words.end());
   ro.float32 = options_.float32;
   ro.trap = &debugger_.trap();
+  ro.program = program_;
   return run_function(ro, out_, errors);
 }
 

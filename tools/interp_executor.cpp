@@ -1,4 +1,4 @@
-// `%!` tests run by the reference interpreter.
+// `%!` tests and graph sections run through the engine.
 #include "interp_executor.h"
 
 #include <map>
@@ -7,7 +7,7 @@
 #include <span>
 
 #include "frontend/diagnostics.h"
-#include "interp/interpreter.h"
+#include "api/engine.h"
 #include "interp/printing.h"
 #include "interp/set_binding.h"
 #include "runtime/set.h"
@@ -71,14 +71,14 @@ RunResult InterpExecutor::run_test(const ast::Program& program, const ast::TestD
   const ast::FuncDecl* f = nullptr;
   if (auto bad = check_signature(program, test, f)) return *bad;
   std::ostringstream discarded;
-  interp::Options options = options_;
+  api::EngineOptions options = options_;
   if (!options.out) options.out = &discarded;
   try {
-    interp::Interpreter interpreter(program, options);
+    api::Engine engine(program, options);
     std::vector<interp::Value> args;
-    for (const auto& a : test.args) args.push_back(interpreter.evaluate_constant(*a));
-    interp::Value expected = interpreter.evaluate_constant(*test.expected);
-    interp::Value actual = interpreter.call(*f, std::move(args)).at(0);
+    for (const auto& a : test.args) args.push_back(engine.evaluate_constant(*a));
+    interp::Value expected = engine.evaluate_constant(*test.expected);
+    interp::Value actual = engine.call(*f, std::move(args)).at(0);
     if (values_match(actual, expected)) return {};
     bool column = is_column(*f->results[0].var->type);
     return failed(interp::literal_text(actual, column) +
@@ -95,7 +95,7 @@ namespace {
 // Builds the sets and values of a section's graph directives and runs it (TESTFORMAT.md §7.3).
 class GraphRun {
  public:
-  GraphRun(const ast::Program& program, interp::Interpreter& in, std::ostringstream& out)
+  GraphRun(const ast::Program& program, api::Engine& in, std::ostringstream& out)
       : program_(program), in_(in), out_(out) {}
 
   // An empty string when the step went well, else why the section fails.
@@ -240,7 +240,7 @@ class GraphRun {
   }
 
   const ast::Program& program_;
-  interp::Interpreter& in_;
+  api::Engine& in_;
   std::ostringstream& out_;
   std::map<std::string, std::unique_ptr<runtime::Set>> sets_;
   std::map<std::string, interp::Value> args_, results_;
@@ -250,11 +250,11 @@ class GraphRun {
 
 RunResult InterpExecutor::run_graph(const ast::Program& program, const std::vector<GraphStep>& steps) {
   std::ostringstream output;
-  interp::Options options = options_;
+  api::EngineOptions options = options_;
   options.out = &output;
   try {
-    interp::Interpreter interpreter(program, options);
-    GraphRun run(program, interpreter, output);
+    api::Engine engine(program, options);
+    GraphRun run(program, engine, output);
     for (const GraphStep& s : steps) {
       std::string problem = run.step(s);
       if (!problem.empty()) {

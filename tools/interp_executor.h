@@ -1,16 +1,16 @@
-// The reference interpreter as the executor of `simit test`: runs `%!` tests by the rules
-// of TESTFORMAT.md §3.2. Graph directives need sets, which come later; they are skipped.
+// The engine as the executor of `simit test`: runs `%!` tests by the rules of
+// TESTFORMAT.md §3.2 and graph directives by §7.3, with the executor its options choose.
 #pragma once
 
 #include "executor.h"
-#include "interp/options.h"
+#include "api/engine.h"
 
 namespace simit::tools {
 
 class InterpExecutor : public Executor {
  public:
   // `options.out` receives what the programs print (null: it is discarded).
-  explicit InterpExecutor(interp::Options options = {}) : options_(options) {}
+  explicit InterpExecutor(api::EngineOptions options = {}) : options_(options) {}
 
   std::string name() const override { return "interpreter"; }
   RunResult run_test(const frontend::ast::Program& program,
@@ -19,7 +19,7 @@ class InterpExecutor : public Executor {
                       const std::vector<GraphStep>& steps) override;
 
  private:
-  interp::Options options_;
+  api::EngineOptions options_;
 };
 
 }  // namespace simit::tools

@@ -1,8 +1,7 @@
 // `simit run`: one exported function, arguments from the command line.
 #include "run_command.h"
 
-#include "frontend/frontend.h"
-#include "interp/interpreter.h"
+#include "api/engine.h"
 #include "interp/operators.h"
 #include "interp/printing.h"
 #include "literal.h"
@@ -56,25 +55,26 @@ bool is_column(const Type& t) {
 }  // namespace
 
 int run_function(const RunOptions& options, std::ostream& out, std::ostream& err) {
-  std::unique_ptr<frontend::Compilation> c = frontend::compile_file(options.file);
+  std::shared_ptr<const api::CompiledProgram> c =
+      options.program ? options.program : api::CompiledProgram::from_file(options.file);
   if (!c->ok()) {
-    err << c->diagnostics.render_all();
+    err << c->compilation()->diagnostics.render_all();
     return 1;
   }
-  const ast::FuncDecl* f = c->program->find_func(options.func);
+  const ast::FuncDecl* f = c->find_func(options.func);
   if (!f) return usage(err, "no function named '" + options.func + "' in " + options.file);
   if (!f->exported) return usage(err, "'" + options.func + "' is not an exported function");
   std::vector<interp::Value> args;
   std::string error;
   if (!convert_args(*f, options, args, error)) return usage(err, error);
-  interp::Options run_options;
+  api::EngineOptions run_options;
   run_options.float32 = options.float32;
   run_options.check_finite = options.check_finite;
   run_options.out = &out;
   run_options.trap = options.trap;
   try {
-    interp::Interpreter interpreter(*c->program, run_options);
-    std::vector<interp::Value> results = interpreter.call(*f, std::move(args));
+    api::Engine engine(c, run_options);
+    std::vector<interp::Value> results = engine.call(*f, std::move(args));
     for (size_t i = 0; i < results.size(); ++i)
       out << f->results[i].name << " = "
           << interp::literal_text(results[i], is_column(*f->results[i].var->type)) << "\n";

@@ -2,12 +2,16 @@
 // with arguments written as literals, and prints its results.
 #pragma once
 
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
 
 namespace simit::interp {
 class Trap;
+}
+namespace simit::api {
+class CompiledProgram;
 }
 
 namespace simit::tools {
@@ -19,6 +23,8 @@ struct RunOptions {
   bool float32 = false;
   bool check_finite = false;
   interp::Trap* trap = nullptr;  // simit debug: the interpreter's trap point switch
+  // `file` already compiled (simit debug runs it again and again); null: compile it here.
+  std::shared_ptr<const api::CompiledProgram> program;
 };
 
 // Prints what the program prints, then one `name = literal` line per result, to `out`.

@@ -17,7 +17,7 @@
 namespace simit {
 
 namespace api {
-struct LoadedProgram;
+class CompiledProgram;
 }
 namespace interp {
 class Trap;
@@ -212,7 +212,7 @@ class Program {
  private:
   int load(const std::string& name, const std::string* text);
   Options options_;
-  std::shared_ptr<const api::LoadedProgram> loaded_;
+  std::shared_ptr<const api::CompiledProgram> loaded_;
   std::vector<Diagnostic> diagnostics_;
 };
 

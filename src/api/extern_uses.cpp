@@ -2,7 +2,7 @@
 #include <set>
 
 #include "interp/ast_walk.h"
-#include "loaded_program.h"
+#include "api/compiled_program.h"
 
 namespace simit::api {
 

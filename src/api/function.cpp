@@ -1,11 +1,10 @@
-// Functions: bindings by name, checks at bind and init time, and runs on the interpreter.
+// Functions: bindings by name, checks at bind and init time, and runs through the engine.
 #include <cstring>
 #include <map>
 
 #include "binding_check.h"
 #include "tensor_values.h"
-#include "interp/interpreter.h"
-#include "loaded_program.h"
+#include "api/engine.h"
 #include "runtime/fault.h"
 #include "simit/program.h"
 
@@ -116,12 +115,12 @@ using api::from_value;
 using api::to_value;
 
 struct Function::Impl {
-  std::shared_ptr<const api::LoadedProgram> loaded;
+  std::shared_ptr<const api::CompiledProgram> loaded;
   Options options;
   const ast::FuncDecl* func = nullptr;
   std::map<std::string, Slot> slots;          // every bindable name
   std::vector<std::string> needed;            // externs used and parameters, in order
-  std::unique_ptr<interp::Interpreter> interpreter;
+  std::unique_ptr<api::Engine> engine;
   std::vector<std::pair<const runtime::Set*, uint64_t>> topology;  // at init
   std::vector<Value> results;
   RunStats stats;
@@ -142,7 +141,7 @@ struct Function::Impl {
                                 [&](const ast::Variable& v) { return bound_set(v); });
   }
   bool stale() const {
-    if (!interpreter) return true;
+    if (!engine) return true;
     for (auto [set, version] : topology)
       if (set->topology_version() != version) return true;
     return false;
@@ -206,7 +205,7 @@ void Function::bind(const std::string& name, Set& set) {
     s.set = previous;
     throw BindError(std::move(problems));
   }
-  im.interpreter.reset();  // rebinding needs init() again (run() does it by itself)
+  im.engine.reset();  // rebinding needs init() again (run() does it by itself)
 }
 
 void Function::bind(const std::string& name, const TensorSlot& tensor) {
@@ -220,7 +219,7 @@ void Function::bind(const std::string& name, const TensorSlot& tensor) {
       api::check_tensor(s.what(), *s.var->type, tensor, im.options.float_size);
   if (!problems.empty()) throw BindError(std::move(problems));
   s.tensor = tensor;
-  im.interpreter.reset();
+  im.engine.reset();
 }
 
 std::vector<std::string> Function::unbound() const {
@@ -248,12 +247,13 @@ void Function::Impl::init() {
     problems.insert(problems.begin(), "cannot initialise '" + func->name + "':");
     throw BindError(std::move(problems));
   }
-  interp::Options io;
-  io.float32 = options.float_size == 4;
-  io.check_finite = options.check_finite;
-  io.out = options.out;
-  io.trap = options.trap;
-  interpreter = std::make_unique<interp::Interpreter>(loaded->program(), io);
+  api::EngineOptions eo;
+  eo.executor = api::ExecutorKind::Interpreter;  // Backend::Cpu as well, until the JIT is built
+  eo.float32 = options.float_size == 4;
+  eo.check_finite = options.check_finite;
+  eo.out = options.out;
+  eo.trap = options.trap;
+  engine = std::make_unique<api::Engine>(loaded, eo);
   topology.clear();
   try {
     // Vertex sets first: an edge set's binding refers to its endpoint sets' bindings.
@@ -261,12 +261,12 @@ void Function::Impl::init() {
       for (const std::string& n : needed) {
         const Slot& s = slots.at(n);
         if (s.set && (s.set->arity() == 0) == (pass == 0)) {
-          interpreter->bind_set(*s.var, *s.set);
+          engine->bind_set(*s.var, *s.set);
           topology.emplace_back(s.set, s.set->topology_version());
         }
       }
   } catch (const interp::RuntimeError& e) {
-    interpreter.reset();
+    engine.reset();
     throw BindError({"cannot initialise '" + func->name + "': " + e.message()});
   }
 }
@@ -276,18 +276,18 @@ void Function::Impl::run() {
   std::vector<Value> args(func->params.size());
   for (const auto& [n, s] : slots) {
     if (!s.tensor) continue;
-    if (s.role == Slot::Role::Extern) interpreter->set_global(*s.var, to_value(*s.tensor, *s.var->type));
+    if (s.role == Slot::Role::Extern) engine->set_global(*s.var, to_value(*s.tensor, *s.var->type));
     if (s.role == Slot::Role::Param) args[s.index] = to_value(*s.tensor, *s.var->type);
   }
-  interpreter->reset_stats();
+  engine->reset_stats();
   // Counted on the way out too, so that a failed run's time is not lost.
   auto account = [&] {
     ++stats.runs;
-    stats.assembly_seconds += interpreter->stats().assembly_seconds;
-    stats.assemblies += interpreter->stats().maps;
+    stats.assembly_seconds += engine->stats().assembly_seconds;
+    stats.assemblies += engine->stats().maps;
   };
   try {
-    results = interpreter->call(*func, std::move(args));
+    results = engine->call(*func, std::move(args));
   } catch (const interp::RuntimeError& e) {
     account();
     throw RuntimeError(e.render(), e.line());
@@ -298,7 +298,7 @@ void Function::Impl::run() {
   account();
   for (const auto& [n, s] : slots) {
     if (!s.tensor) continue;
-    if (s.role == Slot::Role::Extern) from_value(interpreter->global(*s.var), *s.tensor);
+    if (s.role == Slot::Role::Extern) from_value(engine->global(*s.var), *s.tensor);
     if (s.role == Slot::Role::Result) from_value(results.at(s.index), *s.tensor);
   }
 }

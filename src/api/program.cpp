@@ -4,7 +4,7 @@
 
 #include "frontend/diagnostics.h"
 #include "frontend/frontend.h"
-#include "loaded_program.h"
+#include "api/compiled_program.h"
 #include "simit/program.h"
 
 namespace simit {
@@ -79,10 +79,10 @@ int Program::load(const std::string& name, const std::string* text) {
     contents = ss.str();
     text = &contents;
   }
-  auto loaded = std::make_shared<api::LoadedProgram>();
-  loaded->compilation = frontend::compile_source(name, *text);
-  diagnostics_ = convert(loaded->compilation->diagnostics);
-  if (!loaded->compilation->ok()) {
+  std::shared_ptr<const api::CompiledProgram> loaded =
+      api::CompiledProgram::from_source(name, *text);
+  diagnostics_ = convert(loaded->compilation()->diagnostics);
+  if (!loaded->ok()) {
     loaded_.reset();
     return 1;
   }

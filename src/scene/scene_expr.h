@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-namespace simit::tools {
+namespace simit::scene {
 
 // Grammar (loosest first): `or` (also ||), `and` (&&), `not` (!), one comparison
 // (< <= > >= == !=), + -, * /, unary -, ^ (right-associative), then numbers, x, y, z, pi,
@@ -27,4 +27,4 @@ class PositionExpr {
   std::unique_ptr<Node> root_;
 };
 
-}  // namespace simit::tools
+}  // namespace simit::scene

@@ -1,5 +1,5 @@
 // A small recursive-descent parser and tree evaluator for scene expressions.
-#include "scene_expr.h"
+#include "scene/scene_expr.h"
 
 #include <cctype>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace simit::tools {
+namespace simit::scene {
 
 struct PositionExpr::Node {
   enum class Op { Num, Var, Neg, Not, Add, Sub, Mul, Div, Pow, Lt, Le, Gt, Ge, Eq, Ne, And,
@@ -242,4 +242,4 @@ double PositionExpr::eval(const double p[3], const double lo[3], const double hi
   return eval_node(*root_, v);
 }
 
-}  // namespace simit::tools
+}  // namespace simit::scene

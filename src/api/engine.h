@@ -1,0 +1,91 @@
+// The one driver every front end runs through: a program compiled once, the sets and extern
+// tensors bound to it, and its functions run by the executor an option chooses.
+#pragma once
+
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "api/compiled_program.h"
+#include "interp/assembly_plan.h"
+#include "interp/hook.h"
+#include "interp/interpreter.h"
+#include "interp/value.h"
+#include "runtime/set.h"
+
+namespace simit::api {
+
+// What executes the program's functions. Only the reference interpreter exists today. A
+// compiled executor (the CPU or GPU JIT) becomes a second value here and is wired in by
+// Engine::make_executor: it is the interpreter's site hook (interp/assembly_plan.h), offered
+// every planned map and apply site, so the interpreter stays the driver of every run and the
+// host-facing calls below do not change.
+enum class ExecutorKind { Interpreter };
+
+// Settings of one engine; passed down, never global.
+struct EngineOptions {
+  ExecutorKind executor = ExecutorKind::Interpreter;
+  // Round every float to binary32 when produced (Simit `float` is float32).
+  bool float32 = false;
+  // Stop with a run-time error at the first NaN or infinity produced.
+  bool check_finite = false;
+  // Where `print` writes; null means standard output.
+  std::ostream* out = nullptr;
+  // The trap point's host-owned switch (the step debugger, Ctrl-C); null when unused.
+  interp::Trap* trap = nullptr;
+  // An observer of every statement for the engine's whole life (benchmarks); ignored when
+  // `trap` is set.
+  interp::StatementHook* hook = nullptr;
+  // Offered every planned map / apply site before the interpreter runs it (tests of the
+  // executor seam); null with ExecutorKind::Interpreter runs everything in the interpreter.
+  interp::SiteHook* sites = nullptr;
+};
+
+// Runs the functions of one compiled program. Bindings and globals persist between calls,
+// and so do the matrix patterns assembly builds, so repeated calls (frames) cost no set-up.
+// Run-time errors throw interp::RuntimeError (front ends render them in their own terms).
+class Engine {
+ public:
+  explicit Engine(std::shared_ptr<const CompiledProgram> program, EngineOptions options = {});
+  // Over a program checked elsewhere (`simit test` sections); it must outlive the engine.
+  explicit Engine(const frontend::ast::Program& program, EngineOptions options = {});
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  const frontend::ast::Program& program() const { return compiled_->program(); }
+  const CompiledProgram& compiled() const { return *compiled_; }
+  const EngineOptions& options() const { return options_; }
+
+  // Binds a set to an extern set declaration; the set must outlive the engine's use of it.
+  // Throws interp::RuntimeError naming a field or endpoint that does not fit.
+  void bind_set(const frontend::ast::Variable& var, runtime::Set& set);
+  // Binds an extern tensor once; the program's writes to it stay in the engine.
+  void set_global(const frontend::ast::Variable& var, interp::Value value);
+  const interp::Value& global(const frontend::ast::Variable& var) const;
+
+  // Runs `func` with one value per parameter and returns its results in order.
+  std::vector<interp::Value> call(const frontend::ast::FuncDecl& func,
+                                  std::vector<interp::Value> args);
+  // A constant expression of the program (a literal), e.g. the arguments of a `%!` test.
+  interp::Value evaluate_constant(const frontend::ast::Expr& expr);
+
+  // Time in outermost assemblies since construction or reset_stats().
+  const interp::Interpreter::Stats& stats() const { return executor_->stats(); }
+  void reset_stats() { executor_->reset_stats(); }
+  runtime::PatternRegistry& patterns() { return executor_->patterns(); }
+
+  // The executing interpreter, for inspection between or during runs (a debugger hook also
+  // receives it with every statement).
+  const interp::Interpreter& interpreter() const { return *executor_; }
+
+ private:
+  std::unique_ptr<interp::Interpreter> make_executor() const;
+
+  std::shared_ptr<const CompiledProgram> compiled_;
+  EngineOptions options_;
+  std::unique_ptr<interp::Interpreter> executor_;
+};
+
+}  // namespace simit::api

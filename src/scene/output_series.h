@@ -1,0 +1,65 @@
+// [output]: what a scene writes and where: a ParaView series (.pvd + one .vtu per written
+// frame), a per-frame CSV of timings and step results, a quick-look PNG of the last frame,
+// and (--final-csv) the last positions. Everything is checked before the first frame; the
+// folder is created only once every check has passed.
+#pragma once
+
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/mesh/pvd_writer.h"
+#include "scene/mesh_binding.h"
+#include "scene/mesh_cache.h"
+#include "scene/scene_file.h"
+#include "simit/scene.h"
+
+namespace simit::scene {
+
+class OutputSeries {
+ public:
+  OutputSeries(const SceneFile& file, const SceneOptions& options) : file_(file), options_(options) {}
+
+  // Checks [output] (and --output, --png) against the built sets. Throws SceneError.
+  void configure(const BoundSets& sets);
+  // Creates the folder, the .pvd and the stats CSV (its header: frame, time, ms, `stats`,
+  // assembly_ms, solve_ms) and makes sure the picture can be written. Throws SceneError.
+  void open(const std::vector<std::string>& stats);
+
+  // Writes frame `frame` (0: the state after init) at time frame * frame_time; the picture
+  // too when it is `last`.
+  void write_frame(const MeshCache& meshes, int frame, bool last);
+  // One row of the stats CSV, when there is one.
+  void write_stats(int frame, double ms, const std::vector<double>& stats, double assembly_ms);
+  // --final-csv: the last frame's positions as x,y,z lines.
+  void write_final_csv() const;
+
+  bool every_frame(int frame) const { return frame % every_ == 0; }
+  // The .pvd written, or empty when nothing is.
+  std::string pvd_path() const { return pvd_ ? pvd_->path() : std::string(); }
+
+ private:
+  SceneSet* find_set(const toml::table& t, const BoundSets& sets, const std::string& key,
+                     const std::string& name) const;
+  void check_position(const toml::table& t);
+  void check_cells(const toml::table& t, const BoundSets& sets);
+  void field_list(const toml::table& t, const std::string& key, const SceneSet* s,
+                  std::vector<std::string>& list) const;
+  void check_png(const toml::table& t);
+  void open_png(const toml::table& t);
+
+  const SceneFile& file_;
+  const SceneOptions& options_;
+  std::string folder_, name_, csv_path_;
+  std::string png_path_;  // the quick-look picture of the last frame, when asked for
+  SceneSet* points_ = nullptr;
+  SceneSet* cells_ = nullptr;
+  std::string position_field_;
+  std::vector<std::string> point_fields_, cell_fields_;
+  int every_ = 1;
+  std::unique_ptr<runtime::PvdWriter> pvd_;
+  std::ofstream csv_;
+};
+
+}  // namespace simit::scene

@@ -1,0 +1,108 @@
+// The public scene API: a scene opened once, run or built as often as asked, its problems
+// reported the way `simit run` prints them.
+#include "simit/scene.h"
+
+#include "runtime/mesh/mesh.h"
+#include "scene/scene_run.h"
+
+namespace simit::scene {
+
+struct Scene::Impl {
+  SceneOptions options;
+  std::unique_ptr<SceneFile> file;
+  MeshCache meshes;  // read once, shared by every run
+};
+
+Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Scene::~Scene() = default;
+
+std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& err) {
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  try {
+    impl->file = read_scene_file(options.file);
+  } catch (const SceneError& e) {
+    err << e.what() << "\n";
+    return nullptr;
+  } catch (const std::exception& e) {
+    err << options.file << ": error: " << e.what() << "\n";
+    return nullptr;
+  }
+  return std::unique_ptr<Scene>(new Scene(std::move(impl)));
+}
+
+const std::string& Scene::program_path() const { return impl_->file->program_path; }
+
+const frontend::ast::Program& Scene::program() const { return impl_->file->program->program(); }
+
+int Scene::run(std::ostream& out, std::ostream& err, int frames) {
+  const SceneOptions& o = impl_->options;
+  const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
+  try {
+    SceneRun run(*impl_->file, o, impl_->meshes);
+    run.build();
+    run.run(count, out);
+  } catch (const SceneError& e) {
+    out.flush();
+    err << e.what() << "\n";
+    return 1;
+  } catch (const RunFailure& e) {
+    out.flush();
+    err << e.what() << "\n";
+    return 1;
+  } catch (const runtime::MeshError& e) {
+    out.flush();
+    err << o.file << ": error: writing output: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    out.flush();
+    err << "simit run: internal error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+std::optional<SceneSets> Scene::build(std::ostream& err) {
+  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes);
+  try {
+    run->build();
+  } catch (const SceneError& e) {
+    err << e.what() << "\n";
+    return std::nullopt;
+  } catch (const std::exception& e) {
+    err << impl_->options.file << ": error: " << e.what() << "\n";
+    return std::nullopt;
+  }
+  SceneSets d;
+  d.path = impl_->options.file;
+  d.program_path = impl_->file->program_path;
+  d.init = impl_->file->init_name;
+  d.step = impl_->file->step_name;
+  for (const auto& s : run->sets().sets) d.sets.emplace_back(s->name, s->set.get());
+  for (const frontend::ast::Variable* g : impl_->file->program->program().globals) {
+    auto t = run->tensors().find(g->name);
+    if (g->kind == frontend::ast::Variable::Kind::Extern && t != run->tensors().end())
+      d.tensors.emplace_back(g->name, t->second.value.to_tensor());
+  }
+  d.owner = run;
+  return d;
+}
+
+int run_scene(const SceneOptions& options, std::ostream& out, std::ostream& err) {
+  std::unique_ptr<Scene> scene = Scene::open(options, err);
+  return scene ? scene->run(out, err) : 1;
+}
+
+std::optional<SceneSets> load_scene_sets(const std::string& path, bool float32, std::ostream& err) {
+  SceneOptions options;
+  options.file = path;
+  options.float32 = float32;
+  std::shared_ptr<Scene> scene = Scene::open(options, err);
+  if (!scene) return std::nullopt;
+  std::optional<SceneSets> sets = scene->build(err);
+  if (sets) sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
+                  scene, sets->owner);
+  return sets;
+}
+
+}  // namespace simit::scene

@@ -1,0 +1,131 @@
+// Reading a scene file: TOML syntax, the top-level keys, and the program compiled once.
+#include "scene/scene_file.h"
+
+#include <filesystem>
+#include <sstream>
+
+namespace simit::scene {
+
+namespace ast = frontend::ast;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string located(const std::string& file, const toml::source_region& at, const std::string& what) {
+  std::ostringstream s;
+  s << file;
+  if (at.begin.line > 0) s << ':' << at.begin.line << ':' << at.begin.column;
+  s << ": error: " << what;
+  return s.str();
+}
+
+// `init` and `step` name exported procedures without parameters.
+const ast::FuncDecl* find_procedure(const SceneFile& file, const std::string& key,
+                                    const std::string& name) {
+  const ast::FuncDecl* f = file.program->find_func(name);
+  if (!f) file.fail(file.doc.get(key), key + ": the program has no function '" + name + "'");
+  if (!f->exported) file.fail(file.doc.get(key), key + ": '" + name + "' is not an exported function");
+  if (!f->params.empty())
+    file.fail(file.doc.get(key), key + ": '" + name + "' takes parameters; a scene can only run "
+                                       "procedures without parameters");
+  return f;
+}
+
+void compile_program(SceneFile& file) {
+  if (!fs::exists(file.program_path))
+    file.fail(file.doc.get("program"), "program: no such file '" + file.program_path + "'");
+  file.program = api::CompiledProgram::from_file(file.program_path);
+  if (!file.program->ok())
+    throw SceneError(file.program->compilation()->diagnostics.render_all() + file.path +
+                     ": error: the program '" + file.program_path + "' does not compile");
+  if (!file.init_name.empty()) find_procedure(file, "init", file.init_name);
+  const ast::FuncDecl* step = find_procedure(file, "step", file.step_name);
+  for (const ast::Param& r : step->results)
+    if (r.var && r.var->type && r.var->type->is_scalar() &&
+        r.var->type->scalar != frontend::ScalarKind::String)
+      file.stat_names.push_back(r.name);
+}
+
+void read_frames(SceneFile& file) {
+  if (const toml::node* n = file.doc.get("frames")) {
+    if (!n->is_integer() || n->value<int64_t>().value() < 0)
+      file.fail(n, "frames: expected a whole number >= 0");
+    file.frames = static_cast<int>(*n->value<int64_t>());
+  } else {
+    file.fail(nullptr, "the scene: missing key 'frames'");
+  }
+  if (const toml::node* n = file.doc.get("frame_time")) {
+    if (!n->is_number() || !(n->value<double>().value() > 0))
+      file.fail(n, "frame_time: expected a positive number (seconds between frames in the .pvd)");
+    file.frame_time = *n->value<double>();
+  }
+}
+
+}  // namespace
+
+void SceneFile::fail(const toml::node* at, const std::string& what) const {
+  throw SceneError(located(path, at ? at->source() : toml::source_region{}, what));
+}
+
+void SceneFile::check_keys(const toml::table& t, const std::string& table_name,
+                           const std::set<std::string>& allowed) const {
+  for (auto&& [key, value] : t) {
+    if (allowed.count(std::string(key.str()))) continue;
+    std::string list;
+    for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(&value, "unknown key '" + std::string(key.str()) + "' in " + table_name +
+                     " (expected one of: " + list + ")");
+  }
+}
+
+std::optional<std::string> SceneFile::optional_string(const toml::table& t,
+                                                      const std::string& table_name,
+                                                      const std::string& key) const {
+  const toml::node* n = t.get(key);
+  if (!n) return std::nullopt;
+  if (!n->is_string()) fail(n, table_name + " " + key + ": expected a string");
+  return n->value<std::string>();
+}
+
+std::string SceneFile::required_string(const toml::table& t, const std::string& table_name,
+                                       const std::string& key) const {
+  std::optional<std::string> v = optional_string(t, table_name, key);
+  if (!v) fail(nullptr, table_name + ": missing key '" + key + "'");
+  return *v;
+}
+
+std::string SceneFile::resolve(const std::string& relative) const {
+  fs::path p(relative);
+  if (p.is_absolute() || dir.empty()) return p.lexically_normal().string();
+  return (fs::path(dir) / p).lexically_normal().string();
+}
+
+std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
+  auto file = std::make_unique<SceneFile>();
+  file->path = path;
+  try {
+    file->doc = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw SceneError(located(path, e.source(), std::string(e.description())));
+  }
+  file->dir = fs::path(path).parent_path().string();
+  file->check_keys(file->doc, "the scene",
+                   {"program", "init", "step", "frames", "frame_time", "sets", "tensors", "output"});
+  file->program_path = file->resolve(file->required_string(file->doc, "the scene", "program"));
+  file->init_name = file->optional_string(file->doc, "the scene", "init").value_or("");
+  file->step_name = file->required_string(file->doc, "the scene", "step");
+  read_frames(*file);
+  compile_program(*file);
+  return file;
+}
+
+std::map<std::string, const ast::Variable*> program_externs(const SceneFile& file, bool sets) {
+  std::map<std::string, const ast::Variable*> out;
+  for (const ast::Variable* g : file.program->program().globals)
+    if (g->kind == ast::Variable::Kind::Extern && g->type &&
+        (sets ? g->type->kind == frontend::Type::Kind::Set : g->type->is_tensor()))
+      out[g->name] = g;
+  return out;
+}
+
+}  // namespace simit::scene

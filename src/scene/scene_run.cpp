@@ -1,0 +1,132 @@
+// Running a scene: bindings checked and made once, init, the frames, the output.
+#include "scene/scene_run.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "runtime/fault.h"
+#include "scene/progress.h"
+
+namespace simit::scene {
+
+namespace ast = frontend::ast;
+using runtime::ComponentKind;
+
+void SceneRun::build() {
+  tensors_ = read_tensors(file_, options_.float32);
+  sets_ = build_sets(file_, meshes_, options_.float32);
+}
+
+// Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
+void SceneRun::check_needs(const std::string& key, const std::string& name) const {
+  const ast::FuncDecl& f = *file_.program->find_func(name);
+  for (const ast::Variable* g : api::externs_used_by(file_.program->program(), f)) {
+    if (sets_.by_name.count(g->name) || tensors_.count(g->name)) continue;
+    if (g->type && g->type->is_tensor())
+      file_.fail(file_.doc.get(key), key + ": '" + name + "' uses the extern tensor '" + g->name +
+                                         "' (" + frontend::to_string(*g->type) +
+                                         "), which is not set: add it to [tensors]");
+    file_.fail(file_.doc.get(key),
+               key + ": '" + name + "' needs '" + g->name + "' bound, which a scene cannot bind");
+  }
+}
+
+// Sets (vertex sets first: edge sets refer to their endpoints' bindings) and tensors, once.
+void SceneRun::bind(api::Engine& engine) const {
+  try {
+    for (int pass = 0; pass < 2; ++pass)
+      for (const auto& s : sets_.sets)
+        if ((s->set->arity() == 0) == (pass == 0)) engine.bind_set(*s->var, *s->set);
+    for (const auto& [name, t] : tensors_) engine.set_global(*t.var, t.value);
+  } catch (const interp::RuntimeError& e) {
+    throw SceneError(file_.path + ": error: " + e.message());
+  }
+}
+
+// Runs the procedure `name`; a run-time error becomes a RunFailure with its full message.
+std::vector<interp::Value> SceneRun::call(api::Engine& engine, const std::string& name) {
+  try {
+    return engine.call(*file_.program->find_func(name), {});
+  } catch (const interp::RuntimeError& e) {
+    throw RunFailure(e.render());
+  } catch (const runtime::Fault& e) {
+    throw RunFailure(std::string("runtime error: ") + e.what());
+  }
+}
+
+// The results of step named in file_.stat_names, as numbers.
+std::vector<double> SceneRun::step_stats(const std::vector<interp::Value>& results) const {
+  const ast::FuncDecl& step = *file_.program->find_func(file_.step_name);
+  std::vector<double> stats;
+  for (size_t i = 0; i < step.results.size(); ++i) {
+    const std::vector<std::string>& names = file_.stat_names;
+    if (std::find(names.begin(), names.end(), step.results[i].name) == names.end()) continue;
+    runtime::Tensor v = results.at(i).to_tensor();
+    switch (v.kind()) {
+      case ComponentKind::Int: stats.push_back(v.ints()[0]); break;
+      case ComponentKind::Bool: stats.push_back(v.bools()[0]); break;
+      case ComponentKind::Float: stats.push_back(v.floats()[0]); break;
+      default: stats.push_back(NAN); break;
+    }
+  }
+  return stats;
+}
+
+void SceneRun::print_sizes(std::ostream& out, int frames) const {
+  std::string sizes;
+  for (const auto& s : sets_.sets)
+    sizes += (sizes.empty() ? "" : ", ") + s->name + " " + std::to_string(s->set->size());
+  out << file_.path << ": " << sizes << "; " << frames << " frames\n";
+}
+
+api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
+  api::EngineOptions eo;
+  eo.float32 = options_.float32;
+  eo.check_finite = options_.check_finite;
+  eo.out = &out;
+  eo.trap = options_.trap;
+  return eo;
+}
+
+void SceneRun::run(int frames, std::ostream& out) {
+  if (!options_.quiet) output_.configure(sets_);
+  if (!file_.init_name.empty()) check_needs("init", file_.init_name);
+  check_needs("step", file_.step_name);
+  api::Engine engine(file_.program, engine_options(out));
+  bind(engine);
+  output_.open(file_.stat_names);
+  print_sizes(out, frames);
+  // Everything is checked: run.
+  if (!file_.init_name.empty()) call(engine, file_.init_name);
+  output_.write_frame(meshes_, 0, frames == 0);
+  const double total_ms = run_frames(engine, frames, out);
+  if (options_.progress_line && frames > 0) out << '\n';
+  print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
+  output_.write_final_csv();
+}
+
+// Frames 1 .. frames: step, the output, the progress. Returns the frames' total ms.
+double SceneRun::run_frames(api::Engine& engine, int frames, std::ostream& out) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  double total_ms = 0.0;
+  for (int frame = 1; frame <= frames; ++frame) {
+    const auto t0 = Clock::now();
+    engine.reset_stats();
+    const std::vector<interp::Value> results = call(engine, file_.step_name);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double assembly_ms = std::min(ms, 1e3 * engine.stats().assembly_seconds);
+    total_ms += ms;
+    const std::vector<double> stats = step_stats(results);
+    if (output_.every_frame(frame) || frame == frames) output_.write_frame(meshes_, frame, frame == frames);
+    output_.write_stats(frame, ms, stats, assembly_ms);
+    if (options_.quiet) continue;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    print_progress(out, FrameReport{frame, frames, ms, total_ms, elapsed, &file_.stat_names, &stats},
+                   options_.progress_line);
+  }
+  return total_ms;
+}
+
+}  // namespace simit::scene

@@ -1,0 +1,60 @@
+// One run of a scene: its sets built afresh from the cached meshes, its tensors read, both
+// bound once to an engine over the scene's compiled program, then `init` once and `step` per
+// frame, with the output written and the progress printed as it goes.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "api/engine.h"
+#include "scene/mesh_binding.h"
+#include "scene/mesh_cache.h"
+#include "scene/output_series.h"
+#include "scene/scene_file.h"
+#include "scene/scene_tensors.h"
+#include "simit/scene.h"
+
+namespace simit::scene {
+
+// The program stopped with a run-time error; the message is complete (file:line:col and the
+// active calls).
+struct RunFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class SceneRun {
+ public:
+  SceneRun(const SceneFile& file, const SceneOptions& options, MeshCache& meshes)
+      : file_(file), options_(options), meshes_(meshes), output_(file, options) {}
+
+  // Reads [tensors] and builds [sets]. Throws SceneError.
+  void build();
+  // Checks the output and what init and step need, opens the output, runs `frames` frames
+  // and prints the progress to `out`. Throws SceneError, RunFailure, runtime::MeshError.
+  void run(int frames, std::ostream& out);
+
+  const BoundSets& sets() const { return sets_; }
+  const std::map<std::string, SceneTensor>& tensors() const { return tensors_; }
+
+ private:
+  void check_needs(const std::string& key, const std::string& name) const;
+  api::EngineOptions engine_options(std::ostream& out) const;
+  double run_frames(api::Engine& engine, int frames, std::ostream& out);
+  void bind(api::Engine& engine) const;
+  std::vector<interp::Value> call(api::Engine& engine, const std::string& name);
+  std::vector<double> step_stats(const std::vector<interp::Value>& results) const;
+  void print_sizes(std::ostream& out, int frames) const;
+
+  const SceneFile& file_;
+  const SceneOptions& options_;
+  MeshCache& meshes_;
+  BoundSets sets_;
+  std::map<std::string, SceneTensor> tensors_;
+  OutputSeries output_;
+};
+
+}  // namespace simit::scene
