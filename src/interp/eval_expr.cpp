@@ -179,7 +179,8 @@ Value Interpreter::eval_compare(const ast::Compare& c) {
 }
 
 size_t Interpreter::index_value(const ast::Expr& index, int size) {
-  return checked_index(eval(index), index, size);
+  Value scratch;
+  return checked_index(operand(index, scratch), index, size);
 }
 
 size_t Interpreter::checked_index(const Value& v, const ast::Expr& index, int size) {

@@ -24,8 +24,8 @@ Value Interpreter::eval_root(const ast::Expr& e) {
   return eval(e);
 }
 
-Interpreter::HoistScope::HoistScope(Interpreter& in, const ast::Expr& root) : in_(in) {
-  if (root.hoisted.empty()) return;  // the common case (frontend/hoisting.h plans it)
+void Interpreter::HoistScope::run(const ast::Expr& root) {
+  Interpreter& in = in_;
   active_ = true;
   saved_base_ = in.hoist_base_;
   in.hoist_base_ = in.hoisted_.size();
@@ -41,8 +41,7 @@ Interpreter::HoistScope::HoistScope(Interpreter& in, const ast::Expr& root) : in
   }
 }
 
-Interpreter::HoistScope::~HoistScope() {
-  if (!active_) return;
+void Interpreter::HoistScope::finish() {
   in_.hoisted_.resize(in_.hoist_base_);
   in_.hoist_base_ = saved_base_;
 }

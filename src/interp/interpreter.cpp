@@ -130,12 +130,12 @@ Interpreter::Frame& Interpreter::next_frame(const ast::FuncDecl& f, const Source
     callee.slots.resize(n);
     callee.refs.resize(n);
   }
-  // Every activation starts with empty variables; values of the previous activation at
-  // this depth are released now (a map's matrix can then be reused, assembly_plan.h).
-  for (size_t i = 0; i < n; ++i) {
-    callee.slots[i] = Value();
-    callee.refs[i] = &callee.slots[i];
-  }
+  // A call starts with empty variables: values of the previous activation at this depth
+  // are released now (a map's matrix can then be reused, assembly_plan.h). The elements of
+  // a map overwrite their small locals instead, one element after the other.
+  if (!map)
+    for (size_t i = 0; i < n; ++i) callee.slots[i] = Value();
+  for (size_t i = 0; i < n; ++i) callee.refs[i] = &callee.slots[i];
   return callee;
 }
 

@@ -153,12 +153,20 @@ class Interpreter {
   // hoisting.cpp: calls nested in an expression run first (§6.10)
   class HoistScope {
    public:
-    HoistScope(Interpreter& in, const frontend::ast::Expr& root);
-    ~HoistScope();
+    HoistScope(Interpreter& in, const frontend::ast::Expr& root) : in_(in) {
+      if (!root.hoisted.empty()) [[unlikely]]
+        run(root);  // the common case, no nested call, costs one test
+    }
+    ~HoistScope() {
+      if (active_) [[unlikely]]
+        finish();
+    }
     HoistScope(const HoistScope&) = delete;
     HoistScope& operator=(const HoistScope&) = delete;
 
    private:
+    void run(const frontend::ast::Expr& root);
+    void finish();
     Interpreter& in_;
     size_t saved_base_ = 0;
     bool active_ = false;

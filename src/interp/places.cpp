@@ -45,7 +45,8 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
       for (size_t k = 0; k < r.indices.size(); ++k) {
         if (!r.indices[k]) fail(r.span, "a slice cannot be assigned");
         int d = s.dim(static_cast<int>(k));
-        Value index = eval(*r.indices[k]);
+        Value scratch;
+        const Value& index = operand(*r.indices[k], scratch);
         // A write into a global vector result must name the visited element or an endpoint.
         if (map_result && index.kind() == Value::Kind::Element) check_vector_write(r, index);
         outer = outer * d + checked_index(index, *r.indices[k], d);

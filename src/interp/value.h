@@ -40,7 +40,9 @@ class Value {
   };
 
   Value() noexcept = default;
-  Value(const Value& o) { copy_from(o); }
+  Value(const Value& o) : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) {
+    if (owns()) copy_from(o);  // out-of-line payloads are copied, the rest is plain data
+  }
   Value(Value&& o) noexcept : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) { o.kind_ = Kind::Empty; }
   Value& operator=(const Value& o) {
     if (this != &o) {
