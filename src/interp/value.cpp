@@ -40,7 +40,7 @@ ComponentKind Value::component_kind() const {
     case Kind::Complex: return ComponentKind::Complex;
     case Kind::String: return ComponentKind::String;
     case Kind::Tensor: return t_.kind();
-    case Kind::Matrix: return ComponentKind::Float;
+    case Kind::Matrix: return m_ ? m_->kind() : ComponentKind::Float;
     default: break;
   }
   throw runtime::Fault("a value was used before it was assigned");
