@@ -336,6 +336,9 @@ Value Interpreter::solver_intrinsic(const ast::Call& c, std::vector<Value>& args
       case Intrinsic::LltMatSolve: {
         SolverHandle& h = handle();
         const SystemMatrix& b = matrix(args[1]);
+        if (!b.is_float())
+          fail(c.span, std::string("the right-hand side must have float components, not ") +
+                           runtime::component_name(b.kind()));
         SystemMatrix x;
         if (auto* lu = std::get_if<runtime::LuFactor>(&h.factor)) {
           if (b.scalar_rows() != lu->size()) fail(c.span, "the right-hand side has the wrong number of rows");
