@@ -129,6 +129,46 @@ void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
 
 }  // namespace
 
+namespace {
+
+// Adds every stored block into `out` (repeated stencil entries sum, ints wrap).
+template <class T, class Out>
+void add_blocks(const SystemMatrix& m, Out* out) {
+  const runtime::MatrixPattern& p = m.pattern();
+  const int br = m.block_rows(), bc = m.block_cols();
+  const int64_t cols = m.scalar_cols();
+  const T* v = m.data<T>();
+  for (int r = 0; r < m.rows(); ++r)
+    for (int32_t k = p.row_ptr()[r]; k < p.row_ptr()[r + 1]; ++k)
+      for (int i = 0; i < br; ++i)
+        for (int j = 0; j < bc; ++j) {
+          Out& dst = out[(static_cast<int64_t>(r) * br + i) * cols +
+                         static_cast<int64_t>(p.col_idx()[k]) * bc + j];
+          const T x = v[(static_cast<size_t>(k) * br + i) * bc + j];
+          if constexpr (std::is_same_v<Out, bool>)
+            dst = dst || x != 0;
+          else if constexpr (std::is_same_v<T, int32_t>)
+            dst = static_cast<int32_t>(static_cast<uint32_t>(dst) + static_cast<uint32_t>(x));
+          else
+            dst += x;
+        }
+}
+
+}  // namespace
+
+Tensor dense_of(const SystemMatrix& m) {
+  if (m.scalar_rows() * m.scalar_cols() > 100'000'000)
+    throw Fault("a " + std::to_string(m.scalar_rows()) + " x " + std::to_string(m.scalar_cols()) +
+                " system matrix is too large to show densely");
+  Tensor t(m.kind(), Shape{static_cast<int>(m.scalar_rows()), static_cast<int>(m.scalar_cols())});
+  switch (m.kind()) {
+    case ComponentKind::Float: add_blocks<double>(m, t.mutable_floats()); break;
+    case ComponentKind::Int: add_blocks<int32_t>(m, t.mutable_ints()); break;
+    default: add_blocks<int32_t>(m, t.mutable_bools()); break;
+  }
+  return t;
+}
+
 void store_tensor_part(SystemMatrix& m, size_t offset, const Tensor& src, size_t from,
                        size_t count) {
   if (src.kind() != m.kind())

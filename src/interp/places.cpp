@@ -125,6 +125,8 @@ void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan&
       case ComponentKind::Float: return add_into(t.mutable_floats() + p.offset, value, n);
       case ComponentKind::Int: return add_into(t.mutable_ints() + p.offset, value, n);
       case ComponentKind::Complex: return add_into(t.mutable_complexes() + p.offset, value, n);
+      case ComponentKind::Bool:
+        throw runtime::Fault("'reduce +' cannot assemble a vector of bool components");
       default: break;
     }
   }

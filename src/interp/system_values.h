@@ -1,4 +1,5 @@
-// Assembly writes into the blocks of system matrices, for every component kind they hold.
+// Assembly writes into the blocks of system matrices and their dense form, for every
+// component kind they hold.
 #pragma once
 
 #include <cstddef>
@@ -17,5 +18,8 @@ void write_matrix_part(runtime::SystemMatrix& m, size_t offset, size_t count, co
 // [offset, offset + count) of m's value array.
 void store_tensor_part(runtime::SystemMatrix& m, size_t offset, const Tensor& src, size_t from,
                        size_t count);
+
+// The logical unblocked matrix as a dense tensor of m's component kind (for printing).
+Tensor dense_of(const runtime::SystemMatrix& m);
 
 }  // namespace simit::interp
