@@ -28,6 +28,9 @@ struct SetBinding {
   runtime::Set* set = nullptr;
   const frontend::ast::ElementDecl* element = nullptr;
   std::vector<int> fields;  // per field of the element type: its index in `set`
+  // Per field, its declared shape: the set stores blocks of blocks (`vector[2](vector[3](float))`)
+  // with their dimensions run together (2x3), in the same component order.
+  std::vector<runtime::Shape> field_shapes;
 };
 
 // The storage type of an element field declared with type `t` (tensor without set dims).
