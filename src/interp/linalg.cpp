@@ -31,10 +31,33 @@ Value matrix_value(SystemMatrix m) {
   return Value::of_matrix(std::make_shared<SystemMatrix>(std::move(m)));
 }
 
-double scalar_of(const Value& v) {
+Complex scalar_of(const Value& v) {
   if (v.kind() == Value::Kind::Int) return v.as_int();
   if (v.kind() == Value::Kind::Float) return v.as_float();
-  throw Fault("a system matrix can only be scaled by an int or a float");
+  if (v.kind() == Value::Kind::Complex) return v.as_complex();
+  throw Fault("a system matrix can only be scaled by a number");
+}
+
+// A dense tensor's components as a span of the type T that stores them.
+template <class T>
+std::span<const T> components(const Tensor& t) {
+  if constexpr (std::is_same_v<T, double>) return {t.floats(), t.size()};
+  if constexpr (std::is_same_v<T, Complex>) return {t.complexes(), t.size()};
+  if constexpr (std::is_same_v<T, int32_t>) return {t.ints(), t.size()};
+}
+template <class T>
+std::span<T> mutable_components(Tensor& t) {
+  if constexpr (std::is_same_v<T, double>) return {t.mutable_floats(), t.size()};
+  if constexpr (std::is_same_v<T, Complex>) return {t.mutable_complexes(), t.size()};
+  if constexpr (std::is_same_v<T, int32_t>) return {t.mutable_ints(), t.size()};
+}
+
+template <class T>
+void matrix_vector_as(const SystemMatrix& a, const Tensor& x, bool transposed, Tensor& y) {
+  if (transposed)
+    runtime::multiply_transposed(a, components<T>(x), mutable_components<T>(y));
+  else
+    runtime::multiply(a, components<T>(x), mutable_components<T>(y));
 }
 
 // y = A x (or Aᵀ x) in the component kind of A, which the vector must share (§6.5).
@@ -52,20 +75,10 @@ Tensor matrix_vector(const SystemMatrix& a, const Tensor& x, bool transposed, co
     throw Fault("the product has " + std::to_string(out) + " components but its type " +
                 result.str());
   Tensor y(a.kind(), result);
-  if (a.is_float()) {
-    std::span<const double> in_x(x.floats(), x.size());
-    std::span<double> out_y(y.mutable_floats(), y.size());
-    if (transposed)
-      runtime::multiply_transposed(a, in_x, out_y);
-    else
-      runtime::multiply(a, in_x, out_y);
-  } else {
-    std::span<const int32_t> in_x(x.ints(), x.size());
-    std::span<int32_t> out_y(y.mutable_ints(), y.size());
-    if (transposed)
-      runtime::multiply_transposed(a, in_x, out_y);
-    else
-      runtime::multiply(a, in_x, out_y);
+  switch (a.kind()) {
+    case ComponentKind::Float: matrix_vector_as<double>(a, x, transposed, y); break;
+    case ComponentKind::Complex: matrix_vector_as<Complex>(a, x, transposed, y); break;
+    default: matrix_vector_as<int32_t>(a, x, transposed, y); break;
   }
   return y;
 }
@@ -74,6 +87,7 @@ Tensor matrix_vector(const SystemMatrix& a, const Tensor& x, bool transposed, co
 Value matrix_component(const SystemMatrix& m, int64_t i, int64_t j) {
   switch (m.kind()) {
     case ComponentKind::Float: return Value::of_float(m.component_as<double>(i, j));
+    case ComponentKind::Complex: return Value::of_complex(m.component_as<Complex>(i, j));
     case ComponentKind::Int: return Value::of_int(m.component_as<int32_t>(i, j));
     default: return Value::of_bool(m.component_as<int32_t>(i, j) != 0);
   }
@@ -103,15 +117,22 @@ void read_block(const SystemMatrix& m, int i, int j, const std::vector<int32_t>&
     }
 }
 
+// A scalar value as the component type T (ints wrap through uint32 when accumulated).
+template <class T>
+T scalar_as(const Value& v) {
+  if constexpr (std::is_same_v<T, double>) return v.as_float();
+  if constexpr (std::is_same_v<T, Complex>) return v.as_complex();
+  if constexpr (std::is_same_v<T, int32_t>) return v.as_int();
+}
+
 template <class T>
 void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
-  using Acc = std::conditional_t<std::is_same_v<T, double>, double, uint32_t>;
+  using Acc = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
   auto put = [&](size_t i, T x) {
     dst[i] = accumulate ? static_cast<T>(static_cast<Acc>(dst[i]) + static_cast<Acc>(x)) : x;
   };
   if (!v.is_tensor()) {
-    const T x =
-        std::is_same_v<T, double> ? static_cast<T>(v.as_float()) : static_cast<T>(v.as_int());
+    const T x = scalar_as<T>(v);
     for (size_t i = 0; i < count; ++i) put(i, x);
     return;
   }
@@ -119,12 +140,8 @@ void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
   if (t.size() != count)
     throw Fault("cannot store a value of shape " + t.shape().str() + " into a block of " +
                 std::to_string(count) + " components");
-  for (size_t i = 0; i < count; ++i) {
-    if constexpr (std::is_same_v<T, double>)
-      put(i, t.floats()[i]);
-    else
-      put(i, t.ints()[i]);
-  }
+  const T* src = components<T>(t).data();
+  for (size_t i = 0; i < count; ++i) put(i, src[i]);
 }
 
 }  // namespace
@@ -146,7 +163,7 @@ void add_blocks(const SystemMatrix& m, Out* out) {
                          static_cast<int64_t>(p.col_idx()[k]) * bc + j];
           const T x = v[(static_cast<size_t>(k) * br + i) * bc + j];
           if constexpr (std::is_same_v<Out, bool>)
-            dst = dst || x != 0;
+            dst = dst || x != T(0);
           else if constexpr (std::is_same_v<T, int32_t>)
             dst = static_cast<int32_t>(static_cast<uint32_t>(dst) + static_cast<uint32_t>(x));
           else
@@ -164,6 +181,7 @@ Tensor dense_of(const SystemMatrix& m) {
   switch (m.kind()) {
     case ComponentKind::Float: add_blocks<double>(m, t.mutable_floats()); break;
     case ComponentKind::Int: add_blocks<int32_t>(m, t.mutable_ints()); break;
+    case ComponentKind::Complex: add_blocks<Complex>(m, t.mutable_complexes()); break;
     default: add_blocks<int32_t>(m, t.mutable_bools()); break;
   }
   return t;
@@ -179,6 +197,9 @@ void store_tensor_part(SystemMatrix& m, size_t offset, const Tensor& src, size_t
   switch (m.kind()) {
     case ComponentKind::Float: std::copy_n(src.floats() + from, count, m.values() + offset); break;
     case ComponentKind::Int: std::copy_n(src.ints() + from, count, m.ints() + offset); break;
+    case ComponentKind::Complex:
+      std::copy_n(src.complexes() + from, count, m.complexes() + offset);
+      break;
     default: std::copy_n(src.bools() + from, count, m.ints() + offset); break;
   }
 }
@@ -193,6 +214,7 @@ void write_matrix_part(SystemMatrix& m, size_t offset, size_t count, const Value
   switch (k) {
     case ComponentKind::Float: return write_part(m.values() + offset, count, v, accumulate);
     case ComponentKind::Int: return write_part(m.ints() + offset, count, v, accumulate);
+    case ComponentKind::Complex: return write_part(m.complexes() + offset, count, v, accumulate);
     default: break;
   }
   // Bool blocks store only: there is no sum of booleans to reduce with.

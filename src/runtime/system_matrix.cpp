@@ -299,6 +299,7 @@ SystemMatrix::SystemMatrix(PatternPtr pattern, int block_rows, int block_cols, C
     case ComponentKind::Float: values_.assign(n, 0.0); break;
     case ComponentKind::Int:
     case ComponentKind::Bool: ints_.assign(n, 0); break;
+    case ComponentKind::Complex: complexes_.assign(n, Complex()); break;
     default:
       throw Fault(std::string("system matrices of ") + component_name(kind) +
                   " components are not supported");
@@ -308,6 +309,7 @@ SystemMatrix::SystemMatrix(PatternPtr pattern, int block_rows, int block_cols, C
 void SystemMatrix::set_zero() {
   std::fill(values_.begin(), values_.end(), 0.0);
   std::fill(ints_.begin(), ints_.end(), 0);
+  std::fill(complexes_.begin(), complexes_.end(), Complex());
 }
 
 template <class T>
@@ -335,8 +337,11 @@ T SystemMatrix::component_as(int64_t i, int64_t j) const {
 
 template double SystemMatrix::component_as<double>(int64_t, int64_t) const;
 template int32_t SystemMatrix::component_as<int32_t>(int64_t, int64_t) const;
+template Complex SystemMatrix::component_as<Complex>(int64_t, int64_t) const;
 
 double SystemMatrix::component(int64_t i, int64_t j) const {
+  if (kind_ == ComponentKind::Complex)
+    throw Fault("a component of a complex matrix is not a double");
   return is_float() ? component_as<double>(i, j) : component_as<int32_t>(i, j);
 }
 

@@ -145,11 +145,12 @@ class PatternRegistry {
 // A block-sparse matrix: block_rows × block_cols components per block of the pattern, stored
 // row-major one block after another in pattern order. Its own storage is the value array;
 // the pattern is shared. Scalar (unblocked) matrices have 1 × 1 blocks. Float components are
-// doubles (values()); int and bool components are int32s (ints(); bools are 0 or 1).
+// doubles (values()); int and bool components are int32s (ints(); bools are 0 or 1); complex
+// components are complex doubles (complexes()).
 class SystemMatrix {
  public:
   SystemMatrix() = default;  // a placeholder without pattern: assign before use
-  // All zero; a Complex or String kind is a Fault.
+  // All zero; a String kind is a Fault.
   SystemMatrix(PatternPtr pattern, int block_rows = 1, int block_cols = 1,
                ComponentKind kind = ComponentKind::Float);
 
@@ -168,15 +169,18 @@ class SystemMatrix {
   // The components of a Float matrix (null for the other kinds).
   double* values() { return values_.data(); }
   const double* values() const { return values_.data(); }
-  // The components of an Int or Bool matrix (null for Float).
+  // The components of an Int or Bool matrix (null for the other kinds).
   int32_t* ints() { return ints_.data(); }
   const int32_t* ints() const { return ints_.data(); }
-  // values() or ints(), by the component type: T = double or int32_t.
+  // The components of a Complex matrix (null for the other kinds).
+  Complex* complexes() { return complexes_.data(); }
+  const Complex* complexes() const { return complexes_.data(); }
+  // values(), ints() or complexes(), by the component type: double, int32_t or Complex.
   template <class T>
   T* data();
   template <class T>
   const T* data() const;
-  size_t value_count() const { return is_float() ? values_.size() : ints_.size(); }
+  size_t value_count() const { return values_.size() + ints_.size() + complexes_.size(); }
   double* block(int32_t position) {
     return values_.data() + static_cast<size_t>(position) * block_size();
   }
@@ -187,13 +191,15 @@ class SystemMatrix {
 
   // Component (i, j) of the logical unblocked matrix: zero outside the pattern, the sum of
   // the entries when a stencil pattern repeats the column. component() converts int
-  // components to double; component_as<int32_t> reads int and bool matrices exactly.
+  // components to double (a Fault for complex ones); component_as<T> reads the matrix of
+  // T's kind exactly (int32_t for int and bool).
   double component(int64_t i, int64_t j) const;
   template <class T>
   T component_as(int64_t i, int64_t j) const;
 
   size_t value_bytes() const {
-    return values_.size() * sizeof(double) + ints_.size() * sizeof(int32_t);
+    return values_.size() * sizeof(double) + ints_.size() * sizeof(int32_t) +
+           complexes_.size() * sizeof(Complex);
   }
 
  private:
@@ -202,6 +208,7 @@ class SystemMatrix {
   ComponentKind kind_ = ComponentKind::Float;
   std::vector<double> values_;
   std::vector<int32_t> ints_;
+  std::vector<Complex> complexes_;
 };
 
 template <>
@@ -219,6 +226,14 @@ inline int32_t* SystemMatrix::data<int32_t>() {
 template <>
 inline const int32_t* SystemMatrix::data<int32_t>() const {
   return ints();
+}
+template <>
+inline Complex* SystemMatrix::data<Complex>() {
+  return complexes();
+}
+template <>
+inline const Complex* SystemMatrix::data<Complex>() const {
+  return complexes();
 }
 
 // The logical rows and columns of a matrix block of shape `block`: 1 x 1 for a scalar, the

@@ -33,10 +33,27 @@ void check_same(size_t a, size_t b) {
 template <class T>
 using Acc = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
 
-void check_kind(const SystemMatrix& a, bool want_float, const char* what) {
-  if (a.is_float() != want_float)
+// The component type that stores matrices of kind k.
+template <class T>
+bool stores(ComponentKind k) {
+  if constexpr (std::is_same_v<T, double>) return k == ComponentKind::Float;
+  if constexpr (std::is_same_v<T, Complex>) return k == ComponentKind::Complex;
+  return k == ComponentKind::Int || k == ComponentKind::Bool;
+}
+
+// f(T{}) with T the component type that stores matrices of kind k.
+template <class F>
+decltype(auto) by_kind(ComponentKind k, F&& f) {
+  if (k == ComponentKind::Float) return f(double{});
+  if (k == ComponentKind::Complex) return f(Complex{});
+  return f(int32_t{});
+}
+
+template <class T>
+void check_kind(const SystemMatrix& a, const char* what) {
+  if (!stores<T>(a.kind()))
     throw Fault(std::string("cannot ") + what + " a matrix of " + component_name(a.kind()) +
-                " components with " + (want_float ? "float" : "int") + " vectors");
+                " components with vectors of another component type");
 }
 
 // Block kernels: compile-time sizes for the common blocks, run-time sizes (0) otherwise.
@@ -107,7 +124,7 @@ struct MatvecTransposed {
 
 template <class T>
 void multiply_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
-  check_kind(a, std::is_same_v<T, double>, "multiply");
+  check_kind<T>(a, "multiply");
   check_length(x.size(), a.scalar_cols(), "the vector multiplied by the matrix");
   check_length(y.size(), a.scalar_rows(), "the result of the matrix-vector product");
   dispatch_blocks<Matvec>(a, x.data(), y.data());
@@ -115,7 +132,7 @@ void multiply_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) 
 
 template <class T>
 void multiply_transposed_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
-  check_kind(a, std::is_same_v<T, double>, "multiply");
+  check_kind<T>(a, "multiply");
   check_length(x.size(), a.scalar_rows(), "the vector multiplied by the transposed matrix");
   check_length(y.size(), a.scalar_cols(), "the result of the transposed product");
   std::fill(y.begin(), y.end(), T(0));
@@ -140,12 +157,15 @@ int32_t int_factor(double s) {
   return static_cast<int32_t>(s);
 }
 
+// A factor in the component type T; only complex matrices take complex factors.
 template <class T>
-Acc<T> factor(double s) {
+Acc<T> factor(Complex s) {
+  if constexpr (std::is_same_v<T, Complex>) return s;
+  if (s.imag() != 0.0) throw Fault("only a complex matrix can be scaled by a complex number");
   if constexpr (std::is_same_v<T, int32_t>)
-    return static_cast<Acc<T>>(int_factor(s));
+    return static_cast<Acc<T>>(int_factor(s.real()));
   else
-    return s;
+    return s.real();
 }
 
 // out[i] = alpha a[i] + beta b[i] over `n` components.
@@ -158,7 +178,7 @@ void combine(double alpha, const T* a, double beta, const T* b, T* out, size_t n
 
 // Scatters s * (blocks of m) into out, block k going to position to[k].
 template <class T>
-void scatter_scaled(double s, const SystemMatrix& m, const std::vector<int32_t>& to,
+void scatter_scaled(Complex s, const SystemMatrix& m, const std::vector<int32_t>& to,
                     SystemMatrix& out) {
   const int bs = m.block_size();
   const Acc<T> f = factor<T>(s);
@@ -172,7 +192,7 @@ void scatter_scaled(double s, const SystemMatrix& m, const std::vector<int32_t>&
 }
 
 template <class T>
-void scale_values(double s, SystemMatrix& a) {
+void scale_values(Complex s, SystemMatrix& a) {
   const Acc<T> f = factor<T>(s);
   T* v = a.data<T>();
   for (size_t i = 0; i < a.value_count(); ++i) v[i] = static_cast<T>(f * static_cast<Acc<T>>(v[i]));
@@ -259,6 +279,12 @@ void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::
 void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y) {
   multiply_transposed_into(a, x, y);
 }
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
+  multiply_into(a, x, y);
+}
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
+  multiply_transposed_into(a, x, y);
+}
 
 // ---------------------------------------------------------------------------
 // Matrix arithmetic
@@ -266,22 +292,22 @@ void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std:
 SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, double beta,
                  PatternRegistry* registry) {
   check_block_match(a, b, "add");
-  const bool f = a.is_float();
   if (a.shared_pattern() == b.shared_pattern()) {
     SystemMatrix out(a.shared_pattern(), a.block_rows(), a.block_cols(), a.kind());
-    if (f)
-      combine(alpha, a.values(), beta, b.values(), out.values(), out.value_count());
-    else
-      combine(alpha, a.ints(), beta, b.ints(), out.ints(), out.value_count());
+    by_kind(a.kind(), [&](auto t) {
+      using T = decltype(t);
+      combine(alpha, a.data<T>(), beta, b.data<T>(), out.data<T>(), out.value_count());
+    });
     return out;
   }
   std::shared_ptr<const PatternUnion> u =
       registry ? registry->united(a.shared_pattern(), b.shared_pattern())
                : std::make_shared<const PatternUnion>(unite(a.pattern(), b.pattern()));
   SystemMatrix out(u->pattern, a.block_rows(), a.block_cols(), a.kind());
-  auto scatter = f ? scatter_scaled<double> : scatter_scaled<int32_t>;
-  scatter(alpha, a, u->from_a, out);
-  scatter(beta, b, u->from_b, out);
+  by_kind(a.kind(), [&](auto t) {
+    scatter_scaled<decltype(t)>(alpha, a, u->from_a, out);
+    scatter_scaled<decltype(t)>(beta, b, u->from_b, out);
+  });
   return out;
 }
 
@@ -290,38 +316,44 @@ SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
   check_block_match(a, b, "multiply element-wise");
   // Both operands on the union pattern (zero where absent), then the component products.
   SystemMatrix x = add(a, b, 1.0, 0.0, registry), y = add(a, b, 0.0, 1.0, registry);
-  if (x.is_float()) {
-    double* v = x.values();
-    for (size_t i = 0; i < x.value_count(); ++i) v[i] *= y.values()[i];
-  } else {
-    int32_t* v = x.ints();
+  by_kind(x.kind(), [&](auto t) {
+    using T = decltype(t);
+    T* v = x.data<T>();
+    const T* w = y.data<T>();
     for (size_t i = 0; i < x.value_count(); ++i)
-      v[i] = static_cast<int32_t>(static_cast<uint32_t>(v[i]) * static_cast<uint32_t>(y.ints()[i]));
-  }
+      v[i] = static_cast<T>(static_cast<Acc<T>>(v[i]) * static_cast<Acc<T>>(w[i]));
+  });
   return x;
 }
 
-SystemMatrix scaled(double s, const SystemMatrix& a) {
+SystemMatrix scaled(double s, const SystemMatrix& a) { return scaled(Complex(s), a); }
+
+SystemMatrix scaled(Complex s, const SystemMatrix& a) {
   SystemMatrix out = a;
-  scale(s, out);
+  by_kind(a.kind(), [&](auto t) { scale_values<decltype(t)>(s, out); });
   return out;
 }
 
 void scale(double s, SystemMatrix& a) {
-  if (a.is_float())
-    scale_values<double>(s, a);
-  else
-    scale_values<int32_t>(s, a);
+  by_kind(a.kind(), [&](auto t) { scale_values<decltype(t)>(s, a); });
 }
 
-SystemMatrix divided(const SystemMatrix& a, double s) {
+SystemMatrix divided(const SystemMatrix& a, double s) { return divided(a, Complex(s)); }
+
+SystemMatrix divided(const SystemMatrix& a, Complex s) {
   SystemMatrix out = a;
-  if (a.is_float()) {
-    double* v = out.values();
+  if (a.kind() == ComponentKind::Complex) {
+    Complex* v = out.complexes();
     for (size_t i = 0; i < out.value_count(); ++i) v[i] /= s;
     return out;
   }
-  const int32_t d = int_factor(s);
+  const double r = factor<double>(s);
+  if (a.is_float()) {
+    double* v = out.values();
+    for (size_t i = 0; i < out.value_count(); ++i) v[i] /= r;
+    return out;
+  }
+  const int32_t d = int_factor(r);
   if (d == 0) throw Fault("integer division by zero");
   int32_t* v = out.ints();
   // INT32_MIN / -1 wraps like the other int operations instead of trapping.
@@ -335,10 +367,7 @@ SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry) {
       registry ? registry->transposed(a.shared_pattern())
                : std::make_shared<const PatternTranspose>(transpose(a.pattern()));
   SystemMatrix out(t->pattern, a.block_cols(), a.block_rows(), a.kind());
-  if (a.is_float())
-    transpose_blocks<double>(a, *t, out);
-  else
-    transpose_blocks<int32_t>(a, *t, out);
+  by_kind(a.kind(), [&](auto k) { transpose_blocks<decltype(k)>(a, *t, out); });
   return out;
 }
 
@@ -353,10 +382,7 @@ SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b) {
                 " components by one of " + component_name(b.kind()) + " components");
   SystemMatrix out(product_pattern(a.pattern(), b.pattern()), a.block_rows(), b.block_cols(),
                    a.kind());
-  if (a.is_float())
-    product_values<double>(a, b, out);
-  else
-    product_values<int32_t>(a, b, out);
+  by_kind(a.kind(), [&](auto t) { product_values<decltype(t)>(a, b, out); });
   return out;
 }
 
@@ -378,18 +404,15 @@ void unnest_blocks(SystemMatrix& m, const Shape& block) {
   if (from.size() != static_cast<size_t>(m.block_size()))
     throw Fault("a block of shape " + block.str() + " in a matrix of " +
                 dims(m.block_rows(), m.block_cols()) + " blocks");
-  auto permute = [&](auto* v) {
-    using T = std::remove_pointer_t<decltype(v)>;
+  by_kind(m.kind(), [&](auto t) {
+    using T = decltype(t);
+    T* v = m.data<T>();
     std::vector<T> tmp(from.size());
     for (size_t k = 0; k < m.value_count(); k += from.size()) {
       for (size_t i = 0; i < from.size(); ++i) tmp[i] = v[k + from[i]];
       std::copy(tmp.begin(), tmp.end(), v + k);
     }
-  };
-  if (m.is_float())
-    permute(m.values());
-  else
-    permute(m.ints());
+  });
 }
 
 // ---------------------------------------------------------------------------

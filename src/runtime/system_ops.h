@@ -11,15 +11,19 @@
 namespace simit::runtime {
 
 // y = A x, with x of A.scalar_cols() and y of A.scalar_rows() components. The vectors'
-// component type must match A's (double for Float, int32 for Int; int arithmetic wraps).
+// component type must be the one storing A's (double for Float, int32 for Int, Complex for
+// Complex; int arithmetic wraps).
 void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
 void multiply(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
 // y = Aᵀ x, with x of A.scalar_rows() and y of A.scalar_cols() components.
 void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
 void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
 
-// Matrices of any kind the SystemMatrix holds; operands of one operation share the kind, and
-// factors applied to int matrices must be integers (Fault otherwise).
+// Matrices of any kind the SystemMatrix holds; operands of one operation share the kind,
+// factors applied to int matrices must be integers and only complex matrices take complex
+// factors (Fault otherwise). The transpose does not conjugate.
 
 // alpha A + beta B over the union of the patterns (A's pattern itself when they share it).
 // With a registry the union is built once per pair of patterns.
@@ -29,9 +33,11 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha = 1.
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry = nullptr);
 SystemMatrix scaled(double s, const SystemMatrix& a);  // same pattern
+SystemMatrix scaled(Complex s, const SystemMatrix& a);
 void scale(double s, SystemMatrix& a);
 // Every component divided by s; int matrices divide by truncation and Fault on s = 0.
 SystemMatrix divided(const SystemMatrix& a, double s);
+SystemMatrix divided(const SystemMatrix& a, Complex s);
 // Aᵀ: transposed pattern (cached with a registry) and transposed blocks.
 SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry = nullptr);
 // The sparse product A B; its pattern is the product pattern, built on each call.

@@ -1,4 +1,5 @@
-// Int and bool system matrices and matrices whose blocks are blocked, against dense references.
+// Int, bool and complex system matrices and matrices whose blocks are blocked, against dense
+// references and hand-worked values.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -110,7 +111,7 @@ TEST(IntMatrixArithmetic, WrapsOnOverflow) {
   EXPECT_EQ(divided(scaled(-1.0, a), -1.0).ints()[0], std::numeric_limits<int32_t>::max());
 }
 
-TEST(MatrixKinds, BoolIsStoredAsIntAndComplexIsRejected) {
+TEST(MatrixKinds, BoolIsStoredAsIntAndStringIsRejected) {
   auto p = MatrixPattern::from_csr(2, 2, {0, 1, 1}, {1});
   SystemMatrix b(p, 1, 1, ComponentKind::Bool);
   b.ints()[0] = 1;
@@ -118,8 +119,37 @@ TEST(MatrixKinds, BoolIsStoredAsIntAndComplexIsRejected) {
   EXPECT_EQ(b.component_as<int32_t>(1, 0), 0);
   EXPECT_EQ(transposed(b).component_as<int32_t>(1, 0), 1);
   EXPECT_EQ(b.values(), nullptr);
-  EXPECT_THROW(SystemMatrix(p, 1, 1, ComponentKind::Complex), Fault);
   EXPECT_THROW(SystemMatrix(p, 1, 1, ComponentKind::String), Fault);
+}
+
+TEST(MatrixKinds, ComplexMatricesAgainstHandWorkedProducts) {
+  // A = [1+i, 2i; 0, 3] (no entry at (1, 0)); x = (1, i).
+  using C = Complex;
+  auto p = MatrixPattern::from_csr(2, 2, {0, 2, 3}, {0, 1, 1});
+  SystemMatrix a(p, 1, 1, ComponentKind::Complex);
+  a.complexes()[0] = C(1, 1);
+  a.complexes()[1] = C(0, 2);
+  a.complexes()[2] = C(3, 0);
+  const std::vector<C> x = {C(1, 0), C(0, 1)};
+  std::vector<C> y(2), z(2);
+  multiply(a, x, y);
+  EXPECT_EQ(y, (std::vector<C>{C(-1, 1), C(0, 3)}));
+  multiply_transposed(a, x, z);  // Aᵀ x, not conjugated
+  EXPECT_EQ(z, (std::vector<C>{C(1, 1), C(0, 5)}));
+  const SystemMatrix aa = multiply(a, a);  // [2i, -2+8i; 0, 9]
+  EXPECT_EQ(aa.component_as<C>(0, 0), C(0, 2));
+  EXPECT_EQ(aa.component_as<C>(0, 1), C(-2, 8));
+  EXPECT_EQ(aa.component_as<C>(1, 1), C(9, 0));
+  EXPECT_EQ(scaled(C(0, 1), a).component_as<C>(0, 0), C(-1, 1));
+  EXPECT_EQ(divided(a, C(0, 1)).component_as<C>(0, 1), C(2, 0));
+  EXPECT_EQ(add(a, a, 1.0, -2.0).component_as<C>(1, 1), C(-3, 0));
+  EXPECT_EQ(multiply_elementwise(a, a).component_as<C>(0, 0), C(0, 2));
+  EXPECT_EQ(transposed(a).component_as<C>(1, 0), C(0, 2));
+  EXPECT_THROW(a.component(0, 0), Fault);
+  EXPECT_THROW(to_eigen(a), Fault);
+  EXPECT_THROW(LuFactor{a}, Fault);
+  SystemMatrix f(p);
+  EXPECT_THROW(scaled(C(0, 1), f), Fault);  // only complex matrices take complex factors
 }
 
 // ---------------------------------------------------------------------------
