@@ -1,6 +1,6 @@
 // System matrices in expressions: products, sums, scaling, component reads, assembly
 // writes, `A \ b` and the solver intrinsics of LANGUAGE.md §9.5, all delegated to the
-// runtime's block-CSR code. Matrices hold float, int or bool components.
+// runtime's block-CSR code. Matrices hold float, int, bool or complex components.
 #include <algorithm>
 #include <span>
 #include <type_traits>
@@ -117,7 +117,7 @@ void read_block(const SystemMatrix& m, int i, int j, const std::vector<int32_t>&
     }
 }
 
-// A scalar value as the component type T (ints wrap through uint32 when accumulated).
+// A scalar value as the component type T.
 template <class T>
 T scalar_as(const Value& v) {
   if constexpr (std::is_same_v<T, double>) return v.as_float();
@@ -125,6 +125,7 @@ T scalar_as(const Value& v) {
   if constexpr (std::is_same_v<T, int32_t>) return v.as_int();
 }
 
+// Stores or adds v into count components; int sums wrap (through uint32).
 template <class T>
 void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
   using Acc = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
@@ -143,10 +144,6 @@ void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
   const T* src = components<T>(t).data();
   for (size_t i = 0; i < count; ++i) put(i, src[i]);
 }
-
-}  // namespace
-
-namespace {
 
 // Adds every stored block into `out` (repeated stencil entries sum, ints wrap).
 template <class T, class Out>
