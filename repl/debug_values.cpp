@@ -108,7 +108,8 @@ bool all_finite(const interp::Value& v) {
         return finite(reinterpret_cast<const double*>(t.complexes()), 2 * t.size());
       return true;
     }
-    case K::Matrix: return finite(v.matrix()->values(), v.matrix()->value_count());
+    case K::Matrix:
+      return !v.matrix()->is_float() || finite(v.matrix()->values(), v.matrix()->value_count());
     default: return true;
   }
 }

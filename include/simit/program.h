@@ -89,7 +89,9 @@ class RuntimeError : public Error {
 };
 
 // A read-only view of an assembled system matrix (block CSR): `rows` × `cols` blocks of
-// `block_rows` × `block_cols` doubles. It shares the matrix, so it stays valid after later runs.
+// `block_rows` × `block_cols` components: doubles (values()) for float matrices, int32s
+// (ints(); 0 or 1 for bool) for int and bool ones, complexes() for complex ones. It shares the
+// matrix, so it stays valid after later runs.
 class SystemMatrixView {
  public:
   SystemMatrixView() = default;
@@ -101,8 +103,17 @@ class SystemMatrixView {
   int block_cols() const { return m_->block_cols(); }
   std::span<const int32_t> row_ptr() const { return m_->pattern().row_ptr(); }
   std::span<const int32_t> col_idx() const { return m_->pattern().col_idx(); }
-  std::span<const double> values() const { return {m_->values(), m_->value_count()}; }
-  // Component (i, j) of the unblocked matrix (zero outside the pattern).
+  runtime::ComponentKind kind() const { return m_->kind(); }
+  // The components: exactly one of these is non-empty (for a matrix with stored blocks).
+  std::span<const double> values() const {
+    return {m_->values(), m_->values() ? m_->value_count() : 0};
+  }
+  std::span<const int32_t> ints() const { return {m_->ints(), m_->ints() ? m_->value_count() : 0}; }
+  std::span<const runtime::Complex> complexes() const {
+    return {m_->complexes(), m_->complexes() ? m_->value_count() : 0};
+  }
+  // Component (i, j) of the unblocked matrix (zero outside the pattern; ints converted;
+  // throws runtime::Fault for a complex matrix).
   double operator()(int64_t i, int64_t j) const { return m_->component(i, j); }
   const runtime::SystemMatrix& matrix() const { return *m_; }
 

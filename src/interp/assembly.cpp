@@ -6,6 +6,9 @@
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/map_context.h"
+#include "interp/set_binding.h"
+#include "interp/system_values.h"
+#include "runtime/system_ops.h"
 
 namespace simit::interp {
 
@@ -49,9 +52,13 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
   ctx.reduce = m.reduce;
   run_assembly(m.assembly, m.through_set, &ctx, m.span);
   std::vector<Value> out;
-  for (size_t i = 0; i < ctx.values.size(); ++i)
+  for (size_t i = 0; i < ctx.values.size(); ++i) {
     out.push_back(ctx.is_matrix[i] && ctx.grid ? finish_grid_result(ctx, i)
                                                : std::move(ctx.values[i]));
+    // Writes stored blocks of blocks level by level, as the dense block values are laid out.
+    if (ctx.is_matrix[i] && out.back().matrix())
+      runtime::unnest_blocks(*out.back().matrix(), ctx.blocks[i]);
+  }
   return out;
 }
 
@@ -145,9 +152,9 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       };
       runtime::PatternPtr pattern =
           patterns_.assembled(*ctx->target->set, set_of(t.dims[0]), set_of(t.dims[1]));
-      const int br = block.order() >= 1 ? block.dim(0) : 1;
-      const int bc = block.order() >= 2 ? block.dim(1) : 1;
-      slot = Value::of_matrix(result_matrix(plan.results[ctx->blocks.size() - 1], pattern, br, bc));
+      const runtime::BlockDims bd = runtime::block_dims(block);
+      slot = Value::of_matrix(result_matrix(plan.results[ctx->blocks.size() - 1], pattern, bd.rows,
+                                            bd.cols, component_of(t.component())));
     }
     --depth_;
     ++plan.runs;
@@ -197,16 +204,18 @@ AssemblyPlan& Interpreter::plan_site(const ast::Assembly& a, const MapContext& c
 // nothing holds it any more (the program dropped it), otherwise a new one.
 std::shared_ptr<runtime::SystemMatrix> Interpreter::result_matrix(AssemblyPlan::Result& r,
                                                                   const runtime::PatternPtr& pattern,
-                                                                  int block_rows, int block_cols) {
+                                                                  int block_rows, int block_cols,
+                                                                  ComponentKind kind) {
   r.is_matrix = true;
   r.pattern = pattern;
   auto& last = r.last;
   if (last && last.use_count() == 1 && last->shared_pattern() == pattern &&
-      last->block_rows() == block_rows && last->block_cols() == block_cols) {
+      last->block_rows() == block_rows && last->block_cols() == block_cols &&
+      last->kind() == kind) {
     last->set_zero();
     return last;
   }
-  last = std::make_shared<runtime::SystemMatrix>(pattern, block_rows, block_cols);
+  last = std::make_shared<runtime::SystemMatrix>(pattern, block_rows, block_cols, kind);
   return last;
 }
 
@@ -274,7 +283,9 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
     auto& per_offset = ctx.stencil[res];
     const int points = ctx.grid->set->points().size();
     while (per_offset.size() <= static_cast<size_t>(tag))
-      per_offset.push_back(Value::of_tensor(Tensor(ComponentKind::Float, Shape::blocked(std::vector<int>{points}, block))));
+      per_offset.push_back(Value::of_tensor(
+          Tensor(component_of(ctx.assembly->callee->results[res].var->type->component()),
+                 Shape::blocked(std::vector<int>{points}, block))));
     p.root = &per_offset[tag];
     p.offset = static_cast<size_t>(row.index()) * bsize;
     return p;
@@ -343,15 +354,17 @@ void Interpreter::check_vector_write(const ast::TensorRead& r, const Value& x) {
 Value Interpreter::finish_grid_result(MapContext& ctx, size_t res) {
   const runtime::Set& grid = *ctx.grid->set;
   const Shape& block = ctx.blocks[res];
-  const int br = block.order() >= 1 ? block.dim(0) : 1, bc = block.order() >= 2 ? block.dim(1) : 1;
+  const runtime::BlockDims bd = runtime::block_dims(block);
+  const ComponentKind kind =
+      component_of(ctx.assembly->callee->results[res].var->type->component());
   runtime::PatternPtr pattern = patterns_.stencil(grid, ctx.offsets);
-  auto m = std::make_shared<runtime::SystemMatrix>(pattern, br, bc);
+  auto m = std::make_shared<runtime::SystemMatrix>(pattern, bd.rows, bd.cols, kind);
   const size_t bsize = block.size();
   const auto& rp = pattern->row_ptr();
   for (size_t j = 0; j < ctx.stencil[res].size(); ++j) {
-    const double* src = ctx.stencil[res][j].tensor().floats();
+    const Tensor& src = ctx.stencil[res][j].tensor();
     for (int p = 0; p + 1 < static_cast<int>(rp.size()); ++p)
-      for (size_t c = 0; c < bsize; ++c) m->block(rp[p] + static_cast<int32_t>(j))[c] = src[p * bsize + c];
+      store_tensor_part(*m, (rp[p] + j) * bsize, src, p * bsize, bsize);
   }
   return Value::of_matrix(std::move(m));
 }

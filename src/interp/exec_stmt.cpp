@@ -94,7 +94,7 @@ void Interpreter::exec_var_decl(const ast::VarDecl& d) {
     return;
   }
   Value v = eval_root(*d.init);
-  if (t.kind != Type::Kind::Tensor) {
+  if (t.kind != Type::Kind::Tensor || v.kind() == Value::Kind::Matrix) {
     slot = std::move(v);
     return;
   }

@@ -193,8 +193,13 @@ Value Interpreter::zero_of(const Type& t, const SourceSpan& at) {
     const int rows = dim_size(t.dims[0], at), cols = dim_size(t.dims[1], at);
     Shape block = t.block ? shape_of(*t.block, at) : Shape();
     auto pattern = runtime::MatrixPattern::from_csr(rows, cols, std::vector<int32_t>(rows + 1, 0), {});
-    return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(
-        pattern, block.order() >= 1 ? block.dim(0) : 1, block.order() >= 2 ? block.dim(1) : 1));
+    try {
+      const runtime::BlockDims bd = runtime::block_dims(block);
+      return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(pattern, bd.rows, bd.cols,
+                                                                      component_of(t.component())));
+    } catch (const runtime::Fault& f) {
+      fail(at, f.what());
+    }
   }
   if (t.kind == Type::Kind::Opaque || t.kind == Type::Kind::Element || t.kind == Type::Kind::Tuple ||
       t.kind == Type::Kind::Set)

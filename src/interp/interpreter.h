@@ -226,7 +226,8 @@ class Interpreter {
   AssemblyPlan& plan_site(const frontend::ast::Assembly& a, const MapContext& ctx);
   std::shared_ptr<runtime::SystemMatrix> result_matrix(AssemblyPlan::Result& r,
                                                        const runtime::PatternPtr& pattern,
-                                                       int block_rows, int block_cols);
+                                                       int block_rows, int block_cols,
+                                                       ComponentKind kind);
   Place matrix_place(const frontend::ast::TensorRead& r, Value& m);
   int member_of(const frontend::ast::Expr& index);
   static int local_member(const std::vector<int>& members, int member);

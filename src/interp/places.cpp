@@ -2,6 +2,7 @@
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/map_context.h"
+#include "interp/system_values.h"
 #include "runtime/fault.h"
 
 namespace simit::interp {
@@ -117,18 +118,8 @@ void Interpreter::write_place(const Place& p, Value value, const SourceSpan& at)
 
 void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan& at) {
   // A block of a system matrix (assembly); a whole matrix variable is replaced below.
-  if (!p.whole && p.root->kind() == Value::Kind::Matrix) {
-    double* dst = p.root->matrix()->values() + p.offset;
-    const size_t n = p.shape.size();
-    if (p.accumulate) return add_into(dst, value, n);
-    if (value.is_tensor()) {
-      if (value.tensor().size() != n) throw runtime::Fault("block of the wrong shape");
-      std::copy(value.tensor().floats(), value.tensor().floats() + n, dst);
-    } else {
-      std::fill(dst, dst + n, value.as_float());
-    }
-    return;
-  }
+  if (!p.whole && p.root->kind() == Value::Kind::Matrix)
+    return write_matrix_part(*p.root->matrix(), p.offset, p.shape.size(), value, p.accumulate);
   if (p.accumulate && !p.whole) {
     Tensor& t = p.root->tensor();
     const size_t n = p.shape.size();
@@ -136,6 +127,8 @@ void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan&
       case ComponentKind::Float: return add_into(t.mutable_floats() + p.offset, value, n);
       case ComponentKind::Int: return add_into(t.mutable_ints() + p.offset, value, n);
       case ComponentKind::Complex: return add_into(t.mutable_complexes() + p.offset, value, n);
+      case ComponentKind::Bool:
+        throw runtime::Fault("'reduce +' cannot assemble a vector of bool components");
       default: break;
     }
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "interp/system_values.h"
 #include "runtime/dense_linalg.h"
 
 namespace simit::interp {
@@ -103,6 +104,9 @@ void literal_dims(const Tensor& t, int dim, size_t& n, std::string& out) {
 }  // namespace
 
 void print_value(std::ostream& out, const Value& v, bool row) {
+  // A system matrix prints like the dense matrix it means (LANGUAGE.md §8.4).
+  if (v.kind() == Value::Kind::Matrix && v.matrix())
+    return print_value(out, Value::of_tensor(dense_of(*v.matrix())), false);
   if (!v.is_tensor()) {
     if (v.kind() == Value::Kind::String) {
       out << v.as_string();

@@ -28,7 +28,9 @@ struct SetBinding {
   runtime::Set* set = nullptr;
   const frontend::ast::ElementDecl* element = nullptr;
   std::vector<int> fields;  // per field of the element type: its index in `set`
-  std::vector<runtime::Shape> shapes;  // per field of the element type: one element's shape
+  // Per field, its declared shape: the set stores blocks of blocks (`vector[2](vector[3](float))`)
+  // with their dimensions run together (2x3), in the same component order.
+  std::vector<runtime::Shape> field_shapes;
   // Per endpoint: the binding of its set, found on the first tuple read (bindings are only
   // ever added, so the first one found for a set stays the one found).
   std::vector<SetBinding*> endpoint_bindings;

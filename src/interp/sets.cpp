@@ -56,7 +56,7 @@ void Interpreter::bind_set(const ast::Variable& v, runtime::Set& set) {
         fail(v.span, "field '" + f.name + "' of set '" + v.name + "' has type '" + got.str() +
                          "' but the program declares '" + want.str() + "'");
       b->fields.push_back(index);
-      b->shapes.push_back(Shape::of(got.dims));
+      b->field_shapes.push_back(shape_of(*f.type, f.span));
     }
   }
   const size_t arity = t.endpoints.size();
@@ -123,7 +123,10 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
 
 // `S.f` as a vector: shares the field's array (copy-on-write), no copy.
 Value Interpreter::field_vector(const SetBinding& b, int field) {
-  return Value::of_tensor(b.set->field_tensor(b.fields[field]));
+  Tensor t = b.set->field_tensor(b.fields[field]);
+  const Shape declared = Shape::blocked(std::vector<int>{b.set->size()}, b.field_shapes[field]);
+  if (t.shape() != declared) t.reshape(declared);
+  return Value::of_tensor(std::move(t));
 }
 
 Value Interpreter::eval_field_read(const ast::FieldRead& r) {
@@ -137,7 +140,7 @@ Value Interpreter::eval_field_read(const ast::FieldRead& r) {
     fail(r.span, s.describe() + " has no element " + std::to_string(base.index()));
   const runtime::Field& f = s.field(b.fields[r.field_index]);
   return read_components(f, static_cast<size_t>(base.index()) * f.components(),
-                         b.shapes[r.field_index]);
+                         b.field_shapes[r.field_index]);
 }
 
 Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
@@ -196,11 +199,10 @@ Place Interpreter::field_place(const ast::FieldRead& r) {
   const SetBinding& b = *base.binding();
   if (base.kind() == Value::Kind::Element)
     return field_element_place(b, r.field_index, base.index(), r.span);
-  const runtime::Field& f = std::as_const(*b.set).field(b.fields[r.field_index]);
   Place p;
   p.field_set = b.set;
   p.field = b.fields[r.field_index];
-  p.shape = Shape::blocked(std::vector<int>{b.set->size()}, Shape::of(f.type().dims));
+  p.shape = Shape::blocked(std::vector<int>{b.set->size()}, b.field_shapes[r.field_index]);
   return p;
 }
 
@@ -217,13 +219,17 @@ Place Interpreter::field_element_place(const SetBinding& b, int field, int eleme
   p.element = element;
   p.whole = false;
   p.offset = static_cast<size_t>(element) * f.components();
-  p.shape = b.shapes[field];
+  p.shape = b.field_shapes[field];
   return p;
 }
 
 Value Interpreter::read_field(const Place& p) const {
   const runtime::Set& s = *p.field_set;
-  if (p.whole) return Value::of_tensor(s.field_tensor(p.field));
+  if (p.whole) {
+    Tensor t = s.field_tensor(p.field);
+    if (t.shape() != p.shape && t.size() == p.shape.size()) t.reshape(p.shape);
+    return Value::of_tensor(std::move(t));
+  }
   return read_components(s.field(p.field), p.offset, p.shape);
 }
 

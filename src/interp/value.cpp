@@ -149,7 +149,7 @@ ComponentKind Value::component_kind() const {
     case Kind::Complex: return ComponentKind::Complex;
     case Kind::String: return ComponentKind::String;
     case Kind::Tensor: return u_.t->kind();
-    case Kind::Matrix: return ComponentKind::Float;
+    case Kind::Matrix: return *u_.m ? (*u_.m)->kind() : ComponentKind::Float;
     default: break;
   }
   throw runtime::Fault("a value was used before it was assigned");

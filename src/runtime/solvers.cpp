@@ -15,6 +15,9 @@ namespace simit::runtime {
 namespace {
 
 void check_square(const SystemMatrix& a, const char* what) {
+  if (!a.is_float())
+    throw Fault(std::string(what) + " needs a matrix of float components, not " +
+                component_name(a.kind()));
   if (a.scalar_rows() != a.scalar_cols())
     throw Fault(std::string(what) + " needs a square matrix but this one is " +
                 std::to_string(a.scalar_rows()) + " x " + std::to_string(a.scalar_cols()));
@@ -278,6 +281,7 @@ void lower_triangular_solve(const SystemMatrix& a, std::span<const double> b, st
 }
 
 bool is_symmetric(const SystemMatrix& a) {
+  if (!a.is_float()) return false;
   if (a.rows() != a.cols() || a.block_rows() != a.block_cols()) return false;
   if (!a.pattern().canonical()) {
     const EigenSparse m = to_eigen(a);

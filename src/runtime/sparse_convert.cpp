@@ -34,6 +34,9 @@ void merge_repeats(EigenSparse& m) {
 }  // namespace
 
 EigenSparse to_eigen(const SystemMatrix& a) {
+  if (!a.is_float())
+    throw Fault(std::string("only float matrices convert to Eigen's, not ") +
+                component_name(a.kind()) + " ones");
   const int br = a.block_rows(), bc = a.block_cols(), bs = a.block_size();
   const int64_t nnz = a.pattern().nnz() * bs;
   check_index_range(a.scalar_rows(), "rows");

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <set>
+#include <type_traits>
 
 namespace simit::runtime {
 
@@ -287,18 +288,32 @@ void PatternRegistry::clear() {
 // ---------------------------------------------------------------------------
 // Matrices
 
-SystemMatrix::SystemMatrix(PatternPtr pattern, int block_rows, int block_cols)
-    : pattern_(std::move(pattern)), block_rows_(block_rows), block_cols_(block_cols) {
+SystemMatrix::SystemMatrix(PatternPtr pattern, int block_rows, int block_cols, ComponentKind kind)
+    : pattern_(std::move(pattern)), block_rows_(block_rows), block_cols_(block_cols), kind_(kind) {
   if (!pattern_) throw Fault("a system matrix needs a pattern");
   if (block_rows < 1 || block_cols < 1)
     throw Fault("invalid block size " + std::to_string(block_rows) + " x " +
                 std::to_string(block_cols));
-  values_.assign(static_cast<size_t>(pattern_->nnz()) * block_size(), 0.0);
+  const size_t n = static_cast<size_t>(pattern_->nnz()) * block_size();
+  switch (kind) {
+    case ComponentKind::Float: values_.assign(n, 0.0); break;
+    case ComponentKind::Int:
+    case ComponentKind::Bool: ints_.assign(n, 0); break;
+    case ComponentKind::Complex: complexes_.assign(n, Complex()); break;
+    default:
+      throw Fault(std::string("system matrices of ") + component_name(kind) +
+                  " components are not supported");
+  }
 }
 
-void SystemMatrix::set_zero() { std::fill(values_.begin(), values_.end(), 0.0); }
+void SystemMatrix::set_zero() {
+  std::fill(values_.begin(), values_.end(), 0.0);
+  std::fill(ints_.begin(), ints_.end(), 0);
+  std::fill(complexes_.begin(), complexes_.end(), Complex());
+}
 
-double SystemMatrix::component(int64_t i, int64_t j) const {
+template <class T>
+T SystemMatrix::component_as(int64_t i, int64_t j) const {
   if (i < 0 || i >= scalar_rows() || j < 0 || j >= scalar_cols())
     throw Fault("matrix component (" + std::to_string(i) + ", " + std::to_string(j) +
                 ") is outside a " + std::to_string(scalar_rows()) + " x " +
@@ -306,14 +321,36 @@ double SystemMatrix::component(int64_t i, int64_t j) const {
   const int r = static_cast<int>(i / block_rows_), c = static_cast<int>(j / block_cols_);
   const size_t within = static_cast<size_t>(i % block_rows_) * block_cols_ + j % block_cols_;
   const MatrixPattern& p = *pattern_;
+  const T* v = data<T>();
   if (p.canonical()) {
     const int32_t k = p.find(r, c);
-    return k < 0 ? 0.0 : block(k)[within];
+    return k < 0 ? T(0) : v[static_cast<size_t>(k) * block_size() + within];
   }
-  double sum = 0.0;
+  // Repeated stencil entries add; ints wrap like the language's int arithmetic.
+  using Sum = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
+  Sum sum = 0;
   for (int32_t k = p.row_ptr()[r]; k < p.row_ptr()[r + 1]; ++k)
-    if (p.col_idx()[k] == c) sum += block(k)[within];
-  return sum;
+    if (p.col_idx()[k] == c)
+      sum += static_cast<Sum>(v[static_cast<size_t>(k) * block_size() + within]);
+  return static_cast<T>(sum);
+}
+
+template double SystemMatrix::component_as<double>(int64_t, int64_t) const;
+template int32_t SystemMatrix::component_as<int32_t>(int64_t, int64_t) const;
+template Complex SystemMatrix::component_as<Complex>(int64_t, int64_t) const;
+
+double SystemMatrix::component(int64_t i, int64_t j) const {
+  if (kind_ == ComponentKind::Complex)
+    throw Fault("a component of a complex matrix is not a double");
+  return is_float() ? component_as<double>(i, j) : component_as<int32_t>(i, j);
+}
+
+BlockDims block_dims(const Shape& block) {
+  if (block.is_scalar()) return {};
+  if (block.order() != 2 || !block.uniform())
+    throw Fault("a system matrix cannot have blocks of shape " + block.str());
+  const Shape logical = block.logical();
+  return {logical.dim(0), logical.dim(1)};
 }
 
 size_t memory_bytes(std::span<const SystemMatrix* const> matrices) {

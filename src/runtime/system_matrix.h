@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "runtime/set.h"
+#include "runtime/tensor.h"
 
 namespace simit::runtime {
 
@@ -143,16 +144,22 @@ class PatternRegistry {
   int builds_ = 0;
 };
 
-// A block-sparse matrix: block_rows × block_cols doubles per block of the pattern, stored
+// A block-sparse matrix: block_rows × block_cols components per block of the pattern, stored
 // row-major one block after another in pattern order. Its own storage is the value array;
-// the pattern is shared. Scalar (unblocked) matrices have 1 × 1 blocks.
+// the pattern is shared. Scalar (unblocked) matrices have 1 × 1 blocks. Float components are
+// doubles (values()); int and bool components are int32s (ints(); bools are 0 or 1); complex
+// components are complex doubles (complexes()).
 class SystemMatrix {
  public:
   SystemMatrix() = default;  // a placeholder without pattern: assign before use
-  SystemMatrix(PatternPtr pattern, int block_rows = 1, int block_cols = 1);  // all zero
+  // All zero; a String kind is a Fault.
+  SystemMatrix(PatternPtr pattern, int block_rows = 1, int block_cols = 1,
+               ComponentKind kind = ComponentKind::Float);
 
   const MatrixPattern& pattern() const { return *pattern_; }
   const PatternPtr& shared_pattern() const { return pattern_; }
+  ComponentKind kind() const { return kind_; }
+  bool is_float() const { return kind_ == ComponentKind::Float; }
   int rows() const { return pattern_->rows(); }  // in blocks (elements of the row set)
   int cols() const { return pattern_->cols(); }
   int block_rows() const { return block_rows_; }
@@ -161,9 +168,21 @@ class SystemMatrix {
   int64_t scalar_rows() const { return static_cast<int64_t>(rows()) * block_rows_; }
   int64_t scalar_cols() const { return static_cast<int64_t>(cols()) * block_cols_; }
 
+  // The components of a Float matrix (null for the other kinds).
   double* values() { return values_.data(); }
   const double* values() const { return values_.data(); }
-  size_t value_count() const { return values_.size(); }
+  // The components of an Int or Bool matrix (null for the other kinds).
+  int32_t* ints() { return ints_.data(); }
+  const int32_t* ints() const { return ints_.data(); }
+  // The components of a Complex matrix (null for the other kinds).
+  Complex* complexes() { return complexes_.data(); }
+  const Complex* complexes() const { return complexes_.data(); }
+  // values(), ints() or complexes(), by the component type: double, int32_t or Complex.
+  template <class T>
+  T* data();
+  template <class T>
+  const T* data() const;
+  size_t value_count() const { return values_.size() + ints_.size() + complexes_.size(); }
   double* block(int32_t position) {
     return values_.data() + static_cast<size_t>(position) * block_size();
   }
@@ -173,16 +192,58 @@ class SystemMatrix {
   void set_zero();
 
   // Component (i, j) of the logical unblocked matrix: zero outside the pattern, the sum of
-  // the entries when a stencil pattern repeats the column.
+  // the entries when a stencil pattern repeats the column. component() converts int
+  // components to double (a Fault for complex ones); component_as<T> reads the matrix of
+  // T's kind exactly (int32_t for int and bool).
   double component(int64_t i, int64_t j) const;
+  template <class T>
+  T component_as(int64_t i, int64_t j) const;
 
-  size_t value_bytes() const { return values_.size() * sizeof(double); }
+  size_t value_bytes() const {
+    return values_.size() * sizeof(double) + ints_.size() * sizeof(int32_t) +
+           complexes_.size() * sizeof(Complex);
+  }
 
  private:
   PatternPtr pattern_;
   int block_rows_ = 1, block_cols_ = 1;
+  ComponentKind kind_ = ComponentKind::Float;
   std::vector<double> values_;
+  std::vector<int32_t> ints_;
+  std::vector<Complex> complexes_;
 };
+
+template <>
+inline double* SystemMatrix::data<double>() {
+  return values();
+}
+template <>
+inline const double* SystemMatrix::data<double>() const {
+  return values();
+}
+template <>
+inline int32_t* SystemMatrix::data<int32_t>() {
+  return ints();
+}
+template <>
+inline const int32_t* SystemMatrix::data<int32_t>() const {
+  return ints();
+}
+template <>
+inline Complex* SystemMatrix::data<Complex>() {
+  return complexes();
+}
+template <>
+inline const Complex* SystemMatrix::data<Complex>() const {
+  return complexes();
+}
+
+// The logical rows and columns of a matrix block of shape `block`: 1 x 1 for a scalar, the
+// unblocked dimensions for a block of blocks (3x3 of 2x2 gives 6 x 6).
+struct BlockDims {
+  int rows = 1, cols = 1;
+};
+BlockDims block_dims(const Shape& block);
 
 // Bytes used by these matrices: their values, plus each distinct pattern once.
 size_t memory_bytes(std::span<const SystemMatrix* const> matrices);

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <type_traits>
+
+#include "runtime/dense_linalg.h"
 
 namespace simit::runtime {
 
@@ -25,65 +28,116 @@ void check_same(size_t a, size_t b) {
                 " components cannot be combined");
 }
 
+// The type int components are accumulated in: unsigned, so that sums and products wrap
+// (LANGUAGE.md §5.1) without undefined behaviour.
+template <class T>
+using Acc = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
+
+// The component type that stores matrices of kind k.
+template <class T>
+bool stores(ComponentKind k) {
+  if constexpr (std::is_same_v<T, double>) return k == ComponentKind::Float;
+  if constexpr (std::is_same_v<T, Complex>) return k == ComponentKind::Complex;
+  return k == ComponentKind::Int || k == ComponentKind::Bool;
+}
+
+// f(T{}) with T the component type that stores matrices of kind k.
+template <class F>
+decltype(auto) by_kind(ComponentKind k, F&& f) {
+  if (k == ComponentKind::Float) return f(double{});
+  if (k == ComponentKind::Complex) return f(Complex{});
+  return f(int32_t{});
+}
+
+template <class T>
+void check_kind(const SystemMatrix& a, const char* what) {
+  if (!stores<T>(a.kind()))
+    throw Fault(std::string("cannot ") + what + " a matrix of " + component_name(a.kind()) +
+                " components with vectors of another component type");
+}
+
 // Block kernels: compile-time sizes for the common blocks, run-time sizes (0) otherwise.
-template <int BR, int BC>
-void matvec_rows(const SystemMatrix& a, const double* x, double* y) {
+template <class T, int BR, int BC>
+void matvec_rows(const SystemMatrix& a, const T* x, T* y) {
   const int br = BR ? BR : a.block_rows(), bc = BC ? BC : a.block_cols();
   const int32_t* row_ptr = a.pattern().row_ptr().data();
   const int32_t* col_idx = a.pattern().col_idx().data();
-  const double* v = a.values();
+  const T* v = a.data<T>();
+  Acc<T> fixed[BR ? BR : 1];
+  std::vector<Acc<T>> sized(BR ? 0 : static_cast<size_t>(br));
+  Acc<T>* sum = BR ? fixed : sized.data();
   for (int r = 0; r < a.rows(); ++r) {
-    double* yr = y + static_cast<size_t>(r) * br;
-    for (int i = 0; i < br; ++i) yr[i] = 0.0;
+    T* yr = y + static_cast<size_t>(r) * br;
+    for (int i = 0; i < br; ++i) sum[i] = 0;
     for (int32_t k = row_ptr[r]; k < row_ptr[r + 1]; ++k) {
-      const double* blk = v + static_cast<size_t>(k) * br * bc;
-      const double* xc = x + static_cast<size_t>(col_idx[k]) * bc;
+      const T* blk = v + static_cast<size_t>(k) * br * bc;
+      const T* xc = x + static_cast<size_t>(col_idx[k]) * bc;
       for (int i = 0; i < br; ++i)
-        for (int j = 0; j < bc; ++j) yr[i] += blk[i * bc + j] * xc[j];
+        for (int j = 0; j < bc; ++j)
+          sum[i] += static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xc[j]);
+    }
+    for (int i = 0; i < br; ++i) yr[i] = static_cast<T>(sum[i]);
+  }
+}
+
+// y must start at zero.
+template <class T, int BR, int BC>
+void matvec_transposed_rows(const SystemMatrix& a, const T* x, T* y) {
+  const int br = BR ? BR : a.block_rows(), bc = BC ? BC : a.block_cols();
+  const int32_t* row_ptr = a.pattern().row_ptr().data();
+  const int32_t* col_idx = a.pattern().col_idx().data();
+  const T* v = a.data<T>();
+  for (int r = 0; r < a.rows(); ++r) {
+    const T* xr = x + static_cast<size_t>(r) * br;
+    for (int32_t k = row_ptr[r]; k < row_ptr[r + 1]; ++k) {
+      const T* blk = v + static_cast<size_t>(k) * br * bc;
+      T* yc = y + static_cast<size_t>(col_idx[k]) * bc;
+      for (int i = 0; i < br; ++i)
+        for (int j = 0; j < bc; ++j)
+          yc[j] = static_cast<T>(static_cast<Acc<T>>(yc[j]) +
+                                 static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xr[i]));
     }
   }
 }
 
-template <int BR, int BC>
-void matvec_transposed_rows(const SystemMatrix& a, const double* x, double* y) {
-  const int br = BR ? BR : a.block_rows(), bc = BC ? BC : a.block_cols();
-  const int32_t* row_ptr = a.pattern().row_ptr().data();
-  const int32_t* col_idx = a.pattern().col_idx().data();
-  const double* v = a.values();
-  for (int r = 0; r < a.rows(); ++r) {
-    const double* xr = x + static_cast<size_t>(r) * br;
-    for (int32_t k = row_ptr[r]; k < row_ptr[r + 1]; ++k) {
-      const double* blk = v + static_cast<size_t>(k) * br * bc;
-      double* yc = y + static_cast<size_t>(col_idx[k]) * bc;
-      for (int i = 0; i < br; ++i)
-        for (int j = 0; j < bc; ++j) yc[j] += blk[i * bc + j] * xr[i];
-    }
-  }
-}
-
-template <template <int, int> class Kernel>
-void dispatch_blocks(const SystemMatrix& a, const double* x, double* y) {
+template <template <class, int, int> class Kernel, class T>
+void dispatch_blocks(const SystemMatrix& a, const T* x, T* y) {
   const int br = a.block_rows(), bc = a.block_cols();
-  if (br == 1 && bc == 1) return Kernel<1, 1>::run(a, x, y);
-  if (br == 2 && bc == 2) return Kernel<2, 2>::run(a, x, y);
-  if (br == 3 && bc == 3) return Kernel<3, 3>::run(a, x, y);
-  if (br == 4 && bc == 4) return Kernel<4, 4>::run(a, x, y);
-  Kernel<0, 0>::run(a, x, y);
+  if (br == 1 && bc == 1) return Kernel<T, 1, 1>::run(a, x, y);
+  if (br == 2 && bc == 2) return Kernel<T, 2, 2>::run(a, x, y);
+  if (br == 3 && bc == 3) return Kernel<T, 3, 3>::run(a, x, y);
+  if (br == 4 && bc == 4) return Kernel<T, 4, 4>::run(a, x, y);
+  Kernel<T, 0, 0>::run(a, x, y);
 }
 
-template <int BR, int BC>
+template <class T, int BR, int BC>
 struct Matvec {
-  static void run(const SystemMatrix& a, const double* x, double* y) {
-    matvec_rows<BR, BC>(a, x, y);
+  static void run(const SystemMatrix& a, const T* x, T* y) { matvec_rows<T, BR, BC>(a, x, y); }
+};
+
+template <class T, int BR, int BC>
+struct MatvecTransposed {
+  static void run(const SystemMatrix& a, const T* x, T* y) {
+    matvec_transposed_rows<T, BR, BC>(a, x, y);
   }
 };
 
-template <int BR, int BC>
-struct MatvecTransposed {
-  static void run(const SystemMatrix& a, const double* x, double* y) {
-    matvec_transposed_rows<BR, BC>(a, x, y);
-  }
-};
+template <class T>
+void multiply_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
+  check_kind<T>(a, "multiply");
+  check_length(x.size(), a.scalar_cols(), "the vector multiplied by the matrix");
+  check_length(y.size(), a.scalar_rows(), "the result of the matrix-vector product");
+  dispatch_blocks<Matvec>(a, x.data(), y.data());
+}
+
+template <class T>
+void multiply_transposed_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
+  check_kind<T>(a, "multiply");
+  check_length(x.size(), a.scalar_rows(), "the vector multiplied by the transposed matrix");
+  check_length(y.size(), a.scalar_cols(), "the result of the transposed product");
+  std::fill(y.begin(), y.end(), T(0));
+  dispatch_blocks<MatvecTransposed>(a, x.data(), y.data());
+}
 
 void check_block_match(const SystemMatrix& a, const SystemMatrix& b, const char* op) {
   if (a.block_rows() != b.block_rows() || a.block_cols() != b.block_cols() ||
@@ -91,16 +145,69 @@ void check_block_match(const SystemMatrix& a, const SystemMatrix& b, const char*
     throw Fault(std::string("cannot ") + op + " a " + dims(a.rows(), a.cols()) + " matrix of " +
                 dims(a.block_rows(), a.block_cols()) + " blocks and a " + dims(b.rows(), b.cols()) +
                 " matrix of " + dims(b.block_rows(), b.block_cols()) + " blocks");
+  if (a.kind() != b.kind())
+    throw Fault(std::string("cannot ") + op + " a matrix of " + component_name(a.kind()) +
+                " components and one of " + component_name(b.kind()) + " components");
+}
+
+// A scale factor for an int matrix: it must be an int32 (a double holds every one exactly).
+int32_t int_factor(double s) {
+  if (!(s == std::trunc(s) && s >= INT32_MIN && s <= INT32_MAX))
+    throw Fault("an int matrix can only be scaled by an integer, not " + std::to_string(s));
+  return static_cast<int32_t>(s);
+}
+
+// A factor in the component type T; only complex matrices take complex factors.
+template <class T>
+Acc<T> factor(Complex s) {
+  if constexpr (std::is_same_v<T, Complex>) return s;
+  if (s.imag() != 0.0) throw Fault("only a complex matrix can be scaled by a complex number");
+  if constexpr (std::is_same_v<T, int32_t>)
+    return static_cast<Acc<T>>(int_factor(s.real()));
+  else
+    return s.real();
+}
+
+// out[i] = alpha a[i] + beta b[i] over `n` components.
+template <class T>
+void combine(double alpha, const T* a, double beta, const T* b, T* out, size_t n) {
+  const Acc<T> x = factor<T>(alpha), y = factor<T>(beta);
+  for (size_t i = 0; i < n; ++i)
+    out[i] = static_cast<T>(x * static_cast<Acc<T>>(a[i]) + y * static_cast<Acc<T>>(b[i]));
 }
 
 // Scatters s * (blocks of m) into out, block k going to position to[k].
-void scatter_scaled(double s, const SystemMatrix& m, const std::vector<int32_t>& to,
+template <class T>
+void scatter_scaled(Complex s, const SystemMatrix& m, const std::vector<int32_t>& to,
                     SystemMatrix& out) {
   const int bs = m.block_size();
-  const double* v = m.values();
+  const Acc<T> f = factor<T>(s);
+  const T* v = m.data<T>();
+  T* o = out.data<T>();
   for (size_t k = 0; k < to.size(); ++k) {
-    double* dst = out.block(to[k]);
-    for (int i = 0; i < bs; ++i) dst[i] += s * v[k * bs + i];
+    T* dst = o + static_cast<size_t>(to[k]) * bs;
+    for (int i = 0; i < bs; ++i)
+      dst[i] = static_cast<T>(static_cast<Acc<T>>(dst[i]) + f * static_cast<Acc<T>>(v[k * bs + i]));
+  }
+}
+
+template <class T>
+void scale_values(Complex s, SystemMatrix& a) {
+  const Acc<T> f = factor<T>(s);
+  T* v = a.data<T>();
+  for (size_t i = 0; i < a.value_count(); ++i) v[i] = static_cast<T>(f * static_cast<Acc<T>>(v[i]));
+}
+
+template <class T>
+void transpose_blocks(const SystemMatrix& a, const PatternTranspose& t, SystemMatrix& out) {
+  const int br = a.block_rows(), bc = a.block_cols(), bs = a.block_size();
+  const T* v = a.data<T>();
+  T* o = out.data<T>();
+  for (size_t k = 0; k < t.position.size(); ++k) {
+    const T* src = v + k * bs;
+    T* dst = o + static_cast<size_t>(t.position[k]) * bs;
+    for (int i = 0; i < br; ++i)
+      for (int j = 0; j < bc; ++j) dst[j * br + i] = src[i * bc + j];
   }
 }
 
@@ -128,22 +235,55 @@ PatternPtr product_pattern(const MatrixPattern& a, const MatrixPattern& b) {
   return MatrixPattern::from_csr(a.rows(), b.cols(), std::move(row_ptr), std::move(col_idx));
 }
 
+// out += A B, block by block, out having the product pattern.
+template <class T>
+void product_values(const SystemMatrix& a, const SystemMatrix& b, SystemMatrix& out) {
+  const MatrixPattern &pa = a.pattern(), &pb = b.pattern(), &po = out.pattern();
+  const int br = a.block_rows(), bm = a.block_cols(), bc = b.block_cols();
+  const T *va = a.data<T>(), *vb = b.data<T>();
+  T* vo = out.data<T>();
+  std::vector<int32_t> slot(static_cast<size_t>(b.cols()), -1);  // column -> position in out
+  for (int r = 0; r < a.rows(); ++r) {
+    for (int32_t k = po.row_ptr()[r]; k < po.row_ptr()[r + 1]; ++k) slot[po.col_idx()[k]] = k;
+    for (int32_t k = pa.row_ptr()[r]; k < pa.row_ptr()[r + 1]; ++k) {
+      const T* x = va + static_cast<size_t>(k) * br * bm;
+      for (int32_t l = pb.row_ptr()[pa.col_idx()[k]]; l < pb.row_ptr()[pa.col_idx()[k] + 1]; ++l) {
+        const T* y = vb + static_cast<size_t>(l) * bm * bc;
+        T* z = vo + static_cast<size_t>(slot[pb.col_idx()[l]]) * br * bc;
+        for (int i = 0; i < br; ++i)
+          for (int m = 0; m < bm; ++m)
+            for (int j = 0; j < bc; ++j)
+              z[i * bc + j] = static_cast<T>(static_cast<Acc<T>>(z[i * bc + j]) +
+                                             static_cast<Acc<T>>(x[i * bm + m]) *
+                                                 static_cast<Acc<T>>(y[m * bc + j]));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
 // Matrix-vector products
 
 void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y) {
-  check_length(x.size(), a.scalar_cols(), "the vector multiplied by the matrix");
-  check_length(y.size(), a.scalar_rows(), "the result of the matrix-vector product");
-  dispatch_blocks<Matvec>(a, x.data(), y.data());
+  multiply_into(a, x, y);
+}
+void multiply(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y) {
+  multiply_into(a, x, y);
 }
 
 void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y) {
-  check_length(x.size(), a.scalar_rows(), "the vector multiplied by the transposed matrix");
-  check_length(y.size(), a.scalar_cols(), "the result of the transposed product");
-  std::fill(y.begin(), y.end(), 0.0);
-  dispatch_blocks<MatvecTransposed>(a, x.data(), y.data());
+  multiply_transposed_into(a, x, y);
+}
+void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y) {
+  multiply_transposed_into(a, x, y);
+}
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
+  multiply_into(a, x, y);
+}
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
+  multiply_transposed_into(a, x, y);
 }
 
 // ---------------------------------------------------------------------------
@@ -153,44 +293,81 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, dou
                  PatternRegistry* registry) {
   check_block_match(a, b, "add");
   if (a.shared_pattern() == b.shared_pattern()) {
-    SystemMatrix out(a.shared_pattern(), a.block_rows(), a.block_cols());
-    double* o = out.values();
-    const double *va = a.values(), *vb = b.values();
-    for (size_t i = 0; i < out.value_count(); ++i) o[i] = alpha * va[i] + beta * vb[i];
+    SystemMatrix out(a.shared_pattern(), a.block_rows(), a.block_cols(), a.kind());
+    by_kind(a.kind(), [&](auto t) {
+      using T = decltype(t);
+      combine(alpha, a.data<T>(), beta, b.data<T>(), out.data<T>(), out.value_count());
+    });
     return out;
   }
   std::shared_ptr<const PatternUnion> u =
       registry ? registry->united(a.shared_pattern(), b.shared_pattern())
                : std::make_shared<const PatternUnion>(unite(a.pattern(), b.pattern()));
-  SystemMatrix out(u->pattern, a.block_rows(), a.block_cols());
-  scatter_scaled(alpha, a, u->from_a, out);
-  scatter_scaled(beta, b, u->from_b, out);
+  SystemMatrix out(u->pattern, a.block_rows(), a.block_cols(), a.kind());
+  by_kind(a.kind(), [&](auto t) {
+    scatter_scaled<decltype(t)>(alpha, a, u->from_a, out);
+    scatter_scaled<decltype(t)>(beta, b, u->from_b, out);
+  });
   return out;
 }
 
-SystemMatrix scaled(double s, const SystemMatrix& a) {
+SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
+                                  PatternRegistry* registry) {
+  check_block_match(a, b, "multiply element-wise");
+  // Both operands on the union pattern (zero where absent), then the component products.
+  SystemMatrix x = add(a, b, 1.0, 0.0, registry), y = add(a, b, 0.0, 1.0, registry);
+  by_kind(x.kind(), [&](auto t) {
+    using T = decltype(t);
+    T* v = x.data<T>();
+    const T* w = y.data<T>();
+    for (size_t i = 0; i < x.value_count(); ++i)
+      v[i] = static_cast<T>(static_cast<Acc<T>>(v[i]) * static_cast<Acc<T>>(w[i]));
+  });
+  return x;
+}
+
+SystemMatrix scaled(double s, const SystemMatrix& a) { return scaled(Complex(s), a); }
+
+SystemMatrix scaled(Complex s, const SystemMatrix& a) {
   SystemMatrix out = a;
-  scale(s, out);
+  by_kind(a.kind(), [&](auto t) { scale_values<decltype(t)>(s, out); });
   return out;
 }
 
 void scale(double s, SystemMatrix& a) {
-  double* v = a.values();
-  for (size_t i = 0; i < a.value_count(); ++i) v[i] *= s;
+  by_kind(a.kind(), [&](auto t) { scale_values<decltype(t)>(s, a); });
+}
+
+SystemMatrix divided(const SystemMatrix& a, double s) { return divided(a, Complex(s)); }
+
+SystemMatrix divided(const SystemMatrix& a, Complex s) {
+  SystemMatrix out = a;
+  if (a.kind() == ComponentKind::Complex) {
+    Complex* v = out.complexes();
+    for (size_t i = 0; i < out.value_count(); ++i) v[i] /= s;
+    return out;
+  }
+  const double r = factor<double>(s);
+  if (a.is_float()) {
+    double* v = out.values();
+    for (size_t i = 0; i < out.value_count(); ++i) v[i] /= r;
+    return out;
+  }
+  const int32_t d = int_factor(r);
+  if (d == 0) throw Fault("integer division by zero");
+  int32_t* v = out.ints();
+  // INT32_MIN / -1 wraps like the other int operations instead of trapping.
+  for (size_t i = 0; i < out.value_count(); ++i)
+    v[i] = d == -1 ? static_cast<int32_t>(0u - static_cast<uint32_t>(v[i])) : v[i] / d;
+  return out;
 }
 
 SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry) {
   std::shared_ptr<const PatternTranspose> t =
       registry ? registry->transposed(a.shared_pattern())
                : std::make_shared<const PatternTranspose>(transpose(a.pattern()));
-  const int br = a.block_rows(), bc = a.block_cols();
-  SystemMatrix out(t->pattern, bc, br);
-  for (size_t k = 0; k < t->position.size(); ++k) {
-    const double* src = a.block(static_cast<int32_t>(k));
-    double* dst = out.block(t->position[k]);
-    for (int i = 0; i < br; ++i)
-      for (int j = 0; j < bc; ++j) dst[j * br + i] = src[i * bc + j];
-  }
+  SystemMatrix out(t->pattern, a.block_cols(), a.block_rows(), a.kind());
+  by_kind(a.kind(), [&](auto k) { transpose_blocks<decltype(k)>(a, *t, out); });
   return out;
 }
 
@@ -200,25 +377,42 @@ SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b) {
                 dims(b.scalar_rows(), b.scalar_cols()) + " matrix (blocks " +
                 dims(a.block_rows(), a.block_cols()) + " and " +
                 dims(b.block_rows(), b.block_cols()) + ")");
-  SystemMatrix out(product_pattern(a.pattern(), b.pattern()), a.block_rows(), b.block_cols());
-  const MatrixPattern &pa = a.pattern(), &pb = b.pattern(), &po = out.pattern();
-  const int br = a.block_rows(), bm = a.block_cols(), bc = b.block_cols();
-  std::vector<int32_t> slot(static_cast<size_t>(b.cols()), -1);  // column -> position in out
-  for (int r = 0; r < a.rows(); ++r) {
-    for (int32_t k = po.row_ptr()[r]; k < po.row_ptr()[r + 1]; ++k) slot[po.col_idx()[k]] = k;
-    for (int32_t k = pa.row_ptr()[r]; k < pa.row_ptr()[r + 1]; ++k) {
-      const int mid = pa.col_idx()[k];
-      const double* x = a.block(k);
-      for (int32_t l = pb.row_ptr()[mid]; l < pb.row_ptr()[mid + 1]; ++l) {
-        const double* y = b.block(l);
-        double* z = out.block(slot[pb.col_idx()[l]]);
-        for (int i = 0; i < br; ++i)
-          for (int m = 0; m < bm; ++m)
-            for (int j = 0; j < bc; ++j) z[i * bc + j] += x[i * bm + m] * y[m * bc + j];
-      }
-    }
-  }
+  if (a.kind() != b.kind())
+    throw Fault(std::string("cannot multiply a matrix of ") + component_name(a.kind()) +
+                " components by one of " + component_name(b.kind()) + " components");
+  SystemMatrix out(product_pattern(a.pattern(), b.pattern()), a.block_rows(), b.block_cols(),
+                   a.kind());
+  by_kind(a.kind(), [&](auto t) { product_values<decltype(t)>(a, b, out); });
   return out;
+}
+
+// ---------------------------------------------------------------------------
+// Blocks of blocks
+
+std::vector<int32_t> nested_positions(const Shape& block) {
+  if (!block.uniform()) throw Fault("a matrix block " + block.str() + " has no unblocked form");
+  Tensor index(ComponentKind::Int, block);
+  int32_t* at = index.mutable_ints();
+  for (size_t i = 0; i < index.size(); ++i) at[i] = static_cast<int32_t>(i);
+  Tensor flat = unblock(index);
+  return std::vector<int32_t>(flat.ints(), flat.ints() + flat.size());
+}
+
+void unnest_blocks(SystemMatrix& m, const Shape& block) {
+  if (block.levels() < 2) return;
+  const std::vector<int32_t> from = nested_positions(block);
+  if (from.size() != static_cast<size_t>(m.block_size()))
+    throw Fault("a block of shape " + block.str() + " in a matrix of " +
+                dims(m.block_rows(), m.block_cols()) + " blocks");
+  by_kind(m.kind(), [&](auto t) {
+    using T = decltype(t);
+    T* v = m.data<T>();
+    std::vector<T> tmp(from.size());
+    for (size_t k = 0; k < m.value_count(); k += from.size()) {
+      for (size_t i = 0; i < from.size(); ++i) tmp[i] = v[k + from[i]];
+      std::copy(tmp.begin(), tmp.end(), v + k);
+    }
+  });
 }
 
 // ---------------------------------------------------------------------------

@@ -4,26 +4,53 @@
 #pragma once
 
 #include <span>
+#include <vector>
 
 #include "runtime/system_matrix.h"
 
 namespace simit::runtime {
 
-// y = A x, with x of A.scalar_cols() and y of A.scalar_rows() components.
+// y = A x, with x of A.scalar_cols() and y of A.scalar_rows() components. The vectors'
+// component type must be the one storing A's (double for Float, int32 for Int, Complex for
+// Complex; int arithmetic wraps).
 void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
+void multiply(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
 // y = Aᵀ x, with x of A.scalar_rows() and y of A.scalar_cols() components.
 void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
+void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
+
+// Matrices of any kind the SystemMatrix holds; operands of one operation share the kind,
+// factors applied to int matrices must be integers and only complex matrices take complex
+// factors (Fault otherwise). The transpose does not conjugate.
 
 // alpha A + beta B over the union of the patterns (A's pattern itself when they share it).
 // With a registry the union is built once per pair of patterns.
 SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha = 1.0,
                  double beta = 1.0, PatternRegistry* registry = nullptr);
+// A .* B: component products over the union of the patterns.
+SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
+                                  PatternRegistry* registry = nullptr);
 SystemMatrix scaled(double s, const SystemMatrix& a);  // same pattern
+SystemMatrix scaled(Complex s, const SystemMatrix& a);
 void scale(double s, SystemMatrix& a);
+// Every component divided by s; int matrices divide by truncation and Fault on s = 0.
+SystemMatrix divided(const SystemMatrix& a, double s);
+SystemMatrix divided(const SystemMatrix& a, Complex s);
 // Aᵀ: transposed pattern (cached with a registry) and transposed blocks.
 SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry = nullptr);
 // The sparse product A B; its pattern is the product pattern, built on each call.
 SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b);
+
+// Blocks that are themselves blocked (`tensor[V,V](tensor[3,3](tensor[2,2](float)))`): a
+// matrix stores each block as its logical unblocked form (here 6 x 6, row-major), while a
+// dense tensor of the block's shape stores it level by level. For each component of the
+// logical form, row-major, the component of the level-by-level form it is.
+std::vector<int32_t> nested_positions(const Shape& block);
+// Rewrites every block of m from the level-by-level layout of `block` to the logical
+// layout (nothing to do for an unblocked block shape).
+void unnest_blocks(SystemMatrix& m, const Shape& block);
 
 // Global vectors (all operands the same length).
 void axpy(double alpha, std::span<const double> x, std::span<double> y);  // y += alpha x
