@@ -1,19 +1,25 @@
 #!/usr/bin/env bash
 # Installs every build and test dependency of Simit from Debian packages (run as root; idempotent).
-# With --tests also the packages only the tests use (scripts/test.sh passes it).
+# With --tests also the packages only the tests use (scripts/test.sh passes it); with --llvm
+# also LLVM 19, which only a build configured with -DSIMIT_WITH_LLVM=ON asks for (the JIT that
+# will use it is not written yet).
 set -euo pipefail
 
 packages=(
   build-essential g++ cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev libreadline-dev
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
-  libpng-dev libtinyobjloader-dev llvm-19-dev clang libclang-rt-14-dev tmux python3
+  libpng-dev libtinyobjloader-dev clang libclang-rt-14-dev tmux python3
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with.
 test_packages=(python3-vtk9)
-if [ "${1:-}" = "--tests" ]; then
-  packages+=("${test_packages[@]}")
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --tests) packages+=("${test_packages[@]}") ;;
+    --llvm) packages+=(llvm-19-dev) ;;
+    *) echo "install_deps: unknown option $arg (expected --tests or --llvm)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

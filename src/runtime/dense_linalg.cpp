@@ -1,22 +1,17 @@
-// Small dense linear algebra on runtime tensors, through Eigen.
+// Small dense linear algebra on runtime tensors, as plain loops in the order that
+// docs/arithmetic.md states (no Eigen here: its kernels' order depends on the vector ISA).
 #include "runtime/dense_linalg.h"
 
-#include <Eigen/Dense>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "runtime/fault.h"
 
 namespace simit::runtime {
 
 namespace {
-
-template <class T>
-using RowMajor = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-template <class T>
-using ConstMap = Eigen::Map<const RowMajor<T>>;
-template <class T>
-using MutMap = Eigen::Map<RowMajor<T>>;
 
 // Calls f(blocked offset, logical offset) for every component of a uniform blocked shape.
 template <class F>
@@ -80,17 +75,23 @@ void require(bool ok, const char* what) {
 
 int32_t wrap(uint32_t v) { return static_cast<int32_t>(v); }
 
-// C = A (m x k) * B (k x n), all row-major.
+// C = A (m x k) * B (k x n), all row-major: each entry sums from zero over l in order.
+template <class T>
+void gemm_loops(const T* a, const T* b, T* c, int m, int k, int n) {
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < n; ++j) {
+      T s{};
+      for (int l = 0; l < k; ++l) s += a[i * k + l] * b[l * n + j];
+      c[i * n + j] = s;
+    }
+}
+
 void gemm(const Tensor& a, const Tensor& b, Tensor& c, int m, int k, int n) {
   switch (a.kind()) {
     case ComponentKind::Float:
-      MutMap<double>(c.mutable_floats(), m, n).noalias() =
-          ConstMap<double>(a.floats(), m, k) * ConstMap<double>(b.floats(), k, n);
-      return;
+      return gemm_loops(a.floats(), b.floats(), c.mutable_floats(), m, k, n);
     case ComponentKind::Complex:
-      MutMap<Complex>(c.mutable_complexes(), m, n).noalias() =
-          ConstMap<Complex>(a.complexes(), m, k) * ConstMap<Complex>(b.complexes(), k, n);
-      return;
+      return gemm_loops(a.complexes(), b.complexes(), c.mutable_complexes(), m, k, n);
     case ComponentKind::Int: {
       // Integer arithmetic wraps (LANGUAGE.md §5.1); unsigned arithmetic makes that defined.
       int32_t* out = c.mutable_ints();
@@ -113,17 +114,47 @@ void check_product(const Tensor& a, const Tensor& b) {
   require(!a.shape().is_blocked() && !b.shape().is_blocked(), "product of blocked tensors");
 }
 
-template <int N>
-Eigen::Matrix<double, N, N, Eigen::RowMajor> fixed(const Tensor& m) {
-  return Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(m.floats());
+// The determinant of the n x n matrix a (row stride `stride`) restricted to the given rows
+// and columns, by cofactor expansion along its first row: the terms a(r0, c_j) * C(r0, c_j)
+// summed from zero in column order, each cofactor the signed determinant of its minor.
+double minor_determinant(const double* a, int stride, const int* rows, const int* cols, int n) {
+  if (n == 1) return a[rows[0] * stride + cols[0]];
+  std::array<int, 3> sub{};
+  double sum = 0.0;
+  for (int j = 0; j < n; ++j) {
+    for (int c = 0, t = 0; c < n; ++c)
+      if (c != j) sub[t++] = cols[c];
+    const double minor = minor_determinant(a, stride, rows + 1, sub.data(), n - 1);
+    sum += a[rows[0] * stride + cols[j]] * (j % 2 == 0 ? minor : -minor);
+  }
+  return sum;
 }
 
-template <int N>
-Tensor inverse_fixed(const Tensor& m) {
-  auto a = fixed<N>(m);
-  if (a.determinant() == 0.0) throw Fault("inverse of a singular matrix (determinant is 0)");
+// The cofactor C(i, j) of the n x n row-major matrix a.
+double cofactor(const double* a, int n, int i, int j) {
+  std::array<int, 3> rows{}, cols{};
+  for (int r = 0, t = 0; r < n; ++r)
+    if (r != i) rows[t++] = r;
+  for (int c = 0, t = 0; c < n; ++c)
+    if (c != j) cols[t++] = c;
+  const double minor = minor_determinant(a, n, rows.data(), cols.data(), n - 1);
+  return (i + j) % 2 == 0 ? minor : -minor;
+}
+
+double determinant_of(const double* a, int n) {
+  const std::array<int, 4> all{0, 1, 2, 3};
+  return minor_determinant(a, n, all.data(), all.data(), n);
+}
+
+// inv(A)(j, i) = C(i, j) / det(A), det(A) computed as determinant() does.
+Tensor inverse_of(const Tensor& m, int n) {
+  const double* a = m.floats();
+  const double det = determinant_of(a, n);
+  if (det == 0.0) throw Fault("inverse of a singular matrix (determinant is 0)");
   Tensor out(ComponentKind::Float, m.shape());
-  Eigen::Map<Eigen::Matrix<double, N, N, Eigen::RowMajor>>(out.mutable_floats()) = a.inverse();
+  double* o = out.mutable_floats();
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) o[j * n + i] = cofactor(a, n, i, j) / det;
   return out;
 }
 
@@ -133,16 +164,42 @@ int square_size(const Tensor& m) {
   return s.dim(0);
 }
 
+double magnitude(double x) { return std::fabs(x); }
+double magnitude(const Complex& x) { return std::abs(x); }
+
+// Gaussian elimination with partial pivoting (the first row of largest magnitude), then back
+// substitution; a pivot at or below n * epsilon * max |a_ij| means the matrix is singular.
 template <class T>
 Tensor solve_typed(const Tensor& a, const Tensor& b, const T* ad, const T* bd,
                    T* (Tensor::*out)()) {
-  int n = square_size(a);
+  const int n = square_size(a);
   require(b.size() == static_cast<size_t>(n), "solve: vector length does not match the matrix");
-  Eigen::FullPivLU<Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>> lu(ConstMap<T>(ad, n, n));
-  if (!lu.isInvertible()) throw Fault("solve with a singular matrix");
+  std::vector<T> m(ad, ad + static_cast<size_t>(n) * n), r(bd, bd + n);
+  double largest = 0.0;
+  for (const T& v : m) largest = std::fmax(largest, magnitude(v));
+  const double tiny = n * std::numeric_limits<double>::epsilon() * largest;
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    for (int i = k + 1; i < n; ++i)
+      if (magnitude(m[i * n + k]) > magnitude(m[p * n + k])) p = i;
+    if (!(magnitude(m[p * n + k]) > tiny)) throw Fault("solve with a singular matrix");
+    if (p != k) {
+      for (int j = 0; j < n; ++j) std::swap(m[k * n + j], m[p * n + j]);
+      std::swap(r[k], r[p]);
+    }
+    for (int i = k + 1; i < n; ++i) {
+      const T f = m[i * n + k] / m[k * n + k];
+      for (int j = k + 1; j < n; ++j) m[i * n + j] -= f * m[k * n + j];
+      r[i] -= f * r[k];
+    }
+  }
   Tensor x(a.kind(), Shape{n});
-  Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>>((x.*out)(), n) =
-      lu.solve(Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>>(bd, n));
+  T* xs = (x.*out)();
+  for (int i = n - 1; i >= 0; --i) {
+    T s = r[i];
+    for (int j = i + 1; j < n; ++j) s -= m[i * n + j] * xs[j];
+    xs[i] = s / m[i * n + i];
+  }
   return x;
 }
 
@@ -242,22 +299,16 @@ Tensor transpose(const Tensor& m) {
 
 double determinant(const Tensor& m) {
   require(m.kind() == ComponentKind::Float, "determinant of a non-float matrix");
-  switch (square_size(m)) {
-    case 2: return fixed<2>(m).determinant();
-    case 3: return fixed<3>(m).determinant();
-    case 4: return fixed<4>(m).determinant();
-    default: throw Fault("determinant of a matrix that is not 2x2, 3x3 or 4x4");
-  }
+  const int n = square_size(m);
+  if (n < 2 || n > 4) throw Fault("determinant of a matrix that is not 2x2, 3x3 or 4x4");
+  return determinant_of(m.floats(), n);
 }
 
 Tensor inverse(const Tensor& m) {
   require(m.kind() == ComponentKind::Float, "inverse of a non-float matrix");
-  switch (square_size(m)) {
-    case 2: return inverse_fixed<2>(m);
-    case 3: return inverse_fixed<3>(m);
-    case 4: return inverse_fixed<4>(m);
-    default: throw Fault("inverse of a matrix that is not 2x2, 3x3 or 4x4");
-  }
+  const int n = square_size(m);
+  if (n < 2 || n > 4) throw Fault("inverse of a matrix that is not 2x2, 3x3 or 4x4");
+  return inverse_of(m, n);
 }
 
 Tensor solve(const Tensor& a, const Tensor& b) {

@@ -1,6 +1,7 @@
-// Small dense linear algebra on runtime tensors (Eigen underneath): blocked/unblocked
-// conversion, products, transpose, determinants, inverses and dense solves. Every function
-// throws Fault for a run-time condition (singular matrix, mismatched shapes).
+// Small dense linear algebra on runtime tensors (plain loops in the order docs/arithmetic.md
+// states): blocked/unblocked conversion, products, transpose, determinants, inverses and
+// dense solves. Every function throws Fault for a run-time condition (singular matrix,
+// mismatched shapes).
 #pragma once
 
 #include "runtime/tensor.h"
