@@ -148,7 +148,9 @@ Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
   const Value& t = operand(*r.base, scratch);
   if (t.kind() != Value::Kind::Tuple) fail(r.span, "tuple read of a value that is not a tuple");
   int k = r.member_index;
-  if (r.index) {
+  if (const auto* lit = r.index ? r.index->as<ast::IntLit>() : nullptr) {
+    k = static_cast<int>(lit->value);  // `p(1)`: the common, constant case
+  } else if (r.index) {
     Value i = eval(*r.index);
     k = i.as_int();
   }

@@ -70,11 +70,7 @@ Shape Shape::logical() const {
   return of(dims);
 }
 
-size_t Shape::size() const {
-  size_t n = 1;
-  for (int i = 0; i < rank_; ++i) n *= static_cast<size_t>(dims_[i]);
-  return n;
-}
+
 
 size_t Shape::outer_count() const {
   size_t n = 1;

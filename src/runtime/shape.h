@@ -49,7 +49,11 @@ class Shape {
   // The logical unblocked shape: dimension i is the product of dimension i of every level.
   Shape logical() const;
 
-  size_t size() const;         // number of components
+  size_t size() const {  // number of components
+    size_t n = 1;
+    for (int i = 0; i < rank_; ++i) n *= static_cast<size_t>(dims_[i]);
+    return n;
+  }
   size_t outer_count() const;  // number of blocks (components when unblocked)
   size_t block_size() const { return size() / outer_count(); }
 
