@@ -9,8 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "runtime/system_matrix.h"
-#include "runtime/tensor.h"
 #include "simit/set.h"
 #include "simit/tensor.h"
 
@@ -18,6 +16,10 @@ namespace simit {
 
 namespace api {
 class CompiledProgram;
+}
+namespace runtime {
+class SystemMatrix;
+class Tensor;
 }
 namespace interp {
 class Trap;
@@ -88,25 +90,47 @@ class RuntimeError : public Error {
   int line_;
 };
 
+// A dense result of a run (Function::result): its components row-major, global vectors block
+// after block, a scalar as one component. It shares the result, so copies are cheap.
+class Function;
+
+class DenseResult {
+ public:
+  DenseResult() = default;
+
+  ComponentKind kind() const;
+  size_t size() const;
+  // The components; the kind must match (ints for Int, floats for Float, ...).
+  const int32_t* ints() const;
+  const double* floats() const;
+  const bool* bools() const;
+  const double_complex* complexes() const;
+
+ private:
+  friend class Function;
+  explicit DenseResult(std::shared_ptr<const runtime::Tensor> t) : t_(std::move(t)) {}
+  std::shared_ptr<const runtime::Tensor> t_;
+};
+
 // A read-only view of an assembled system matrix (block CSR): `rows` × `cols` blocks of
 // `block_rows` × `block_cols` doubles. It shares the matrix, so it stays valid after later runs.
 class SystemMatrixView {
  public:
   SystemMatrixView() = default;
-  explicit SystemMatrixView(std::shared_ptr<const runtime::SystemMatrix> m) : m_(std::move(m)) {}
 
-  int rows() const { return m_->rows(); }
-  int cols() const { return m_->cols(); }
-  int block_rows() const { return m_->block_rows(); }
-  int block_cols() const { return m_->block_cols(); }
-  std::span<const int32_t> row_ptr() const { return m_->pattern().row_ptr(); }
-  std::span<const int32_t> col_idx() const { return m_->pattern().col_idx(); }
-  std::span<const double> values() const { return {m_->values(), m_->value_count()}; }
+  int rows() const;
+  int cols() const;
+  int block_rows() const;
+  int block_cols() const;
+  std::span<const int32_t> row_ptr() const;
+  std::span<const int32_t> col_idx() const;
+  std::span<const double> values() const;
   // Component (i, j) of the unblocked matrix (zero outside the pattern).
-  double operator()(int64_t i, int64_t j) const { return m_->component(i, j); }
-  const runtime::SystemMatrix& matrix() const { return *m_; }
+  double operator()(int64_t i, int64_t j) const;
 
  private:
+  friend class Function;
+  explicit SystemMatrixView(std::shared_ptr<const runtime::SystemMatrix> m) : m_(std::move(m)) {}
   std::shared_ptr<const runtime::SystemMatrix> m_;
 };
 
@@ -156,7 +180,7 @@ class Function {
 
   // A result of the last run: a dense tensor (global vectors flat, block after block; scalars
   // as one component), or a system matrix.
-  runtime::Tensor result(const std::string& name) const;
+  DenseResult result(const std::string& name) const;
   SystemMatrixView matrix(const std::string& name) const;
 
   // Time accounting of the runs since compile() or reset_stats() (cheap, always on): the rest

@@ -4,6 +4,7 @@
 
 #include "runtime/mesh/mesh.h"
 #include "scene/scene_run.h"
+#include "scene/scene_sets.h"
 
 namespace simit::scene {
 
@@ -33,7 +34,9 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
 
 const std::string& Scene::program_path() const { return impl_->file->program_path; }
 
-const frontend::ast::Program& Scene::program() const { return impl_->file->program->program(); }
+const frontend::ast::Program& SceneAccess::program(const Scene& scene) {
+  return scene.impl_->file->program->program();
+}
 
 int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const SceneOptions& o = impl_->options;
@@ -62,7 +65,8 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   return 0;
 }
 
-std::optional<SceneSets> Scene::build(std::ostream& err) {
+std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
+  const std::unique_ptr<Scene::Impl>& impl_ = scene.impl_;
   auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes);
   try {
     run->build();
@@ -99,7 +103,7 @@ std::optional<SceneSets> load_scene_sets(const std::string& path, bool float32, 
   options.float32 = float32;
   std::shared_ptr<Scene> scene = Scene::open(options, err);
   if (!scene) return std::nullopt;
-  std::optional<SceneSets> sets = scene->build(err);
+  std::optional<SceneSets> sets = SceneAccess::build(*scene, err);
   if (sets) sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
                   scene, sets->owner);
   return sets;

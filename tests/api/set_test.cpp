@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "api_test_util.h"
+#include "api/set_access.h"
 #include "simit/simit.h"
 
 namespace {
@@ -32,7 +33,7 @@ TEST(ApiSet, VertexSetElementsAndScalarFields) {
   EXPECT_FALSE(bool(pinned(b)));
   // The handle reads and writes the set's own storage.
   EXPECT_EQ(static_cast<double*>(nodes.field_data("mass"))[1], 4.0);
-  EXPECT_EQ(nodes.runtime().field("mass").data<double>()[0], 2.5);
+  EXPECT_EQ(simit::api::SetAccess::of(nodes).field("mass").data<double>()[0], 2.5);
 }
 
 TEST(ApiSet, VectorAndMatrixFieldsAreRowMajorViews) {
@@ -49,7 +50,7 @@ TEST(ApiSet, VectorAndMatrixFieldsAreRowMajorViews) {
   EXPECT_EQ(m(e)(0, 2), 3.0);
   EXPECT_EQ(m(e)(1, 0), 4.0);
   m(e)(1, 2) = 60.0;
-  EXPECT_EQ(s.runtime().field("m").data<double>()[5], 60.0);
+  EXPECT_EQ(simit::api::SetAccess::of(s).field("m").data<double>()[5], 60.0);
   std::vector<double> values = {9, 8, 7};
   pos.set(e, values);
   EXPECT_EQ(pos(e)(2), 7.0);
