@@ -21,9 +21,6 @@ namespace runtime {
 class SystemMatrix;
 class Tensor;
 }
-namespace interp {
-class Trap;
-}
 
 // Settings of one Program and the Functions compiled from it (there is no process-wide
 // configuration).
@@ -39,9 +36,6 @@ struct Options {
   bool check_finite = false;
   // Where `print` writes; null means standard output.
   std::ostream* out = nullptr;
-  // The interpreter's statement trap point switch (interp/hook.h), for a host that debugs
-  // or interrupts runs (Ctrl-C); null when unused.
-  interp::Trap* trap = nullptr;
 };
 
 // Options from the original's `init(backend, floatSize)` spelling ("cpu", "interpreter",

@@ -11,10 +11,6 @@
 #include <utility>
 #include <vector>
 
-namespace simit::interp {
-class Trap;
-}
-
 namespace simit::scene {
 
 struct SceneOptions {
@@ -26,10 +22,8 @@ struct SceneOptions {
   bool float32 = false;
   bool check_finite = false;
   bool progress_line = false;  // rewrite one progress line (a terminal) instead of plain lines
-  // simit debug: no output files, no timings (its transcript must be reproducible), and the
-  // interpreter's trap point switched through this (interp/hook.h).
+  // No output files and no timings (simit debug: its transcript must be reproducible).
   bool quiet = false;
-  interp::Trap* trap = nullptr;
 };
 
 class Scene {

@@ -253,7 +253,6 @@ void Function::Impl::init() {
   eo.float32 = options.float_size == 4;
   eo.check_finite = options.check_finite;
   eo.out = options.out;
-  eo.trap = options.trap;
   engine = std::make_unique<api::Engine>(loaded, eo);
   topology.clear();
   try {

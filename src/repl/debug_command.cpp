@@ -113,8 +113,7 @@ bool DebugSession::open() {
     scene_options_.file = options_.file;
     scene_options_.float32 = options_.float32;
     scene_options_.quiet = true;
-    scene_options_.trap = &debugger_.trap();
-    scene_ = scene::Scene::open(scene_options_, err_);
+    scene_ = scene::SceneAccess::open(scene_options_, &debugger_.trap(), err_);
     if (!scene_) return false;
     debugger_.set_program(&scene::SceneAccess::program(*scene_),
                           {{1, fs::path(scene_->program_path()).filename().string(), 1}});

@@ -12,6 +12,7 @@ struct Scene::Impl {
   SceneOptions options;
   std::unique_ptr<SceneFile> file;
   MeshCache meshes;  // read once, shared by every run
+  interp::Trap* trap = nullptr;
 };
 
 Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -34,6 +35,13 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
 
 const std::string& Scene::program_path() const { return impl_->file->program_path; }
 
+std::unique_ptr<Scene> SceneAccess::open(const SceneOptions& options, interp::Trap* trap,
+                                         std::ostream& err) {
+  std::unique_ptr<Scene> scene = Scene::open(options, err);
+  if (scene) scene->impl_->trap = trap;
+  return scene;
+}
+
 const frontend::ast::Program& SceneAccess::program(const Scene& scene) {
   return scene.impl_->file->program->program();
 }
@@ -42,7 +50,7 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const SceneOptions& o = impl_->options;
   const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
   try {
-    SceneRun run(*impl_->file, o, impl_->meshes);
+    SceneRun run(*impl_->file, o, impl_->meshes, impl_->trap);
     run.build();
     run.run(count, out);
   } catch (const SceneError& e) {
@@ -67,7 +75,7 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
 
 std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
   const std::unique_ptr<Scene::Impl>& impl_ = scene.impl_;
-  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes);
+  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes, impl_->trap);
   try {
     run->build();
   } catch (const SceneError& e) {

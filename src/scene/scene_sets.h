@@ -16,6 +16,9 @@
 namespace simit::frontend::ast {
 struct Program;
 }
+namespace simit::interp {
+class Trap;
+}
 
 namespace simit::scene {
 
@@ -33,6 +36,10 @@ struct SceneSets {
 };
 
 struct SceneAccess {
+  // Scene::open, with every run's statements under the trap point switched through `trap`
+  // (interp/hook.h: the step debugger).
+  static std::unique_ptr<Scene> open(const SceneOptions& options, interp::Trap* trap,
+                                     std::ostream& err);
   // The compiled program the runs execute (the debugger resolves breakpoints against it).
   static const frontend::ast::Program& program(const Scene& scene);
   // Builds the sets afresh and reads the tensors, running nothing; nullopt after reporting a

@@ -138,4 +138,17 @@ TEST(ApiSet, PrintsASummary) {
   EXPECT_TRUE(contains(os.str(), "x (float 3)"));
 }
 
+// A field described at run time (simit::FieldType) is the same field a typed handle reaches.
+TEST(ApiSet, FieldsDescribedAtRunTime) {
+  simit::Set s("points");
+  s.add_many(2);
+  s.add_field("x", simit::FieldType{simit::ComponentKind::Float, {3}, false});
+  simit::FieldRef<double, 3> x = s.get_field<double, 3>("x");
+  x.set(simit::ElementRef(1), {1.0, 2.0, 3.0});
+  EXPECT_EQ(x(simit::ElementRef(1))(2), 3.0);
+  EXPECT_EQ(x.data()[5], 3.0);
+  EXPECT_THROW((s.get_field<float, 3>("x")), simit::Error);
+  EXPECT_THROW(x.get(simit::ElementRef(2)), simit::Error);
+}
+
 }  // namespace
