@@ -84,10 +84,10 @@ class RuntimeError : public Error {
   int line_;
 };
 
-// A dense result of a run (Function::result): its components row-major, global vectors block
-// after block, a scalar as one component. It shares the result, so copies are cheap.
 class Function;
 
+// A dense result of a run (Function::result): its components row-major, global vectors block
+// after block, a scalar as one component. It shares the result, so copies are cheap.
 class DenseResult {
  public:
   DenseResult() = default;

@@ -38,7 +38,6 @@ class FieldRef {
   static constexpr size_t components = View::size;
 
   FieldRef() = default;
-  FieldRef(const Set* set, int field) : set_(set), field_(field) {}
 
   bool defined() const { return set_ != nullptr; }
   const std::string& name() const { return detail::field_name(*set_, field_); }
@@ -74,6 +73,10 @@ class FieldRef {
     if (!set_) throw Error("use of an undefined FieldRef");
     return static_cast<T*>(detail::field_element(*set_, field_, e));
   }
+  // Made by Set::add_field and Set::get_field only, which check that T and dims are the
+  // field's type (the storage is reached untyped).
+  friend class Set;
+  FieldRef(const Set* set, int field) : set_(set), field_(field) {}
   const Set* set_ = nullptr;
   int field_ = -1;
 };

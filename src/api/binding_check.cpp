@@ -165,7 +165,8 @@ std::vector<std::string> check_tensor(const std::string& what, const Type& type,
               "dimensions)"};
     return {what + " has type " + spelled + ", which a host tensor cannot hold"};
   }
-  std::string why = mismatch(*want, runtime_kind(tensor.kind), tensor.single, tensor.dims, float_size);
+  std::string why =
+      mismatch(*want, runtime_kind(tensor.kind), tensor.single, tensor.dims, float_size);
   if (why.empty()) return {};
   return {what + " is " + spelled + " in the program but the host tensor (" +
           host_type_name(runtime_kind(tensor.kind), tensor.single, tensor.dims) + ") " + why};
