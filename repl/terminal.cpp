@@ -14,8 +14,7 @@
 #include <iostream>
 #include <optional>
 
-#include "session.h"
-#include "sigint.h"
+#include "simit/repl.h"
 
 #ifdef SIMIT_HAVE_READLINE
 #include <readline/history.h>
@@ -26,8 +25,8 @@ namespace simit::repl {
 namespace {
 
 // Ctrl-C stops the session's computation; at the prompt it abandons the line being typed.
-// The handler only sets flags (Session::interrupt is async-signal-safe).
-Session* g_interruptible = nullptr;
+// The handler only sets flags (ReplSession::interrupt is async-signal-safe).
+ReplSession* g_interruptible = nullptr;
 volatile std::sig_atomic_t g_sigint = 0;
 
 void on_sigint(int) {
@@ -35,19 +34,31 @@ void on_sigint(int) {
   if (g_interruptible) g_interruptible->interrupt();
 }
 
+// Installed for the session's lifetime, restored after. SA_RESTART: a blocking read goes on;
+// select() still returns EINTR, which the prompt uses.
 class SigintHandler {
  public:
-  explicit SigintHandler(Session& session) : handler_((g_interruptible = &session, on_sigint)) {}
-  ~SigintHandler() { g_interruptible = nullptr; }
+  explicit SigintHandler(ReplSession& session) {
+    g_interruptible = &session;
+    struct sigaction sa {};
+    sa.sa_handler = on_sigint;
+    sa.sa_flags = SA_RESTART;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &previous_);
+  }
+  ~SigintHandler() {
+    sigaction(SIGINT, &previous_, nullptr);
+    g_interruptible = nullptr;
+  }
   SigintHandler(const SigintHandler&) = delete;
   SigintHandler& operator=(const SigintHandler&) = delete;
 
  private:
-  SigintScope handler_;
+  struct sigaction previous_ {};
 };
 
 #ifdef SIMIT_HAVE_READLINE
-Session* g_session = nullptr;
+ReplSession* g_session = nullptr;
 
 char* complete_one(const char* text, int state) {
   static std::vector<std::string> matches;
@@ -132,7 +143,7 @@ std::optional<std::string> read_line(const char* prompt, bool& interrupted) {
   return g_line;
 }
 
-int run_terminal(Session& session) {
+int run_terminal(ReplSession& session) {
   g_session = &session;
   rl_catch_signals = 0;  // our handler: Ctrl-C must reach the session
   rl_attempted_completion_function = complete;
@@ -167,9 +178,8 @@ int run_terminal(Session& session) {
 
 }  // namespace
 
-int run_repl(const std::string& file, SceneLoader scenes) {
-  Session session(std::cout, std::cerr);
-  session.set_scene_loader(std::move(scenes));
+int run_repl(const std::string& file) {
+  ReplSession session(std::cout, std::cerr);
   SigintHandler sigint(session);
 #ifdef SIMIT_HAVE_READLINE
   const bool terminal = isatty(fileno(stdin)) && isatty(fileno(stdout));

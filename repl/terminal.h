@@ -4,13 +4,11 @@
 
 #include <string>
 
-#include "scene_data.h"
-
 namespace simit::repl {
 
 // Runs the REPL on stdin/stdout/stderr, loading `file` first when it is not empty (a
 // `.toml` file is loaded as a scene). Ctrl-C stops a running computation and returns to the
 // prompt. Returns the exit status (0).
-int run_repl(const std::string& file, SceneLoader scenes);
+int run_repl(const std::string& file);
 
 }  // namespace simit::repl

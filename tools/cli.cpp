@@ -4,19 +4,16 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "check_command.h"
-#include "debug_command.h"
-#include "interp_executor.h"
-#include "run_command.h"
-#include "scene_command.h"
-
 #include <unistd.h>
 
 #include <cstdio>
 #include <iostream>
-#include "test_runner.h"
+
+#include "scene_command.h"
+#include "simit/commands.h"
+#include "simit/testing.h"
 #ifdef SIMIT_HAVE_REPL
-#include "scene_loader.h"
+#include "simit/debug.h"
 #include "terminal.h"
 #endif
 
@@ -39,8 +36,7 @@ struct Commands {
   DebugOptions debug_options;
   CheckOptions check_options;
   std::vector<std::string> test_paths;
-  TestOptions test_options;
-  api::EngineOptions engine_options;  // how `simit test` runs %! tests and graph sections
+  TestCommandOptions test_options;  // how `simit test` runs %! tests and graph sections
   RunOptions run_options;
   SceneOptions scene_options;
 };
@@ -71,8 +67,8 @@ void add_test(CLI::App& app, Commands& c) {
       ->type_name("");
   c.test->add_flag("-v,--verbose", c.test_options.verbose,
                    "List every section with PASS, SKIP or FAIL (default: failures only)");
-  c.test->add_flag("--float32", c.engine_options.float32, "Run programs with 32-bit floats");
-  c.test->add_flag("--check-finite", c.engine_options.check_finite,
+  c.test->add_flag("--float32", c.test_options.float32, "Run programs with 32-bit floats");
+  c.test->add_flag("--check-finite", c.test_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
@@ -192,8 +188,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   }
 #ifdef SIMIT_HAVE_REPL
   if (c.debug->parsed()) return run_debug(c.debug_options, std::cin, out, err);
-  if (c.repl->parsed()) return repl::run_repl(c.repl_file, repl::load_scene);
-  if (app.get_subcommands().empty()) return repl::run_repl("", repl::load_scene);
+  if (c.repl->parsed()) return repl::run_repl(c.repl_file);
+  if (app.get_subcommands().empty()) return repl::run_repl("");
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
   if (c.run->parsed()) {
@@ -212,9 +208,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     c.run_options.args = c.run->remaining();
     return run_function(c.run_options, out, err);
   }
-  InterpExecutor executor(c.engine_options);
-  c.test_options.executor = &executor;
-  return run_tests(c.test_paths, c.test_options, out, err);
+  return run_test_command(c.test_paths, c.test_options, out, err);
 }
 
 }  // namespace simit::tools

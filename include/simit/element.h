@@ -10,8 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
-
-#include "runtime/set.h"
+#include <vector>
 
 namespace simit {
 
@@ -40,48 +39,60 @@ class ElementRef {
   int ident_ = -1;
 };
 
+// What a field or tensor component holds (the runtime's storage kinds a host can bind).
+enum class ComponentKind : uint8_t { Int, Float, Bool, Complex };
+
+// A field's type described at run time: component kind, dimensions (empty: a scalar) and
+// whether float components are stored as binary32.
+struct FieldType {
+  ComponentKind kind = ComponentKind::Float;
+  std::vector<int> dims;
+  bool single = false;
+  bool operator==(const FieldType&) const = default;
+};
+
 // The host types a field or tensor component may have, and how the runtime stores them.
 // `double` is Simit `float` at binary64, `float` is Simit `float` stored as binary32.
 template <class T>
 struct ComponentTraits;
 template <>
 struct ComponentTraits<double> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Float;
+  static constexpr ComponentKind kind = ComponentKind::Float;
   static constexpr bool single = false;
 };
 template <>
 struct ComponentTraits<float> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Float;
+  static constexpr ComponentKind kind = ComponentKind::Float;
   static constexpr bool single = true;
 };
 template <>
 struct ComponentTraits<int32_t> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Int;
+  static constexpr ComponentKind kind = ComponentKind::Int;
   static constexpr bool single = false;
 };
 template <>
 struct ComponentTraits<bool> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Bool;
+  static constexpr ComponentKind kind = ComponentKind::Bool;
   static constexpr bool single = false;
 };
 template <>
 struct ComponentTraits<double_complex> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Complex;
+  static constexpr ComponentKind kind = ComponentKind::Complex;
   static constexpr bool single = false;
 };
 template <>
 struct ComponentTraits<float_complex> {
-  static constexpr runtime::ComponentKind kind = runtime::ComponentKind::Complex;
+  static constexpr ComponentKind kind = ComponentKind::Complex;
   static constexpr bool single = true;
 };
 
 template <class T>
 concept Component = requires { ComponentTraits<T>::kind; };
 
-// The runtime field type of a host field `FieldRef<T, dims...>`.
+// The field type of a host field `FieldRef<T, dims...>`.
 template <Component T, int... dims>
-runtime::FieldType field_type_of() {
-  return runtime::FieldType{ComponentTraits<T>::kind, {dims...}, ComponentTraits<T>::single};
+FieldType field_type_of() {
+  return FieldType{ComponentTraits<T>::kind, {dims...}, ComponentTraits<T>::single};
 }
 
 // A view of one tensor of fixed dimensions stored row-major at `data` (a field value of one

@@ -9,8 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "runtime/system_matrix.h"
-#include "runtime/tensor.h"
 #include "simit/set.h"
 #include "simit/tensor.h"
 
@@ -19,8 +17,9 @@ namespace simit {
 namespace api {
 class CompiledProgram;
 }
-namespace interp {
-class Trap;
+namespace runtime {
+class SystemMatrix;
+class Tensor;
 }
 
 // Settings of one Program and the Functions compiled from it (there is no process-wide
@@ -37,9 +36,6 @@ struct Options {
   bool check_finite = false;
   // Where `print` writes; null means standard output.
   std::ostream* out = nullptr;
-  // The interpreter's statement trap point switch (interp/hook.h), for a host that debugs
-  // or interrupts runs (Ctrl-C); null when unused.
-  interp::Trap* trap = nullptr;
 };
 
 // Options from the original's `init(backend, floatSize)` spelling ("cpu", "interpreter",
@@ -88,6 +84,28 @@ class RuntimeError : public Error {
   int line_;
 };
 
+class Function;
+
+// A dense result of a run (Function::result): its components row-major, global vectors block
+// after block, a scalar as one component. It shares the result, so copies are cheap.
+class DenseResult {
+ public:
+  DenseResult() = default;
+
+  ComponentKind kind() const;
+  size_t size() const;
+  // The components; the kind must match (ints for Int, floats for Float, ...).
+  const int32_t* ints() const;
+  const double* floats() const;
+  const bool* bools() const;
+  const double_complex* complexes() const;
+
+ private:
+  friend class Function;
+  explicit DenseResult(std::shared_ptr<const runtime::Tensor> t) : t_(std::move(t)) {}
+  std::shared_ptr<const runtime::Tensor> t_;
+};
+
 // A read-only view of an assembled system matrix (block CSR): `rows` × `cols` blocks of
 // `block_rows` × `block_cols` components: doubles (values()) for float matrices, int32s
 // (ints(); 0 or 1 for bool) for int and bool ones, complexes() for complex ones. It shares the
@@ -95,29 +113,25 @@ class RuntimeError : public Error {
 class SystemMatrixView {
  public:
   SystemMatrixView() = default;
-  explicit SystemMatrixView(std::shared_ptr<const runtime::SystemMatrix> m) : m_(std::move(m)) {}
 
-  int rows() const { return m_->rows(); }
-  int cols() const { return m_->cols(); }
-  int block_rows() const { return m_->block_rows(); }
-  int block_cols() const { return m_->block_cols(); }
-  std::span<const int32_t> row_ptr() const { return m_->pattern().row_ptr(); }
-  std::span<const int32_t> col_idx() const { return m_->pattern().col_idx(); }
-  runtime::ComponentKind kind() const { return m_->kind(); }
+  int rows() const;
+  int cols() const;
+  int block_rows() const;
+  int block_cols() const;
+  std::span<const int32_t> row_ptr() const;
+  std::span<const int32_t> col_idx() const;
+  ComponentKind kind() const;
   // The components: exactly one of these is non-empty (for a matrix with stored blocks).
-  std::span<const double> values() const {
-    return {m_->values(), m_->values() ? m_->value_count() : 0};
-  }
-  std::span<const int32_t> ints() const { return {m_->ints(), m_->ints() ? m_->value_count() : 0}; }
-  std::span<const runtime::Complex> complexes() const {
-    return {m_->complexes(), m_->complexes() ? m_->value_count() : 0};
-  }
+  std::span<const double> values() const;
+  std::span<const int32_t> ints() const;
+  std::span<const double_complex> complexes() const;
   // Component (i, j) of the unblocked matrix (zero outside the pattern; ints converted;
-  // throws runtime::Fault for a complex matrix).
-  double operator()(int64_t i, int64_t j) const { return m_->component(i, j); }
-  const runtime::SystemMatrix& matrix() const { return *m_; }
+  // throws for a complex matrix).
+  double operator()(int64_t i, int64_t j) const;
 
  private:
+  friend class Function;
+  explicit SystemMatrixView(std::shared_ptr<const runtime::SystemMatrix> m) : m_(std::move(m)) {}
   std::shared_ptr<const runtime::SystemMatrix> m_;
 };
 
@@ -167,7 +181,7 @@ class Function {
 
   // A result of the last run: a dense tensor (global vectors flat, block after block; scalars
   // as one component), or a system matrix.
-  runtime::Tensor result(const std::string& name) const;
+  DenseResult result(const std::string& name) const;
   SystemMatrixView matrix(const std::string& name) const;
 
   // Time accounting of the runs since compile() or reset_stats() (cheap, always on): the rest

@@ -8,12 +8,26 @@
 #include <string>
 #include <vector>
 
-#include "runtime/set.h"
 #include "simit/element.h"
 
 namespace simit {
 
 class Set;
+namespace runtime {
+class Set;
+}
+namespace api {
+struct SetAccess;
+}
+
+// FieldRef's access to a set's storage, out of line (src/api/set.cpp) so that the runtime's
+// representation stays behind the API.
+namespace detail {
+const std::string& field_name(const Set& set, int field);
+void* field_data(const Set& set, int field);
+// Element e's value; throws Error naming the set and field when e is not one of its elements.
+void* field_element(const Set& set, int field, ElementRef e);
+}  // namespace detail
 
 // A typed handle to one field of one set. It names the field by (set, index), not by a
 // pointer into the storage, so it stays valid when the set grows.
@@ -24,10 +38,9 @@ class FieldRef {
   static constexpr size_t components = View::size;
 
   FieldRef() = default;
-  FieldRef(runtime::Set* set, int field) : set_(set), field_(field) {}
 
   bool defined() const { return set_ != nullptr; }
-  const std::string& name() const { return set_->field(field_).name(); }
+  const std::string& name() const { return detail::field_name(*set_, field_); }
 
   // A view of element e's value (reads and writes the set's storage directly).
   View get(ElementRef e) const { return View(at(e)); }
@@ -52,18 +65,19 @@ class FieldRef {
   }
 
   // The whole array: element 0's components, then element 1's, ... (moves when the set grows).
-  T* data() const { return set_->field(field_).template data<T>(); }
+  T* data() const { return static_cast<T*>(detail::field_data(*set_, field_)); }
   T* getData() const { return data(); }
 
  private:
   T* at(ElementRef e) const {
     if (!set_) throw Error("use of an undefined FieldRef");
-    if (!e.defined() || e.ident() >= set_->size())
-      throw Error(set_->describe() + " has no element " + std::to_string(e.ident()) +
-                  " (field '" + name() + "')");
-    return set_->field(field_).template at<T>(e.ident());
+    return static_cast<T*>(detail::field_element(*set_, field_, e));
   }
-  runtime::Set* set_ = nullptr;
+  // Made by Set::add_field and Set::get_field only, which check that T and dims are the
+  // field's type (the storage is reached untyped).
+  friend class Set;
+  FieldRef(const Set* set, int field) : set_(set), field_(field) {}
+  const Set* set_ = nullptr;
   int field_ = -1;
 };
 
@@ -122,11 +136,11 @@ class Set {
   Set& operator=(const Set&) = delete;
   ~Set();
 
-  const std::string& name() const { return impl_->name(); }
-  int size() const { return impl_->size(); }
-  int cardinality() const { return impl_->arity(); }
-  Kind kind() const { return impl_->is_grid() ? Grid : Unstructured; }
-  bool is_homogeneous() const { return impl_->homogeneous(); }
+  const std::string& name() const;
+  int size() const;
+  int cardinality() const;
+  Kind kind() const;
+  bool is_homogeneous() const;
 
   // --- elements ------------------------------------------------------------------------
   ElementRef add();  // vertex sets
@@ -146,35 +160,31 @@ class Set {
   ElementRef endpoint(ElementRef edge, int k) const;
   std::vector<ElementRef> endpoints(ElementRef edge) const;
   Set* endpoint_set(int k) const;
-  const int32_t* endpoints_data() const { return impl_->endpoints(); }
+  const int32_t* endpoints_data() const;
 
   // --- fields --------------------------------------------------------------------------
   template <Component T, int... dims>
   FieldRef<T, dims...> add_field(const std::string& name) {
-    return FieldRef<T, dims...>(impl_.get(), add_field(name, field_type_of<T, dims...>()));
+    return FieldRef<T, dims...>(this, add_field(name, field_type_of<T, dims...>()));
   }
   // A field described at run time (choice 2 of API.md §8); returns its index.
-  int add_field(const std::string& name, const runtime::FieldType& type);
+  int add_field(const std::string& name, const FieldType& type);
   // An existing field; its component type and dimensions must be exactly T and dims.
   template <Component T, int... dims>
   FieldRef<T, dims...> get_field(const std::string& name) const {
-    return FieldRef<T, dims...>(impl_.get(), require_field(name, field_type_of<T, dims...>()));
+    return FieldRef<T, dims...>(this, require_field(name, field_type_of<T, dims...>()));
   }
-  bool has_field(const std::string& name) const { return impl_->field_index(name) >= 0; }
+  bool has_field(const std::string& name) const;
   void* field_data(const std::string& name);
 
   // --- grids ---------------------------------------------------------------------------
-  const std::vector<int>& grid_extents() const { return impl_->extents(); }
+  const std::vector<int>& grid_extents() const;
   ElementRef grid_point(std::span<const int> coords) const;
   ElementRef grid_point(std::initializer_list<int> coords) const {
     return grid_point(std::span<const int>(coords.begin(), coords.size()));
   }
   std::vector<int> grid_point_coords(ElementRef point) const;
   ElementRef grid_edge(std::span<const int> coords, int axis) const;
-
-  // The runtime storage itself (what programs read and write; shared, never copied).
-  runtime::Set& runtime() { return *impl_; }
-  const runtime::Set& runtime() const { return *impl_; }
 
   // --- the spellings of the original API ---------------------------------------------------
   template <Component T, int... dims>
@@ -200,7 +210,8 @@ class Set {
   std::vector<int> getGridPointCoords(ElementRef p) const { return grid_point_coords(p); }
 
  private:
-  int require_field(const std::string& name, const runtime::FieldType& type) const;
+  friend struct api::SetAccess;  // the engine binds the storage itself (shared, never copied)
+  int require_field(const std::string& name, const FieldType& type) const;
   void check_element(ElementRef e, const char* what) const;
 
   std::unique_ptr<runtime::Set> impl_;

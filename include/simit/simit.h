@@ -8,7 +8,7 @@
 //     problem by extern and field name; run-time errors of the program throw RuntimeError.
 //     All derive from simit::Error.
 //  2. Fields are typed at compile time (FieldRef<T, dims...>) and may also be described at
-//     run time (Set::add_field(name, runtime::FieldType)).
+//     run time (Set::add_field(name, FieldType)).
 //  3. Precision is a per-Program option (Options::float_size, default 8 = binary64); there is
 //     no process-wide state. simit::init() only builds an Options value.
 //  4. Batch construction: Set::add_many(n) returns the range of new handles.
@@ -20,7 +20,7 @@
 //     externs its Simit type names (checked at init, when all are bound).
 //     Host tensors (Tensor<T, dims...>) bound to externs, parameters and results are copied in
 //     before and out after each run; sets are never copied (the interpreter reads and writes
-//     the runtime::Set inside simit::Set). Tensors whose type has set dimensions cannot be
+//     the runtime storage inside simit::Set). Tensors whose type has set dimensions cannot be
 //     bound; results of that kind are read after a run with Function::result()/matrix().
 //     Only the externs the function actually uses (directly or through calls and maps) must
 //     be bound; init() and run() name every one that is not.

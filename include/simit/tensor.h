@@ -15,7 +15,7 @@ namespace simit {
 // dimensions (empty: a scalar) and where its row-major components live. The host owns the
 // storage, which must outlive the binding.
 struct TensorSlot {
-  runtime::ComponentKind kind = runtime::ComponentKind::Float;
+  ComponentKind kind = ComponentKind::Float;
   bool single = false;  // float / float_complex components (binary32)
   std::vector<int> dims;
   void* data = nullptr;

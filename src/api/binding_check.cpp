@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "api/set_access.h"
 #include "interp/set_binding.h"
 
 namespace simit::api {
@@ -164,10 +165,11 @@ std::vector<std::string> check_tensor(const std::string& what, const Type& type,
               "dimensions)"};
     return {what + " has type " + spelled + ", which a host tensor cannot hold"};
   }
-  std::string why = mismatch(*want, tensor.kind, tensor.single, tensor.dims, float_size);
+  std::string why =
+      mismatch(*want, runtime_kind(tensor.kind), tensor.single, tensor.dims, float_size);
   if (why.empty()) return {};
   return {what + " is " + spelled + " in the program but the host tensor (" +
-          host_type_name(tensor.kind, tensor.single, tensor.dims) + ") " + why};
+          host_type_name(runtime_kind(tensor.kind), tensor.single, tensor.dims) + ") " + why};
 }
 
 std::string host_type_name(ComponentKind kind, bool single, const std::vector<int>& dims) {

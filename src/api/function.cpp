@@ -5,6 +5,7 @@
 #include "binding_check.h"
 #include "tensor_values.h"
 #include "api/engine.h"
+#include "api/set_access.h"
 #include "runtime/fault.h"
 #include "simit/program.h"
 
@@ -14,7 +15,7 @@ namespace ast = frontend::ast;
 using frontend::IndexSet;
 using frontend::Type;
 using interp::Value;
-using runtime::ComponentKind;
+using RtKind = runtime::ComponentKind;  // simit::ComponentKind is the host-facing one
 
 namespace {
 
@@ -44,7 +45,7 @@ runtime::Shape shape_of(const Type& t) {
 
 template <class T>
 T component(const TensorSlot& s, size_t i) {
-  if (s.kind == ComponentKind::Float)
+  if (s.kind == simit::ComponentKind::Float)
     return s.single ? static_cast<T>(static_cast<const float*>(s.data)[i])
                     : static_cast<T>(static_cast<const double*>(s.data)[i]);
   return static_cast<const T*>(s.data)[i];
@@ -62,23 +63,23 @@ namespace api {
 // The host tensor's value as an interpreter value of type `t` (already checked to match).
 Value to_value(const TensorSlot& s, const Type& t) {
   if (t.kind == Type::Kind::Scalar) {
-    switch (s.kind) {
-      case ComponentKind::Int: return Value::of_int(component<int32_t>(s, 0));
-      case ComponentKind::Float: return Value::of_float(component<double>(s, 0));
-      case ComponentKind::Bool: return Value::of_bool(component<bool>(s, 0));
-      case ComponentKind::Complex: return Value::of_complex(complex_component(s, 0));
-      case ComponentKind::String: break;
+    switch (api::runtime_kind(s.kind)) {
+      case RtKind::Int: return Value::of_int(component<int32_t>(s, 0));
+      case RtKind::Float: return Value::of_float(component<double>(s, 0));
+      case RtKind::Bool: return Value::of_bool(component<bool>(s, 0));
+      case RtKind::Complex: return Value::of_complex(complex_component(s, 0));
+      case RtKind::String: break;
     }
     throw Error("string tensors cannot be bound");
   }
-  runtime::Tensor out(s.kind, shape_of(t));
+  runtime::Tensor out(api::runtime_kind(s.kind), shape_of(t));
   for (size_t i = 0; i < out.size(); ++i) {
-    switch (s.kind) {
-      case ComponentKind::Int: out.mutable_ints()[i] = component<int32_t>(s, i); break;
-      case ComponentKind::Float: out.mutable_floats()[i] = component<double>(s, i); break;
-      case ComponentKind::Bool: out.mutable_bools()[i] = component<bool>(s, i); break;
-      case ComponentKind::Complex: out.mutable_complexes()[i] = complex_component(s, i); break;
-      case ComponentKind::String: break;
+    switch (api::runtime_kind(s.kind)) {
+      case RtKind::Int: out.mutable_ints()[i] = component<int32_t>(s, i); break;
+      case RtKind::Float: out.mutable_floats()[i] = component<double>(s, i); break;
+      case RtKind::Bool: out.mutable_bools()[i] = component<bool>(s, i); break;
+      case RtKind::Complex: out.mutable_complexes()[i] = complex_component(s, i); break;
+      case RtKind::String: break;
     }
   }
   return Value::of_tensor(std::move(out));
@@ -89,22 +90,22 @@ void from_value(const Value& v, const TensorSlot& s) {
   if (!v.is_scalar() && !v.is_tensor()) return;
   runtime::Tensor t = v.to_tensor();
   for (size_t i = 0; i < t.size(); ++i) {
-    switch (s.kind) {
-      case ComponentKind::Int: static_cast<int32_t*>(s.data)[i] = t.ints()[i]; break;
-      case ComponentKind::Float:
+    switch (api::runtime_kind(s.kind)) {
+      case RtKind::Int: static_cast<int32_t*>(s.data)[i] = t.ints()[i]; break;
+      case RtKind::Float:
         if (s.single)
           static_cast<float*>(s.data)[i] = static_cast<float>(t.floats()[i]);
         else
           static_cast<double*>(s.data)[i] = t.floats()[i];
         break;
-      case ComponentKind::Bool: static_cast<bool*>(s.data)[i] = t.bools()[i]; break;
-      case ComponentKind::Complex:
+      case RtKind::Bool: static_cast<bool*>(s.data)[i] = t.bools()[i]; break;
+      case RtKind::Complex:
         if (s.single)
           static_cast<std::complex<float>*>(s.data)[i] = std::complex<float>(t.complexes()[i]);
         else
           static_cast<runtime::Complex*>(s.data)[i] = t.complexes()[i];
         break;
-      case ComponentKind::String: break;
+      case RtKind::String: break;
     }
   }
 }
@@ -194,12 +195,12 @@ void Function::bind(const std::string& name, Set& set) {
   Slot& s = im.slot(name);
   if (s.role != Slot::Role::Extern || !s.is_set())
     throw BindError({s.what() + " is " + frontend::to_string(*s.var->type) +
-                     ", not a set extern, but a set (" + set.runtime().describe() +
+                     ", not a set extern, but a set (" + api::SetAccess::of(set).describe() +
                      ") was bound to it"});
   std::vector<std::string> problems =
-      api::check_set(*s.var, set.runtime(), im.options.float_size);
+      api::check_set(*s.var, api::SetAccess::of(set), im.options.float_size);
   runtime::Set* previous = s.set;
-  s.set = &set.runtime();
+  s.set = &api::SetAccess::of(set);
   for (const std::string& p : im.endpoint_problems(s)) problems.push_back(p);
   if (!problems.empty()) {
     s.set = previous;
@@ -252,7 +253,6 @@ void Function::Impl::init() {
   eo.float32 = options.float_size == 4;
   eo.check_finite = options.check_finite;
   eo.out = options.out;
-  eo.trap = options.trap;
   engine = std::make_unique<api::Engine>(loaded, eo);
   topology.clear();
   try {
@@ -303,7 +303,7 @@ void Function::Impl::run() {
   }
 }
 
-runtime::Tensor Function::result(const std::string& name) const {
+DenseResult Function::result(const std::string& name) const {
   Impl& im = impl();
   const Slot& s = im.slot(name);
   if (s.role != Slot::Role::Result) throw Error("'" + name + "' is not a result of '" + im.func->name + "'");
@@ -312,7 +312,7 @@ runtime::Tensor Function::result(const std::string& name) const {
   if (v.kind() == Value::Kind::Matrix)
     throw Error("result '" + name + "' is a system matrix; read it with matrix()");
   if (!v.is_scalar() && !v.is_tensor()) throw Error("result '" + name + "' is not a tensor");
-  return v.to_tensor();
+  return DenseResult(std::make_shared<const runtime::Tensor>(v.to_tensor()));
 }
 
 RunStats Function::stats() const { return impl().stats; }

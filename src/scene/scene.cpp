@@ -4,6 +4,7 @@
 
 #include "runtime/mesh/mesh.h"
 #include "scene/scene_run.h"
+#include "scene/scene_sets.h"
 
 namespace simit::scene {
 
@@ -11,6 +12,7 @@ struct Scene::Impl {
   SceneOptions options;
   std::unique_ptr<SceneFile> file;
   MeshCache meshes;  // read once, shared by every run
+  interp::Trap* trap = nullptr;
 };
 
 Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -33,13 +35,22 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
 
 const std::string& Scene::program_path() const { return impl_->file->program_path; }
 
-const frontend::ast::Program& Scene::program() const { return impl_->file->program->program(); }
+std::unique_ptr<Scene> SceneAccess::open(const SceneOptions& options, interp::Trap* trap,
+                                         std::ostream& err) {
+  std::unique_ptr<Scene> scene = Scene::open(options, err);
+  if (scene) scene->impl_->trap = trap;
+  return scene;
+}
+
+const frontend::ast::Program& SceneAccess::program(const Scene& scene) {
+  return scene.impl_->file->program->program();
+}
 
 int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const SceneOptions& o = impl_->options;
   const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
   try {
-    SceneRun run(*impl_->file, o, impl_->meshes);
+    SceneRun run(*impl_->file, o, impl_->meshes, impl_->trap);
     run.build();
     run.run(count, out);
   } catch (const SceneError& e) {
@@ -62,8 +73,9 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   return 0;
 }
 
-std::optional<SceneSets> Scene::build(std::ostream& err) {
-  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes);
+std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
+  const std::unique_ptr<Scene::Impl>& impl_ = scene.impl_;
+  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes, impl_->trap);
   try {
     run->build();
   } catch (const SceneError& e) {
@@ -99,7 +111,7 @@ std::optional<SceneSets> load_scene_sets(const std::string& path, bool float32, 
   options.float32 = float32;
   std::shared_ptr<Scene> scene = Scene::open(options, err);
   if (!scene) return std::nullopt;
-  std::optional<SceneSets> sets = scene->build(err);
+  std::optional<SceneSets> sets = SceneAccess::build(*scene, err);
   if (sets) sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
                   scene, sets->owner);
   return sets;

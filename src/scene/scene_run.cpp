@@ -85,7 +85,7 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.float32 = options_.float32;
   eo.check_finite = options_.check_finite;
   eo.out = &out;
-  eo.trap = options_.trap;
+  eo.trap = trap_;
   return eo;
 }
 

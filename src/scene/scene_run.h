@@ -28,8 +28,10 @@ struct RunFailure : std::runtime_error {
 
 class SceneRun {
  public:
-  SceneRun(const SceneFile& file, const SceneOptions& options, MeshCache& meshes)
-      : file_(file), options_(options), meshes_(meshes), output_(file, options) {}
+  // `trap`: the interpreter's trap point switch (the step debugger), or null.
+  SceneRun(const SceneFile& file, const SceneOptions& options, MeshCache& meshes,
+           interp::Trap* trap = nullptr)
+      : file_(file), options_(options), meshes_(meshes), trap_(trap), output_(file, options) {}
 
   // Reads [tensors] and builds [sets]. Throws SceneError.
   void build();
@@ -52,6 +54,7 @@ class SceneRun {
   const SceneFile& file_;
   const SceneOptions& options_;
   MeshCache& meshes_;
+  interp::Trap* trap_;
   BoundSets sets_;
   std::map<std::string, SceneTensor> tensors_;
   OutputSeries output_;

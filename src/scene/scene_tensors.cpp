@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "api/binding_check.h"
+#include "api/set_access.h"
 #include "api/tensor_values.h"
 
 namespace simit::scene {
@@ -28,7 +29,7 @@ struct Storage {
                  : ft.kind == ComponentKind::Bool ? static_cast<void*>(bools.get())
                  : ft.single                      ? static_cast<void*>(floats.data())
                                                   : static_cast<void*>(doubles.data());
-    return TensorSlot{ft.kind, ft.single, ft.dims, data};
+    return TensorSlot{api::host_kind(ft.kind), ft.single, ft.dims, data};
   }
 };
 

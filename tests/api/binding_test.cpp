@@ -133,6 +133,8 @@ TEST(ApiBind, ParametersAndResults) {
   EXPECT_EQ(b(1), 4.0);
   EXPECT_EQ(double(s), 3.5);
   EXPECT_EQ(twice.result("s").floats()[0], 3.5);
+  EXPECT_EQ(twice.result("s").kind(), simit::ComponentKind::Float);
+  EXPECT_EQ(twice.result("s").size(), 1u);
   EXPECT_THROW(twice.matrix("b"), simit::Error);
 }
 

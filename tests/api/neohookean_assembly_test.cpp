@@ -109,7 +109,7 @@ struct Pyramid {
   }
   Eigen::VectorXd forces() {
     force_only.run();
-    simit::runtime::Tensor f = force_only.result("f");
+    simit::DenseResult f = force_only.result("f");
     EXPECT_EQ(f.size(), 3u * kVerts);
     return Eigen::Map<const Eigen::VectorXd>(f.floats(), 3 * kVerts);
   }

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "api_test_util.h"
+#include "api/set_access.h"
 #include "simit/simit.h"
 
 namespace {
@@ -32,7 +33,7 @@ TEST(ApiSet, VertexSetElementsAndScalarFields) {
   EXPECT_FALSE(bool(pinned(b)));
   // The handle reads and writes the set's own storage.
   EXPECT_EQ(static_cast<double*>(nodes.field_data("mass"))[1], 4.0);
-  EXPECT_EQ(nodes.runtime().field("mass").data<double>()[0], 2.5);
+  EXPECT_EQ(simit::api::SetAccess::of(nodes).field("mass").data<double>()[0], 2.5);
 }
 
 TEST(ApiSet, VectorAndMatrixFieldsAreRowMajorViews) {
@@ -49,7 +50,7 @@ TEST(ApiSet, VectorAndMatrixFieldsAreRowMajorViews) {
   EXPECT_EQ(m(e)(0, 2), 3.0);
   EXPECT_EQ(m(e)(1, 0), 4.0);
   m(e)(1, 2) = 60.0;
-  EXPECT_EQ(s.runtime().field("m").data<double>()[5], 60.0);
+  EXPECT_EQ(simit::api::SetAccess::of(s).field("m").data<double>()[5], 60.0);
   std::vector<double> values = {9, 8, 7};
   pos.set(e, values);
   EXPECT_EQ(pos(e)(2), 7.0);
@@ -135,6 +136,19 @@ TEST(ApiSet, PrintsASummary) {
   os << s;
   EXPECT_TRUE(contains(os.str(), "nodes"));
   EXPECT_TRUE(contains(os.str(), "x (float 3)"));
+}
+
+// A field described at run time (simit::FieldType) is the same field a typed handle reaches.
+TEST(ApiSet, FieldsDescribedAtRunTime) {
+  simit::Set s("points");
+  s.add_many(2);
+  s.add_field("x", simit::FieldType{simit::ComponentKind::Float, {3}, false});
+  simit::FieldRef<double, 3> x = s.get_field<double, 3>("x");
+  x.set(simit::ElementRef(1), {1.0, 2.0, 3.0});
+  EXPECT_EQ(x(simit::ElementRef(1))(2), 3.0);
+  EXPECT_EQ(x.data()[5], 3.0);
+  EXPECT_THROW((s.get_field<float, 3>("x")), simit::Error);
+  EXPECT_THROW(x.get(simit::ElementRef(2)), simit::Error);
 }
 
 }  // namespace

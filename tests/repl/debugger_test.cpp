@@ -1,7 +1,7 @@
 // The step debugger driven in-process: a program compiled from two concatenated "files" (as
 // the REPL compiles its loaded files), breakpoints and stops in real file names and lines,
 // the hook installed only while something needs it, and quitting from a stop.
-#include "debugger.h"
+#include "repl/debugger.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include "frontend/frontend.h"
 #include "interp/interpreter.h"
-#include "line_map.h"
+#include "repl/line_map.h"
 
 namespace simit::repl {
 namespace {

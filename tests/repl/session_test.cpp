@@ -1,5 +1,5 @@
 // The REPL session driven directly: inputs in, printed output compared.
-#include "session.h"
+#include "repl/session.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -14,6 +14,7 @@
 
 #include "frontend/ast.h"
 #include "scene/scene_expr.h"
+#include "scene/scene_sets.h"
 
 namespace simit::scene {
 namespace {
@@ -199,7 +200,7 @@ TEST_F(SceneTest, OpenedOnceRunsAgainFromTheMeshes) {
   std::ostringstream err;
   std::unique_ptr<Scene> scene = Scene::open(o, err);
   ASSERT_TRUE(scene) << err.str();
-  EXPECT_NE(scene->program().find_func("step"), nullptr);
+  EXPECT_NE(SceneAccess::program(*scene).find_func("step"), nullptr);
   EXPECT_EQ(fs::path(scene->program_path()).filename(), "tet.sim");
   std::ostringstream first, second;
   ASSERT_EQ(scene->run(first, err, 2), 0) << err.str();

@@ -1,7 +1,5 @@
 // `simit debug`: a command loop around repl::Debugger that runs scenes and functions.
-#include "debug_command.h"
-
-#ifdef SIMIT_HAVE_REPL
+#include "simit/debug.h"
 
 #include <unistd.h>
 
@@ -13,8 +11,9 @@
 #include <vector>
 
 #include "api/compiled_program.h"
+#include "commands/run_command.h"
 #include "debugger.h"
-#include "run_command.h"
+#include "scene/scene_sets.h"
 #include "sigint.h"
 #include "simit/scene.h"
 
@@ -114,10 +113,9 @@ bool DebugSession::open() {
     scene_options_.file = options_.file;
     scene_options_.float32 = options_.float32;
     scene_options_.quiet = true;
-    scene_options_.trap = &debugger_.trap();
-    scene_ = scene::Scene::open(scene_options_, err_);
+    scene_ = scene::SceneAccess::open(scene_options_, &debugger_.trap(), err_);
     if (!scene_) return false;
-    debugger_.set_program(&scene_->program(),
+    debugger_.set_program(&scene::SceneAccess::program(*scene_),
                           {{1, fs::path(scene_->program_path()).filename().string(), 1}});
     return true;
   }
@@ -192,9 +190,7 @@ int DebugSession::run_call(const std::string& args, std::ostream& errors) {
   ro.func = words[0];
   ro.args.assign(words.begin() + 1, words.end());
   ro.float32 = options_.float32;
-  ro.trap = &debugger_.trap();
-  ro.program = program_;
-  return run_function(ro, out_, errors);
+  return run_function(ro, RunHooks{&debugger_.trap(), program_}, out_, errors);
 }
 
 }  // namespace
@@ -205,5 +201,3 @@ int run_debug(const DebugOptions& options, std::istream& in, std::ostream& out, 
 }
 
 }  // namespace simit::tools
-
-#endif  // SIMIT_HAVE_REPL

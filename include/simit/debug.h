@@ -1,4 +1,4 @@
-// `simit debug SCENE.toml|FILE.sim`: the step debugger (repl/debugger.h) on a scene or a
+// `simit debug SCENE.toml|FILE.sim`: the step debugger (src/repl/debugger.h) on a scene or a
 // program, with gdb's commands read from a stream (stdin).
 #pragma once
 

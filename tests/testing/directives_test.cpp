@@ -1,5 +1,5 @@
 // Parsing and validation of `%@` directives (TESTFORMAT.md §7).
-#include "directives.h"
+#include "testing/directives.h"
 
 #include <gtest/gtest.h>
 

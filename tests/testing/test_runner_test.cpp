@@ -1,5 +1,5 @@
 // The `simit test` runner: judging sections, locating failures, and the executor seam.
-#include "test_runner.h"
+#include "testing/test_runner.h"
 
 #include <gtest/gtest.h>
 

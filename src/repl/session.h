@@ -1,6 +1,6 @@
 // The REPL's state, with no terminal code: accumulated declarations (as source text),
 // variables kept as values between inputs, a bound scene, and the `:` commands. The
-// terminal front end (repl/terminal.h) feeds it lines; tests feed it strings.
+// terminal front end (repl/, through simit/repl.h) feeds it lines; tests feed it strings.
 #pragma once
 
 #include <functional>
@@ -47,7 +47,7 @@ class Session {
   // Whether `text` is a complete input: blocks closed by `end`, brackets closed.
   static bool is_complete(const std::string& text);
 
-  // `:scene` reads scene files through the host's loader (the `simit` tool supplies it).
+  // `:scene` reads scene files through this loader (ReplSession supplies load_scene).
   void set_scene_loader(SceneLoader loader) { scene_loader_ = std::move(loader); }
   // Where the debugger reads its commands while a run is stopped (the terminal or stdin);
   // without one, a stop ends the run.

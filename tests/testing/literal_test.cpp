@@ -1,5 +1,5 @@
 // Literal values of `%@` directives (LANGUAGE.md §2.6, §3.4, §6.2).
-#include "literal.h"
+#include "testing/literal.h"
 
 #include <gtest/gtest.h>
 

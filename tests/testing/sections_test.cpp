@@ -1,5 +1,5 @@
 // Splitting test files into sections (TESTFORMAT.md §2).
-#include "sections.h"
+#include "testing/sections.h"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 //
 // A host (simit debug, the REPL) owns one Debugger and:
 //   1. set_program() with the program it will run and the map of its lines to files;
-//   2. passes trap() to the interpreter (interp::Options::trap or simit::Options::trap);
+//   2. passes trap() to the engine (api::EngineOptions::trap, or scene::SceneAccess::open);
 //   3. feeds each command line typed outside a run to command(); on Outcome::Run it starts
 //      the program between begin_run() and end_run() (run_args holds what followed `run`);
 //   4. may wire SIGINT to trap().request_interrupt() (async-signal-safe).

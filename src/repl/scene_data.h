@@ -1,6 +1,6 @@
 // What `:scene FILE.toml` gives the REPL: the scene's program, its sets built from meshes with
-// their fields initialised, and its extern tensors. The host (the `simit` tool, which reads
-// scene files) supplies a loader; the REPL binds these to every run.
+// their fields initialised, and its extern tensors. A loader supplies them (load_scene, or a
+// test's own); the REPL binds these to every run.
 #pragma once
 
 #include <functional>

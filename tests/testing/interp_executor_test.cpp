@@ -1,6 +1,6 @@
 // `%!` tests run by the interpreter (TESTFORMAT.md §3.2): literal types with and without
 // orientation, the comparison rules, run-time errors with their lines, and `simit run`.
-#include "interp_executor.h"
+#include "testing/interp_executor.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -8,9 +8,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "run_command.h"
-#include "test_runner.h"
-#include "value_match.h"
+#include "commands/run_command.h"
+#include "testing/test_runner.h"
+#include "testing/value_match.h"
 
 namespace simit::tools {
 namespace {

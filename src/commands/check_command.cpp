@@ -1,12 +1,12 @@
 // `simit check`: parse and type-check programs, print diagnostics and optional tree dumps.
-#include "check_command.h"
+#include "simit/commands.h"
 
 #include <algorithm>
 #include <exception>
 #include <memory>
 #include <vector>
 
-#include "files.h"
+#include "testing/files.h"
 #include "frontend/frontend.h"
 #include "frontend/printer.h"
 

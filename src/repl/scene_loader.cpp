@@ -1,7 +1,7 @@
 // Scenes for the REPL through the scene library.
 #include "scene_loader.h"
 
-#include "simit/scene.h"
+#include "scene/scene_sets.h"
 
 namespace simit::repl {
 

@@ -1,11 +1,11 @@
 // `simit run`: one exported function, arguments from the command line.
-#include "run_command.h"
+#include "commands/run_command.h"
 
 #include "api/engine.h"
 #include "interp/operators.h"
 #include "interp/printing.h"
-#include "literal.h"
-#include "value_match.h"
+#include "testing/literal.h"
+#include "testing/value_match.h"
 
 namespace simit::tools {
 
@@ -55,8 +55,13 @@ bool is_column(const Type& t) {
 }  // namespace
 
 int run_function(const RunOptions& options, std::ostream& out, std::ostream& err) {
+  return run_function(options, RunHooks{}, out, err);
+}
+
+int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream& out,
+                 std::ostream& err) {
   std::shared_ptr<const api::CompiledProgram> c =
-      options.program ? options.program : api::CompiledProgram::from_file(options.file);
+      hooks.program ? hooks.program : api::CompiledProgram::from_file(options.file);
   if (!c->ok()) {
     err << c->compilation()->diagnostics.render_all();
     return 1;
@@ -71,7 +76,7 @@ int run_function(const RunOptions& options, std::ostream& out, std::ostream& err
   run_options.float32 = options.float32;
   run_options.check_finite = options.check_finite;
   run_options.out = &out;
-  run_options.trap = options.trap;
+  run_options.trap = hooks.trap;
   try {
     api::Engine engine(c, run_options);
     std::vector<interp::Value> results = engine.call(*f, std::move(args));

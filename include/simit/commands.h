@@ -1,0 +1,40 @@
+// The work behind the `simit` subcommands that need the compiler's internals: `simit check`
+// (diagnostics and tree dumps) and `simit run FILE --call` (one function, literal arguments).
+// The command line (tools/) parses arguments and calls these.
+#pragma once
+
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace simit::tools {
+
+struct CheckOptions {
+  std::vector<std::string> files;
+  std::vector<std::string> dumps;  // "ast" and/or "typed", printed to `out` in that order
+};
+
+// Checks every file; diagnostics go to `err`. Returns 0 when all are clean, else 1.
+int run_check(const CheckOptions& options, std::ostream& out, std::ostream& err);
+
+// `simit run FILE --call NAME [ARGS...]`: runs one exported function that needs no sets.
+struct RunOptions {
+  std::string file;
+  std::string func;
+  std::vector<std::string> args;  // one literal per parameter, e.g. `2.5`, `[1.0, 2.0]'`
+  bool float32 = false;
+  bool check_finite = false;
+};
+
+// Prints what the program prints, then one `name = literal` line per result, to `out`.
+// Returns 0, or 1 (with diagnostics or the run-time error on `err`) when the file does not
+// compile, the arguments do not fit, or the run stops with a run-time error.
+int run_function(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// Runs `command` and returns its exit status; an exception escaping it is simit's own bug,
+// reported on `err` as such (an internal assertion with its place, or any other exception)
+// with exit status 3, never as a crash or as the user's error.
+int run_guarded(const std::function<int()>& command, std::ostream& err);
+
+}  // namespace simit::tools

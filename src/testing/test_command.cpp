@@ -1,0 +1,20 @@
+// `simit test` as the command line runs it: the test runner with the interpreter as executor.
+#include "interp_executor.h"
+#include "simit/testing.h"
+#include "test_runner.h"
+
+namespace simit::tools {
+
+int run_test_command(const std::vector<std::string>& paths, const TestCommandOptions& options,
+                     std::ostream& out, std::ostream& err) {
+  api::EngineOptions engine;
+  engine.float32 = options.float32;
+  engine.check_finite = options.check_finite;
+  InterpExecutor executor(engine);
+  TestOptions run;
+  run.verbose = options.verbose;
+  run.executor = &executor;
+  return run_tests(paths, run, out, err);
+}
+
+}  // namespace simit::tools

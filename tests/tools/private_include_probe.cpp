@@ -1,0 +1,6 @@
+// Must not compile: a front end's libraries (tools/, repl/) see the public headers, and a
+// private header of src/ is not found. Built only by the layers_*_refuse_private_headers tests.
+#include "simit/simit.h"
+#include "frontend/ast.h"
+
+int probe() { return 0; }
