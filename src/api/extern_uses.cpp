@@ -1,7 +1,7 @@
 // Which externs a function needs: a walk over its body and everything it calls or maps.
 #include <set>
 
-#include "interp/ast_walk.h"
+#include "frontend/ast_walk.h"
 #include "api/compiled_program.h"
 
 namespace simit::api {
@@ -55,65 +55,37 @@ class ExternUses {
       variable(m->through_set);
       return;  // the map's arguments were visited by assembly()
     }
-    interp::for_each_child(e, [&](const ast::Expr& child) { expr(child); });
+    ast::for_each_child(e, [&](const ast::Expr& child) { expr(child); });
   }
   void block(const ast::Block& b) {
     for (const auto& s : b) stmt(*s);
   }
   void stmt(const ast::Stmt& s) {
+    declared(s);
+    ast::for_each_stmt_part(
+        s, [&](const ast::Expr& e) { expr(e); }, [&](const ast::Block& b) { block(b); });
+  }
+  // What a statement names besides its expressions: the variables it declares, and an
+  // apply's function and target set.
+  void declared(const ast::Stmt& s) {
     using K = ast::NodeKind;
     switch (s.kind) {
-      case K::VarDecl: {
-        const auto& d = static_cast<const ast::VarDecl&>(s);
-        variable(d.var);
-        if (d.init) expr(*d.init);
+      case K::VarDecl: variable(static_cast<const ast::VarDecl&>(s).var); break;
+      case K::Assign:
+        for (const auto* v : static_cast<const ast::Assign&>(s).declares) variable(v);
         break;
-      }
-      case K::Assign: {
-        const auto& a = static_cast<const ast::Assign&>(s);
-        for (const auto& t : a.targets) expr(*t);
-        for (const auto* v : a.declares) variable(v);
-        if (a.value) expr(*a.value);
-        break;
-      }
-      case K::ExprStmt: expr(*static_cast<const ast::ExprStmt&>(s).expr); break;
-      case K::If: {
-        const auto& i = static_cast<const ast::If&>(s);
-        for (const auto& c : i.conditions) expr(*c);
-        for (const auto& b : i.branches) block(b);
-        block(i.else_branch);
-        break;
-      }
-      case K::While: {
-        const auto& w = static_cast<const ast::While&>(s);
-        expr(*w.condition);
-        block(w.body);
-        break;
-      }
-      case K::DoWhile: {
-        const auto& w = static_cast<const ast::DoWhile&>(s);
-        block(w.body);
-        expr(*w.condition);
-        break;
-      }
-      case K::ForRange: {
-        const auto& f = static_cast<const ast::ForRange&>(s);
-        expr(*f.lo);
-        expr(*f.hi);
-        block(f.body);
-        break;
-      }
       case K::ForSet: {
         const auto& f = static_cast<const ast::ForSet&>(s);
         variable(f.domain_var);
         variable(f.var);
-        block(f.body);
         break;
       }
-      case K::Print:
-        for (const auto& a : static_cast<const ast::Print&>(s).args) expr(*a);
+      case K::Apply: {
+        const ast::Assembly& a = static_cast<const ast::Apply&>(s).assembly;
+        variable(a.target_set);
+        if (a.callee) func(*a.callee);
         break;
-      case K::Apply: assembly(static_cast<const ast::Apply&>(s).assembly); break;
+      }
       default: break;
     }
   }

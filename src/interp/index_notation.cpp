@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <functional>
 
-#include "interp/ast_walk.h"
+#include "frontend/ast_walk.h"
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/operators.h"
@@ -79,7 +79,7 @@ Interpreter::IndexVars Interpreter::index_vars(const ast::Assign& a) {
     if (const auto* r = e.as<ast::TensorRead>(); r && r->index_notation)
       ivar_ranges(*r, sizes);
     else
-      for_each_child(e, visit);
+      ast::for_each_child(e, visit);
   };
   visit(*a.targets.at(0));
   visit(*a.value);

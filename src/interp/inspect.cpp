@@ -1,6 +1,6 @@
 // Inspection of a paused run: frames, their variables and map contexts, and the evaluation
 // of debugger expressions in a chosen frame.
-#include "interp/ast_walk.h"
+#include "frontend/ast_walk.h"
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/map_context.h"
@@ -27,7 +27,7 @@ std::string refusal(const ast::Expr& e, const ast::FuncDecl* func, size_t slots)
       return "'" + v.name + "' is not a variable of this frame";
   }
   std::string why;
-  for_each_child(e, [&](const ast::Expr& c) {
+  ast::for_each_child(e, [&](const ast::Expr& c) {
     if (why.empty()) why = refusal(c, func, slots);
   });
   return why;

@@ -104,6 +104,12 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
   Value result = Value::uninit_tensor(t.kind, shape);
   Tensor& out = result.tensor();
   const size_t n = shape.size();
+  if (t.kind == ComponentKind::Float && !t.single) {  // the common case: doubles, copied
+    const double* src = f.data<double>() + offset;
+    double* dst = out.mutable_floats();
+    for (size_t i = 0; i < n; ++i) dst[i] = src[i];
+    return result;
+  }
   if (t.single && t.kind == ComponentKind::Float) {
     const float* src = f.data<float>() + offset;
     double* dst = out.mutable_floats();

@@ -79,7 +79,7 @@ void Storage::reset_uninit(size_t bytes) {
   bytes_ = bytes;
   if (bytes > kInlineBytes)
     heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
-  else
+  else if (heap_)
     heap_.reset();
 }
 
@@ -161,13 +161,13 @@ void Tensor::reset_uninit(ComponentKind kind, const Shape& shape) {
   if (kind == ComponentKind::String) throw Fault("string tensors are always initialised");
   kind_ = kind;
   shape_ = shape;
-  strings_.reset();
+  if (strings_) strings_.reset();
   storage_.reset_uninit(component_bytes(kind) * shape.size());
 }
 
 void Tensor::release_shared() {
-  strings_.reset();
-  storage_.reset_uninit(0);
+  if (strings_) strings_.reset();
+  if (storage_.heap()) storage_.reset_uninit(0);
 }
 
 bool Tensor::operator==(const Tensor& o) const {
