@@ -141,14 +141,11 @@ Value Value::component(const Tensor& t, size_t i) {
   return {};
 }
 
-ComponentKind Value::component_kind() const {
+ComponentKind Value::component_kind_slow() const {
   switch (kind_) {
-    case Kind::Int: return ComponentKind::Int;
-    case Kind::Float: return ComponentKind::Float;
     case Kind::Bool: return ComponentKind::Bool;
     case Kind::Complex: return ComponentKind::Complex;
     case Kind::String: return ComponentKind::String;
-    case Kind::Tensor: return u_.t->kind();
     case Kind::Matrix: return *u_.m ? (*u_.m)->kind() : ComponentKind::Float;
     default: break;
   }

@@ -145,7 +145,12 @@ class Value {
   const std::shared_ptr<SolverHandle>& opaque() const { return *u_.o; }
 
   // The component kind of a scalar or tensor.
-  ComponentKind component_kind() const;
+  ComponentKind component_kind() const {
+    if (kind_ == Kind::Float) return ComponentKind::Float;
+    if (kind_ == Kind::Tensor) return u_.t->kind();
+    if (kind_ == Kind::Int) return ComponentKind::Int;
+    return component_kind_slow();
+  }
   // The shape of a tensor; the scalar shape for scalars.
   Shape shape() const { return is_tensor() ? u_.t->shape() : Shape(); }
   // A scalar as a 1-component tensor of `shape` (which must have size 1), or the tensor.
@@ -159,6 +164,7 @@ class Value {
  private:
   explicit Value(Kind k) : kind_(k) {}
   void copy_from(const Value& o);
+  ComponentKind component_kind_slow() const;
   // String, Tensor, Matrix and Opaque hold their payload out of line.
   bool owns() const {
     constexpr unsigned kOwning = 1u << unsigned(Kind::String) | 1u << unsigned(Kind::Tensor) |
