@@ -105,7 +105,8 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
   Tensor& out = result.tensor();
   const size_t n = shape.size();
   if (t.kind == ComponentKind::Float && !t.single) {  // the common case: doubles, copied
-    const double* src = f.data<double>() + offset;
+    // The field type was just checked to be binary64: read its bytes without the check.
+    const double* src = reinterpret_cast<const double*>(f.bytes()) + offset;
     double* dst = out.mutable_floats();
     for (size_t i = 0; i < n; ++i) dst[i] = src[i];
     return result;

@@ -8,47 +8,14 @@
 
 namespace simit::interp {
 
-namespace {
+namespace detail {
 
-// Tensor boxes recycled per thread: interpreter temporaries are created and dropped at a
-// high rate, and a box from the free list costs no allocation.
-thread_local bool pool_gone = false;  // values destroyed after the pool free their boxes
+constinit thread_local TensorBoxes tensor_boxes{};
 
-class TensorPool {
- public:
-  ~TensorPool() {
-    pool_gone = true;
-    for (Tensor* t : free_) delete t;
-  }
-  Tensor* acquire() {
-    if (pool_gone || free_.empty()) return new Tensor;
-    Tensor* t = free_.back();
-    free_.pop_back();
-    return t;
-  }
-  void recycle(Tensor* t) noexcept {
-    t->release_shared();
-    if (!pool_gone && free_.size() < kKeep) {
-      try {
-        free_.push_back(t);
-        return;
-      } catch (...) {
-      }
-    }
-    delete t;
-  }
+Tensor* new_tensor_box() { return new Tensor; }
+void delete_tensor_box(Tensor* t) noexcept { delete t; }
 
- private:
-  static constexpr size_t kKeep = 4096;
-  std::vector<Tensor*> free_;
-};
-
-TensorPool& pool() {
-  thread_local TensorPool p;
-  return p;
-}
-
-}  // namespace
+}  // namespace detail
 
 Value Value::of_string(std::string v) {
   Value x(Kind::String);
@@ -58,16 +25,8 @@ Value Value::of_string(std::string v) {
 
 Value Value::of_tensor(Tensor t) {
   Value x(Kind::Tensor);
-  x.u_.t = pool().acquire();
+  x.u_.t = detail::acquire_tensor_box();
   *x.u_.t = std::move(t);
-  return x;
-}
-
-Value Value::uninit_tensor(ComponentKind kind, const Shape& shape) {
-  if (kind == ComponentKind::String) return of_tensor(Tensor(kind, shape));
-  Value x(Kind::Tensor);
-  x.u_.t = pool().acquire();
-  x.u_.t->reset_uninit(kind, shape);
   return x;
 }
 
@@ -90,7 +49,7 @@ void Value::copy_from(const Value& o) {
   switch (kind_) {
     case Kind::String: u_.s = new std::string(*o.u_.s); break;
     case Kind::Tensor:
-      u_.t = pool().acquire();
+      u_.t = detail::acquire_tensor_box();
       *u_.t = *o.u_.t;
       break;
     case Kind::Matrix: u_.m = new std::shared_ptr<runtime::SystemMatrix>(*o.u_.m); break;
@@ -102,7 +61,7 @@ void Value::copy_from(const Value& o) {
 void Value::release() noexcept {
   switch (kind_) {
     case Kind::String: delete u_.s; break;
-    case Kind::Tensor: pool().recycle(u_.t); break;
+    case Kind::Tensor: detail::recycle_tensor_box(u_.t); break;
     case Kind::Matrix: delete u_.m; break;
     case Kind::Opaque: delete u_.o; break;
     default: break;

@@ -14,6 +14,33 @@
 
 namespace simit::interp {
 
+namespace detail {
+// Tensor boxes recycled per thread: interpreter temporaries are created and dropped at a
+// high rate, and a box from this list costs no allocation. Constant-initialised and trivial,
+// so reaching it costs no guard.
+struct TensorBoxes {
+  static constexpr int kKeep = 512;
+  runtime::Tensor* items[kKeep];
+  int count;
+};
+extern constinit thread_local TensorBoxes tensor_boxes;
+runtime::Tensor* new_tensor_box();
+void delete_tensor_box(runtime::Tensor* t) noexcept;
+
+inline runtime::Tensor* acquire_tensor_box() {
+  TensorBoxes& b = tensor_boxes;
+  return b.count ? b.items[--b.count] : new_tensor_box();
+}
+inline void recycle_tensor_box(runtime::Tensor* t) noexcept {
+  t->release_shared();
+  TensorBoxes& b = tensor_boxes;
+  if (b.count < TensorBoxes::kKeep)
+    b.items[b.count++] = t;
+  else
+    delete_tensor_box(t);
+}
+}  // namespace detail
+
 struct SetBinding;
 struct SolverHandle;
 
@@ -53,7 +80,7 @@ class Value {
   }
   Value& operator=(Value&& o) noexcept {
     if (this != &o) {
-      if (owns()) release();
+      drop();
       kind_ = o.kind_;
       i_ = o.i_;
       aux_ = o.aux_;
@@ -62,9 +89,7 @@ class Value {
     }
     return *this;
   }
-  ~Value() {
-    if (owns()) release();
-  }
+  ~Value() { drop(); }
 
   static Value of_int(int32_t v) {
     Value x(Kind::Int);
@@ -91,7 +116,13 @@ class Value {
   static Value of_tensor(Tensor t);
   // A tensor of `kind` and `shape` whose components the caller writes next: no zero-fill
   // (every component must be written before the value is read).
-  static Value uninit_tensor(ComponentKind kind, const Shape& shape);
+  static Value uninit_tensor(ComponentKind kind, const Shape& shape) {
+    if (kind == ComponentKind::String) return of_tensor(Tensor(kind, shape));
+    Value x(Kind::Tensor);
+    x.u_.t = detail::acquire_tensor_box();
+    x.u_.t->reset_uninit(kind, shape);
+    return x;
+  }
   static Value of_element(SetBinding* set, int32_t index, int32_t offset_tag = -1) {
     Value x(Kind::Element);
     x.u_.set = set;
@@ -172,6 +203,12 @@ class Value {
     return (kOwning >> unsigned(kind_)) & 1u;
   }
   void release() noexcept;
+  void drop() noexcept {
+    if (kind_ == Kind::Tensor)
+      detail::recycle_tensor_box(u_.t);
+    else if (owns())
+      release();
+  }
 
   // A few machine words: scalars, elements and set references inline; tensors, strings
   // and shared payloads out of line (tensors in recycled boxes, so temporaries cost no

@@ -18,17 +18,6 @@ const char* component_name(ComponentKind k) {
   return "?";
 }
 
-size_t component_bytes(ComponentKind k) {
-  switch (k) {
-    case ComponentKind::Int: return sizeof(int32_t);
-    case ComponentKind::Float: return sizeof(double);
-    case ComponentKind::Bool: return sizeof(bool);
-    case ComponentKind::Complex: return sizeof(Complex);
-    case ComponentKind::String: return 0;
-  }
-  return 0;
-}
-
 // ---------------------------------------------------------------------------
 // Storage
 
@@ -75,16 +64,7 @@ Storage& Storage::operator=(Storage&& o) noexcept {
   return *this;
 }
 
-void Storage::reset_uninit(size_t bytes) {
-  bytes_ = bytes;
-  if (bytes > kInlineBytes)
-    heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
-  else if (heap_)
-    heap_.reset();
-}
-
-std::byte* Storage::mutable_data() {
-  if (!heap_) return inline_;
+std::byte* Storage::mutable_heap() {
   if (heap_.use_count() > 1) {
     std::shared_ptr<std::byte[]> copy(new std::byte[bytes_]);
     std::memcpy(copy.get(), heap_.get(), bytes_);
@@ -157,18 +137,7 @@ void Tensor::reshape(const Shape& shape) {
   shape_ = shape;
 }
 
-void Tensor::reset_uninit(ComponentKind kind, const Shape& shape) {
-  if (kind == ComponentKind::String) throw Fault("string tensors are always initialised");
-  kind_ = kind;
-  shape_ = shape;
-  if (strings_) strings_.reset();
-  storage_.reset_uninit(component_bytes(kind) * shape.size());
-}
-
-void Tensor::release_shared() {
-  if (strings_) strings_.reset();
-  if (storage_.heap()) storage_.reset_uninit(0);
-}
+void Tensor::string_uninit() { throw Fault("string tensors are always initialised"); }
 
 bool Tensor::operator==(const Tensor& o) const {
   if (kind_ != o.kind_ || shape_ != o.shape_) return false;

@@ -18,7 +18,17 @@ namespace simit::runtime {
 // Component (scalar) kinds: int is 32-bit, float is binary64 storage, bool one byte.
 enum class ComponentKind : uint8_t { Int, Float, Bool, Complex, String };
 const char* component_name(ComponentKind k);
-size_t component_bytes(ComponentKind k);  // 0 for String (stored out of line)
+// 0 for String (stored out of line).
+inline size_t component_bytes(ComponentKind k) {
+  switch (k) {
+    case ComponentKind::Int: return 4;
+    case ComponentKind::Float: return 8;
+    case ComponentKind::Bool: return 1;
+    case ComponentKind::Complex: return 16;
+    case ComponentKind::String: return 0;
+  }
+  return 0;
+}
 
 using Complex = std::complex<double>;
 
@@ -41,15 +51,24 @@ class Storage {
   size_t bytes() const { return bytes_; }
   // Resizes to `bytes` without clearing them (the caller writes every byte) and drops any
   // shared heap block.
-  void reset_uninit(size_t bytes);
+  void reset_uninit(size_t bytes) {
+    bytes_ = bytes;
+    if (bytes > kInlineBytes)
+      heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
+    else if (heap_)
+      heap_.reset();
+  }
   const std::byte* data() const { return heap_ ? heap_.get() : inline_; }
-  std::byte* mutable_data();  // unshares heap storage first
+  std::byte* mutable_data() {  // unshares heap storage first
+    return heap_ ? mutable_heap() : inline_;
+  }
   // The shared heap block (null when the bytes are inline).
   const std::shared_ptr<std::byte[]>& heap() const { return heap_; }
 
  private:
   void copy_from(const Storage& o);
   void move_from(Storage& o) noexcept;
+  std::byte* mutable_heap();
 
   alignas(16) std::byte inline_[kInlineBytes];
   std::shared_ptr<std::byte[]> heap_;
@@ -97,14 +116,24 @@ class Tensor {
   void reshape(const Shape& shape);
   // Makes this a tensor of `kind` and `shape` in place whose components are not cleared:
   // the caller writes every one before reading (interpreter temporaries). Not for String.
-  void reset_uninit(ComponentKind kind, const Shape& shape);
+  void reset_uninit(ComponentKind kind, const Shape& shape) {
+    if (kind == ComponentKind::String) string_uninit();
+    kind_ = kind;
+    shape_ = shape;
+    if (strings_) strings_.reset();
+    storage_.reset_uninit(component_bytes(kind) * shape.size());
+  }
   // Drops shared storage (heap block, strings) so the object can be recycled cheaply.
-  void release_shared();
+  void release_shared() {
+    if (strings_) strings_.reset();
+    if (storage_.heap()) storage_.reset_uninit(0);
+  }
 
   // Exact equality of kind, shape and components (float components compared with ==).
   bool operator==(const Tensor& o) const;
 
  private:
+  [[noreturn]] static void string_uninit();
   ComponentKind kind_ = ComponentKind::Float;
   Shape shape_;
   Storage storage_;
