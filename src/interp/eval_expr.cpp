@@ -33,24 +33,6 @@ bool float_arith(ast::Binary::Op op, double x, double y, double& out) {
 
 }  // namespace
 
-Value Interpreter::eval(const ast::Expr& e) {
-  try {
-    return eval_node(e);
-  } catch (const runtime::Fault& f) {
-    // Faults come from the operation of this very node: its operands were evaluated by
-    // nested calls, which converted theirs already.
-    fail(e.span, f.what());
-  } catch (const std::bad_alloc&) {
-    fail(e.span, "out of memory");
-  }
-}
-
-const Value& Interpreter::operand(const ast::Expr& e, Value& scratch) {
-  if (e.kind == ast::NodeKind::VarRef) return read_var(*static_cast<const ast::VarRef&>(e).var, e);
-  scratch = eval(e);
-  return scratch;
-}
-
 Value Interpreter::eval_node(const ast::Expr& e) {
   switch (e.kind) {
     case ast::NodeKind::IntLit:

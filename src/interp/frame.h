@@ -1,11 +1,14 @@
-// The interpreter's activation records: one slot per variable of a function (the checker
-// numbers them), and the bookkeeping of inout arguments of pending calls.
+// The interpreter's activation records (one slot per variable of a function, numbered by the
+// checker), the bookkeeping of inout arguments of pending calls, and the inline reads of the
+// evaluation loop (variables, operands).
 #pragma once
 
+#include <new>
 #include <vector>
 
 #include "frontend/ast.h"
 #include "interp/interpreter.h"
+#include "runtime/fault.h"
 
 namespace simit::interp {
 
@@ -42,6 +45,27 @@ inline Value& Interpreter::read_var(const frontend::ast::Variable& v, const fron
   if (value.empty()) [[unlikely]]
     fail_unset(v, at);
   return value;
+}
+
+inline Value Interpreter::eval(const frontend::ast::Expr& e) {
+  try {
+    return eval_node(e);
+  } catch (const runtime::Fault& f) {
+    // Faults come from the operation of this very node: its operands were evaluated by
+    // nested calls, which converted theirs already.
+    fail(e.span, f.what());
+  } catch (const std::bad_alloc&) {
+    fail(e.span, "out of memory");
+  }
+}
+
+// An operand by reference: a variable is read in place, anything else is computed into
+// `scratch`.
+inline const Value& Interpreter::operand(const frontend::ast::Expr& e, Value& scratch) {
+  if (e.kind == frontend::ast::NodeKind::VarRef)
+    return read_var(*static_cast<const frontend::ast::VarRef&>(e).var, e);
+  scratch = eval(e);
+  return scratch;
 }
 
 }  // namespace simit::interp

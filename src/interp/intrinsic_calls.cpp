@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"

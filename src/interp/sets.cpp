@@ -88,11 +88,14 @@ namespace {
 Value read_components(const runtime::Field& f, size_t offset, const Shape& shape) {
   const runtime::FieldType& t = f.type();
   if (shape.is_scalar()) {
+    // The kind (and width) is the field type's, so its bytes are read without a check.
+    const std::byte* bytes = f.bytes();
     switch (t.kind) {
-      case ComponentKind::Int: return Value::of_int(f.data<int32_t>()[offset]);
-      case ComponentKind::Bool: return Value::of_bool(f.data<bool>()[offset]);
+      case ComponentKind::Int: return Value::of_int(reinterpret_cast<const int32_t*>(bytes)[offset]);
+      case ComponentKind::Bool: return Value::of_bool(reinterpret_cast<const bool*>(bytes)[offset]);
       case ComponentKind::Float:
-        return Value::of_float(t.single ? f.data<float>()[offset] : f.data<double>()[offset]);
+        return Value::of_float(t.single ? reinterpret_cast<const float*>(bytes)[offset]
+                                        : reinterpret_cast<const double*>(bytes)[offset]);
       case ComponentKind::Complex:
         return Value::of_complex(t.single ? Complex(f.data<std::complex<float>>()[offset])
                                           : f.data<Complex>()[offset]);
