@@ -166,10 +166,25 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
         return;
       }
     }
+    // After the first element only the element and its endpoint tuple change: nothing
+    // between elements touches the frame's references (calls run one level deeper).
+    bool reuse = f.generics.empty();
+    for (size_t i = 0; i < partial.size(); ++i) reuse = reuse && !f.params[i].inout;
+    const size_t first = partial.size();
+    const int element_slot = first < f.params.size() ? f.params[first].var->slot : -1;
+    const int tuple_slot =
+        a.pass_endpoints && first + 1 < f.params.size() ? f.params[first + 1].var->slot : -1;
+    Frame* frame_of_element = nullptr;
     const int n = ctx->target->set->size();
     for (int e = 0; e < n; ++e) {
       ctx->element = e;
-      setup(e);
+      if (reuse && frame_of_element) {
+        frame_of_element->activation = ++activations_;
+        if (element_slot >= 0) frame_of_element->slots[element_slot] = Value::of_element(ctx->target, e);
+        if (tuple_slot >= 0) frame_of_element->slots[tuple_slot] = Value::of_tuple(ctx->target, e);
+      } else {
+        frame_of_element = &setup(e);
+      }
       ++depth_;
       execute_body(f);
     }

@@ -84,6 +84,12 @@ void Interpreter::push_inout_arg(const ast::Expr& arg, int slot) {
     arg_stack_.emplace_back();
     return;
   }
+  if (arg.is<ast::TupleRead>()) {
+    // An endpoint passed on as an element: elements are references, nothing to write back.
+    arg_stack_.push_back(Arg{eval(arg), nullptr});
+    inout_stack_.push_back(InoutArg{nullptr, {}, false, slot});
+    return;
+  }
   Place p = resolve_place(arg);
   arg_stack_.push_back(Arg{read_place(p), nullptr});
   inout_stack_.push_back(InoutArg{nullptr, p, true, slot});

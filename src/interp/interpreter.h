@@ -27,8 +27,6 @@ struct Place {
   bool whole = true;
   size_t offset = 0;  // first component of the addressed part (when not whole)
   Shape shape;        // shape of the addressed part: scalar for one component
-  // A value made for the place (an endpoint passed on as an element); root points at it.
-  std::shared_ptr<Value> staged;
   // A set field (root is null): the components [offset, offset + shape.size()) of the
   // field's array, read and written there directly. `whole` is the whole field (element
   // < 0, from `S.f`); otherwise `element` is the element addressed (from `e.f`, `S.f(e)`).

@@ -73,13 +73,6 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
       return p;
     }
     case ast::NodeKind::FieldRead: return field_place(static_cast<const ast::FieldRead&>(target));
-    case ast::NodeKind::TupleRead: {
-      // An endpoint passed on as an element: elements are references, nothing to write back.
-      Place p;
-      p.staged = std::make_shared<Value>(eval(target));
-      p.root = p.staged.get();
-      return p;
-    }
     default: break;
   }
   fail(target.span, "expression is not assignable");
