@@ -317,6 +317,75 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   return p;
 }
 
+// `f(p(0)) = t`, `K(v(i), v(j)) = B` in the mapped function itself: a write into one of the
+// map's results at a member of the visited element goes straight to its block, without
+// resolving a general place. False (nothing written) for any other target, which the
+// general path then handles, with its checks and messages.
+bool Interpreter::result_write(const ast::Expr& target, Value& value) {
+  const auto* r = target.as<ast::TensorRead>();
+  // `K(v(i), v(j))(a, d) = x`: one component of a block.
+  const ast::TensorRead* component = nullptr;
+  if (r && r->base->is<ast::TensorRead>()) {
+    component = r;
+    r = r->base->as<ast::TensorRead>();
+  }
+  const auto* base = r ? r->base->as<ast::VarRef>() : nullptr;
+  if (!base || base->var->kind != ast::Variable::Kind::Result || map_->grid) return false;
+  MapContext& ctx = *map_;
+  const auto& results = ctx.assembly->callee->results;
+  size_t res = 0;
+  while (res < results.size() && results[res].var != base->var) ++res;
+  if (res == results.size() || &var(*base->var) != &ctx.values[res]) return false;
+  Value& root = ctx.values[res];
+  Place p;
+  p.whole = false;
+  p.root = &root;
+  p.accumulate = ctx.reduce;
+  p.shape = ctx.blocks[res];
+  if (root.kind() == Value::Kind::Matrix) {
+    if (r->indices.size() != 2 || !r->indices[0] || !r->indices[1]) return false;
+    const int rm = member_of(*r->indices[0]);
+    const int cm = rm < 0 ? -1 : member_of(*r->indices[1]);
+    if (cm < 0 || !root.matrix()->pattern().assembled_through(*ctx.target->set)) return false;
+    const runtime::AssemblyIndex& ai = root.matrix()->pattern().assembly();
+    const int rl = local_member(ai.row_members, rm), cl = local_member(ai.col_members, cm);
+    if (rl < 0 || cl < 0) return false;
+    p.matrix_position = ai.position(ctx.element, rl, cl);
+    p.offset = static_cast<size_t>(p.matrix_position) * p.shape.size();
+    if (component && !block_component(*component, p)) return false;
+  } else {
+    if (component) return false;
+    if (!root.is_tensor() || r->indices.size() != 1 || !r->indices[0]) return false;
+    const Shape& s = root.tensor().shape();
+    if (s.order() != 1) return false;
+    const int m = member_of(*r->indices[0]);
+    if (m < 0) return false;
+    const int32_t e = runtime::member_element(*ctx.target->set, ctx.element, m);
+    if (e < 0 || e >= s.dim(0)) return false;
+    p.offset = static_cast<size_t>(e) * p.shape.size();
+  }
+  write_place(p, std::move(value), target.span);
+  return true;
+}
+
+// Narrows a block place to the component `(a, d)` of an unblocked matrix block; false for
+// anything else (the general path then evaluates the indices and reports errors).
+bool Interpreter::block_component(const ast::TensorRead& r, Place& p) {
+  const Shape& block = p.shape;
+  if (block.levels() != 1 || block.order() != 2 || r.indices.size() != 2) return false;
+  size_t at = 0;
+  for (int k = 0; k < 2; ++k) {
+    if (!r.indices[k]) return false;
+    Value scratch;
+    const Value& i = operand(*r.indices[k], scratch);
+    if (i.kind() != Value::Kind::Int || i.as_int() < 0 || i.as_int() >= block.dim(k)) return false;
+    at = at * static_cast<size_t>(block.dim(k)) + static_cast<size_t>(i.as_int());
+  }
+  p.offset += at;
+  p.shape = Shape();
+  return true;
+}
+
 // The member of the visited element an index of a matrix write names directly (0: the
 // element parameter, k + 1: endpoint k read from its tuple); -1 for any other index, which
 // the general path evaluates. Evaluates the tuple's index expression (calls in it were

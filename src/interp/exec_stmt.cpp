@@ -139,6 +139,7 @@ void Interpreter::store(const ast::Assign& a, size_t i, Value value) {
   }
   const ast::Expr& target = *a.targets[i];
   HoistScope hoisted(*this, target);
+  if (map_ && depth_ == map_depth_ && result_write(target, value)) return;
   write_place(resolve_place(target), std::move(value), target.span);
 }
 

@@ -228,6 +228,8 @@ class Interpreter {
                                                        ComponentKind kind);
   Place matrix_place(const frontend::ast::TensorRead& r, Value& m);
   int member_of(const frontend::ast::Expr& index);
+  bool result_write(const frontend::ast::Expr& target, Value& value);
+  bool block_component(const frontend::ast::TensorRead& r, Place& p);
   static int local_member(const std::vector<int>& members, int member);
   void check_vector_write(const frontend::ast::TensorRead& r, const Value& element);
   bool is_map_result(const Value* v) const;
