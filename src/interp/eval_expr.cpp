@@ -118,19 +118,22 @@ Value Interpreter::eval_binary(const ast::Binary& b) {
   Value ls, rs;
   const Value& l = operand(*b.lhs, ls);
   const Value& r = operand(*b.rhs, rs);
-  Value v;
   double x;
-  if ((l.kind() == Value::Kind::Matrix || r.kind() == Value::Kind::Matrix ||
-       b.op == ast::Binary::Op::LeftDiv) && system_binary(b, l, r, v)) {
+  if (l.kind() == Value::Kind::Float && r.kind() == Value::Kind::Float &&
+      float_arith(b.op, l.as_float(), r.as_float(), x)) {
+    Value v = Value::of_float(x);
     finish(v, b);
     return v;
   }
-  if (l.kind() == Value::Kind::Float && r.kind() == Value::Kind::Float &&
-      float_arith(b.op, l.as_float(), r.as_float(), x)) {
-    v = Value::of_float(x);
-  } else {
-    v = binary_op(b.op, l, is_row(*b.lhs->type), r, is_row(*b.rhs->type));
+  if (l.kind() == Value::Kind::Matrix || r.kind() == Value::Kind::Matrix ||
+      b.op == ast::Binary::Op::LeftDiv) {
+    Value v;
+    if (system_binary(b, l, r, v)) {
+      finish(v, b);
+      return v;
+    }
   }
+  Value v = binary_op(b.op, l, is_row(*b.lhs->type), r, is_row(*b.rhs->type));
   finish(v, b);
   return v;
 }

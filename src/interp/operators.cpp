@@ -138,7 +138,45 @@ Value elementwise(Arith a, const Value& l, const Value& r) {
   return result;
 }
 
+// Float operands, each a float or a float tensor (same shape when both are): the common case,
+// with the operator chosen once outside the loop.
+template <class Op>
+Value float_elementwise(const Value& l, const Value& r, Op op) {
+  const Tensor& t = l.is_tensor() ? l.tensor() : r.tensor();
+  Value out = Value::uninit_tensor(ComponentKind::Float, t.shape());
+  double* o = out.tensor().mutable_floats();
+  const size_t n = t.size();
+  if (l.is_tensor() && r.is_tensor()) {
+    const double *x = l.tensor().floats(), *y = r.tensor().floats();
+    for (size_t i = 0; i < n; ++i) o[i] = op(x[i], y[i]);
+  } else if (l.is_tensor()) {
+    const double* x = l.tensor().floats();
+    const double y = r.as_float();
+    for (size_t i = 0; i < n; ++i) o[i] = op(x[i], y);
+  } else {
+    const double x = l.as_float();
+    const double* y = r.tensor().floats();
+    for (size_t i = 0; i < n; ++i) o[i] = op(x, y[i]);
+  }
+  return out;
+}
+
+bool float_operands(const Value& l, const Value& r) {
+  const bool lt = l.is_tensor(), rt = r.is_tensor();
+  if (lt ? l.tensor().kind() != ComponentKind::Float : l.kind() != Value::Kind::Float) return false;
+  if (rt ? r.tensor().kind() != ComponentKind::Float : r.kind() != Value::Kind::Float) return false;
+  return (lt || rt) && (!lt || !rt || l.tensor().shape() == r.tensor().shape());
+}
+
 Value elementwise(Arith a, const Value& l, const Value& r) {
+  if (float_operands(l, r)) {
+    switch (a) {
+      case Arith::Add: return float_elementwise(l, r, [](double x, double y) { return x + y; });
+      case Arith::Sub: return float_elementwise(l, r, [](double x, double y) { return x - y; });
+      case Arith::Mul: return float_elementwise(l, r, [](double x, double y) { return x * y; });
+      case Arith::Div: return float_elementwise(l, r, [](double x, double y) { return x / y; });
+    }
+  }
   ComponentKind k = l.component_kind();
   if (k != r.component_kind()) throw Fault("operands of different component types");
   switch (k) {
