@@ -526,4 +526,32 @@ struct Program {
 
 #undef SIMIT_NODE_KIND
 
+// The children of each expression kind that has any, in evaluation order (`n` is the node);
+// frontend/ast_walk.h generates the child walk from it.
+#define SIMIT_EXPR_CHILDREN(X)            \
+  X(Unary, n.operand)                     \
+  X(Transpose, n.operand)                 \
+  X(Binary, n.lhs, n.rhs)                 \
+  X(Compare, n.operands)                  \
+  X(Call, n.args)                         \
+  X(TensorRead, n.base, n.indices)        \
+  X(FieldRead, n.base)                    \
+  X(TupleRead, n.base, n.index)           \
+  X(SetRead, n.base, n.first, n.second)   \
+  X(Map, n.assembly.args)
+
+// The root expressions and the nested blocks of each statement kind that has any (`n` is the
+// statement); frontend/ast_walk.h generates the statement walk from it.
+#define SIMIT_STMT_PARTS(X)                                 \
+  X(VarDecl, (n.init), ())                                  \
+  X(Assign, (n.value, n.targets), ())                       \
+  X(ExprStmt, (n.expr), ())                                 \
+  X(If, (n.conditions), (n.branches, n.else_branch))        \
+  X(While, (n.condition), (n.body))                         \
+  X(DoWhile, (n.condition), (n.body))                       \
+  X(ForRange, (n.lo, n.hi), (n.body))                       \
+  X(ForSet, (), (n.body))                                   \
+  X(Print, (n.args), ())                                    \
+  X(Apply, (n.assembly.args), ())
+
 }  // namespace simit::frontend::ast
