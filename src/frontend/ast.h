@@ -237,6 +237,9 @@ struct TensorRead : Expr {
   ExprPtr base;
   std::vector<ExprPtr> indices;
   bool index_notation = false;  // by the checker: some index is an ivar
+  // By the assembly-write pass (frontend/assembly_writes.h), on assignment targets only:
+  // the function result this write assembles into (a system vector or matrix), or -1.
+  int assembles_result = -1;
 };
 
 // `t(k)` on an unnamed tuple, or `t.name` on a named one.

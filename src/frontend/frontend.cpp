@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "frontend/assembly_writes.h"
 #include "frontend/checker.h"
 #include "frontend/hoisting.h"
 #include "frontend/system_statements.h"
@@ -24,6 +25,7 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
   if (c->ok() && options.check) {
     plan_hoisting(*c->program);
     mark_system_statements(*c->program);
+    mark_assembly_writes(*c->program);
   }
   return c;
 }

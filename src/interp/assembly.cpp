@@ -329,13 +329,12 @@ bool Interpreter::result_write(const ast::Expr& target, Value& value) {
     component = r;
     r = r->base->as<ast::TensorRead>();
   }
-  const auto* base = r ? r->base->as<ast::VarRef>() : nullptr;
-  if (!base || base->var->kind != ast::Variable::Kind::Result || map_->grid) return false;
+  // The frontend marked the writes into the function's system-tensor results.
+  if (!r || r->assembles_result < 0 || map_->grid) return false;
   MapContext& ctx = *map_;
-  const auto& results = ctx.assembly->callee->results;
-  size_t res = 0;
-  while (res < results.size() && results[res].var != base->var) ++res;
-  if (res == results.size() || &var(*base->var) != &ctx.values[res]) return false;
+  const auto& base = static_cast<const ast::VarRef&>(*r->base);
+  const size_t res = static_cast<size_t>(r->assembles_result);
+  if (res >= ctx.values.size() || &var(*base.var) != &ctx.values[res]) return false;
   Value& root = ctx.values[res];
   Place p;
   p.whole = false;

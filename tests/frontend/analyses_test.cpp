@@ -91,5 +91,41 @@ end
   EXPECT_TRUE(b[6]->system_level);
 }
 
+TEST(AssemblyWrites, TargetsIndexingSystemResultsAreMarked) {
+  auto c = compile(R"(
+element V
+  m : float;
+end
+element E
+  k : float;
+end
+extern verts : set{V};
+extern edges : set{E}(verts, verts);
+func both(e : E, p : (V * 2)) -> (f : vector[verts](vector[2](float)),
+                                  K : matrix[verts,verts](matrix[2,2](float)))
+  var local : vector[2](float);
+  local(0) = e.k;
+  f(p(0)) = local;
+  K(p(0), p(1)) = [1.0, 0.0; 0.0, 1.0];
+  K(p(1), p(0))(1, 1) = e.k;
+end
+func dense(x : float) -> (y : vector[2](float))
+  y(0) = x;
+end
+)");
+  const ast::Block& b = body(*c, "both");
+  auto target = [&](size_t i) -> const ast::TensorRead& {
+    return *static_cast<const ast::Assign&>(*b[i]).targets[0]->as<ast::TensorRead>();
+  };
+  EXPECT_EQ(target(1).assembles_result, -1);  // a local
+  EXPECT_EQ(target(2).assembles_result, 0);   // f
+  EXPECT_EQ(target(3).assembles_result, 1);   // K
+  EXPECT_EQ(target(4).assembles_result, 1);   // a component of K's block
+  const ast::Block& d = body(*c, "dense");
+  // A result without a set dimension is not assembled.
+  EXPECT_EQ(static_cast<const ast::Assign&>(*d[0]).targets[0]->as<ast::TensorRead>()->assembles_result,
+            -1);
+}
+
 }  // namespace
 }  // namespace simit::frontend
