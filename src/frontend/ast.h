@@ -373,6 +373,11 @@ struct Assign : Stmt {
   bool index_notation = false;
   std::vector<const Variable*> free_vars;       // index notation: ivars of the left side
   std::vector<const Variable*> reduction_vars;  // index notation: ivars only on the right
+  // By the index-range pass (frontend/index_ranges.h), index notation only: the loop
+  // variables (each once; a reduction variable is one the left side does not use) and the
+  // reads whose dimensions give their ranges, left side first.
+  std::vector<const Variable*> loop_free, loop_reduction;
+  std::vector<const struct TensorRead*> ranging_reads;
 };
 
 struct ExprStmt : Stmt {

@@ -7,6 +7,7 @@
 #include "frontend/assembly_writes.h"
 #include "frontend/checker.h"
 #include "frontend/hoisting.h"
+#include "frontend/index_ranges.h"
 #include "frontend/system_statements.h"
 #include "frontend/lexer.h"
 #include "frontend/parser.h"
@@ -26,6 +27,7 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
     plan_hoisting(*c->program);
     mark_system_statements(*c->program);
     mark_assembly_writes(*c->program);
+    plan_index_ranges(*c->program);
   }
   return c;
 }

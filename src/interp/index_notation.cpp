@@ -2,9 +2,7 @@
 // value of the free index variables, the sum over every value of the reduction variables
 // of the right-hand side, which is then an ordinary scalar (or block) expression.
 #include <algorithm>
-#include <functional>
 
-#include "frontend/ast_walk.h"
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/operators.h"
@@ -24,10 +22,6 @@ namespace {
 const ast::Variable* ivar_of(const ast::Expr* e) {
   const auto* r = e ? e->as<ast::VarRef>() : nullptr;
   return r && r->var && r->var->kind == ast::Variable::Kind::IndexVar ? r->var : nullptr;
-}
-
-void add_once(std::vector<const ast::Variable*>& list, const ast::Variable* v) {
-  if (std::find(list.begin(), list.end(), v) == list.end()) list.push_back(v);
 }
 
 // The next combination of `idx` below `sizes` (row-major); false after the last one.
@@ -73,26 +67,19 @@ Shape Interpreter::ivar_ranges(const ast::TensorRead& r,
   return s.block();
 }
 
+// The ranges of the loops the frontend planned (frontend/index_ranges.h), from the shapes
+// the ranging reads have now.
 Interpreter::IndexVars Interpreter::index_vars(const ast::Assign& a) {
   std::vector<std::pair<const ast::Variable*, int>> sizes;
-  std::function<void(const ast::Expr&)> visit = [&](const ast::Expr& e) {
-    if (const auto* r = e.as<ast::TensorRead>(); r && r->index_notation)
-      ivar_ranges(*r, sizes);
-    else
-      ast::for_each_child(e, visit);
-  };
-  visit(*a.targets.at(0));
-  visit(*a.value);
+  for (const ast::TensorRead* r : a.ranging_reads) ivar_ranges(*r, sizes);
   auto size_of = [&](const ast::Variable* v) {
     auto it = std::find_if(sizes.begin(), sizes.end(), [&](const auto& p) { return p.first == v; });
     if (it == sizes.end()) fail(a.span, "index variable '" + v->name + "' indexes no dimension");
     return it->second;
   };
   IndexVars vars;
-  for (const auto* v : a.free_vars) add_once(vars.free, v);
-  for (const auto* v : a.reduction_vars)
-    if (std::find(vars.free.begin(), vars.free.end(), v) == vars.free.end())
-      add_once(vars.reduction, v);
+  vars.free = a.loop_free;
+  vars.reduction = a.loop_reduction;
   for (const auto* v : vars.free) vars.free_sizes.push_back(size_of(v));
   for (const auto* v : vars.reduction) vars.reduction_sizes.push_back(size_of(v));
   return vars;

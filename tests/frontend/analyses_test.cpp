@@ -127,5 +127,29 @@ end
             -1);
 }
 
+TEST(IndexRanges, LoopsAndRangingReadsOfAMatrixProduct) {
+  auto c = compile(R"(
+func matmul(A : matrix[2,3](float), B : matrix[3,2](float)) -> C : matrix[2,2](float)
+  ivar i;
+  ivar j;
+  ivar k;
+  C(i, j) = A(i, k) * B(k, j) + A(i, k) * B(k, j);
+end
+)");
+  const ast::Block& b = body(*c, "matmul");
+  const auto& a = static_cast<const ast::Assign&>(*b[3]);
+  ASSERT_TRUE(a.index_notation);
+  ASSERT_EQ(a.loop_free.size(), 2u);
+  EXPECT_EQ(a.loop_free[0]->name, "i");
+  EXPECT_EQ(a.loop_free[1]->name, "j");
+  ASSERT_EQ(a.loop_reduction.size(), 1u);  // k once, though it appears four times
+  EXPECT_EQ(a.loop_reduction[0]->name, "k");
+  // The target, then the four reads of the value, left to right.
+  ASSERT_EQ(a.ranging_reads.size(), 5u);
+  EXPECT_EQ(a.ranging_reads[0], a.targets[0].get());
+  EXPECT_EQ(static_cast<const ast::VarRef&>(*a.ranging_reads[1]->base).name, "A");
+  EXPECT_EQ(static_cast<const ast::VarRef&>(*a.ranging_reads[2]->base).name, "B");
+}
+
 }  // namespace
 }  // namespace simit::frontend
