@@ -37,9 +37,4 @@ class CompiledProgram {
   const frontend::ast::Program* borrowed_ = nullptr;
 };
 
-// The externs `func` needs bound: those it (or anything it calls or maps) names, the sets
-// that types it uses are indexed by, and the endpoint sets of those sets; in declaration order.
-std::vector<const frontend::ast::Variable*> externs_used_by(const frontend::ast::Program& program,
-                                                            const frontend::ast::FuncDecl& func);
-
 }  // namespace simit::api

@@ -178,7 +178,7 @@ Function Program::compile(const std::string& name) const {
   for (const ast::Variable* g : program.globals)
     if (g && g->kind == ast::Variable::Kind::Extern)
       impl->slots[g->name] = Slot{Slot::Role::Extern, g, 0, nullptr, std::nullopt};
-  for (const ast::Variable* g : api::externs_used_by(program, *f)) impl->needed.push_back(g->name);
+  for (const ast::Variable* g : f->extern_uses) impl->needed.push_back(g->name);
   for (size_t i = 0; i < f->params.size(); ++i) {
     impl->slots[f->params[i].name] =
         Slot{Slot::Role::Param, f->params[i].var, static_cast<int>(i), nullptr, std::nullopt};

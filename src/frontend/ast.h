@@ -511,6 +511,8 @@ struct FuncDecl : Decl {
   std::vector<Param> results;
   Block body;
   int frame_size = 0;  // by the checker: slots for generics, params, results and locals
+  // By the extern-use pass (frontend/extern_uses.h): the externs it needs bound.
+  std::vector<const Variable*> extern_uses;
 };
 
 // `%! f(args) == expected;`

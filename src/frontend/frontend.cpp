@@ -6,6 +6,7 @@
 
 #include "frontend/assembly_writes.h"
 #include "frontend/checker.h"
+#include "frontend/extern_uses.h"
 #include "frontend/hoisting.h"
 #include "frontend/index_ranges.h"
 #include "frontend/system_statements.h"
@@ -28,6 +29,7 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
     mark_system_statements(*c->program);
     mark_assembly_writes(*c->program);
     plan_index_ranges(*c->program);
+    plan_extern_uses(*c->program);
   }
   return c;
 }

@@ -21,7 +21,7 @@ void SceneRun::build() {
 // Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
 void SceneRun::check_needs(const std::string& key, const std::string& name) const {
   const ast::FuncDecl& f = *file_.program->find_func(name);
-  for (const ast::Variable* g : api::externs_used_by(file_.program->program(), f)) {
+  for (const ast::Variable* g : f.extern_uses) {
     if (sets_.by_name.count(g->name) || tensors_.count(g->name)) continue;
     if (g->type && g->type->is_tensor())
       file_.fail(file_.doc.get(key), key + ": '" + name + "' uses the extern tensor '" + g->name +

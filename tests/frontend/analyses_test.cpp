@@ -151,5 +151,42 @@ end
   EXPECT_EQ(static_cast<const ast::VarRef&>(*a.ranging_reads[2]->base).name, "B");
 }
 
+TEST(ExternUses, ThroughCallsMapsAndTypes) {
+  auto c = compile(R"(
+element V
+  m : float;
+end
+element E
+  k : float;
+end
+extern verts : set{V};
+extern edges : set{E}(verts, verts);
+extern scale : float;
+extern unused : float;
+func weigh(e : E, p : (V * 2)) -> f : vector[verts](float)
+  f(p(0)) = scale * e.k;
+end
+func total() -> f : vector[verts](float)
+  f = map weigh to edges reduce +;
+end
+export func main() -> s : float
+  s = dot(total(), verts.m);
+end
+export func none() -> s : float
+  s = 1.0;
+end
+)");
+  auto names = [&](const char* f) {
+    std::vector<std::string> out;
+    for (const ast::Variable* v : c->program->find_func(f)->extern_uses) out.push_back(v->name);
+    return out;
+  };
+  // In declaration order: the map's set and its endpoint set, the tensor the mapped
+  // function reads; never `unused`.
+  EXPECT_EQ(names("main"), (std::vector<std::string>{"verts", "edges", "scale"}));
+  EXPECT_EQ(names("weigh"), (std::vector<std::string>{"verts", "scale"}));
+  EXPECT_TRUE(names("none").empty());
+}
+
 }  // namespace
 }  // namespace simit::frontend

@@ -1,14 +1,11 @@
 // Which externs a function needs: a walk over its body and everything it calls or maps.
+#include "frontend/extern_uses.h"
+
 #include <set>
 
 #include "frontend/ast_walk.h"
-#include "api/compiled_program.h"
 
-namespace simit::api {
-
-namespace ast = frontend::ast;
-using frontend::IndexSet;
-using frontend::Type;
+namespace simit::frontend {
 
 namespace {
 
@@ -95,14 +92,16 @@ class ExternUses {
 
 }  // namespace
 
-std::vector<const ast::Variable*> externs_used_by(const ast::Program& program,
-                                                  const ast::FuncDecl& func) {
-  ExternUses uses;
-  uses.func(func);
-  std::vector<const ast::Variable*> out;
-  for (const ast::Variable* g : program.globals)
-    if (g && uses.found.count(g)) out.push_back(g);
-  return out;
+void plan_extern_uses(ast::Program& program) {
+  for (const auto& decl : program.decls) {
+    auto* f = decl->as<ast::FuncDecl>();
+    if (!f) continue;
+    ExternUses uses;
+    uses.func(*f);
+    f->extern_uses.clear();
+    for (const ast::Variable* g : program.globals)
+      if (g && uses.found.count(g)) f->extern_uses.push_back(g);
+  }
 }
 
-}  // namespace simit::api
+}  // namespace simit::frontend
