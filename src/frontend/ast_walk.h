@@ -34,11 +34,11 @@ template <class F>
 void for_each_child(const Expr& e, F&& f) {
   auto visit = [&](const auto&... members) { (walk_detail::each_expr(members, f), ...); };
   switch (e.kind) {
-#define SIMIT_WALK_CHILDREN(Node, ...)               \
-  case NodeKind::Node: {                             \
+#define SIMIT_WALK_CHILDREN(Node, ...)                            \
+  case NodeKind::Node: {                                          \
     [[maybe_unused]] const auto& n = static_cast<const Node&>(e); \
-    visit(__VA_ARGS__);                              \
-    break;                                           \
+    visit(__VA_ARGS__);                                           \
+    break;                                                        \
   }
     SIMIT_EXPR_CHILDREN(SIMIT_WALK_CHILDREN)
 #undef SIMIT_WALK_CHILDREN
@@ -58,11 +58,11 @@ void for_each_stmt_part(const Stmt& s, R&& root, B&& block) {
   };
   switch (s.kind) {
 #define SIMIT_WALK_PARTS(Node, root_members, block_members)       \
-  case NodeKind::Node: {                                         \
+  case NodeKind::Node: {                                          \
     [[maybe_unused]] const auto& n = static_cast<const Node&>(s); \
-    roots root_members;                                          \
-    blocks block_members;                                        \
-    break;                                                       \
+    roots root_members;                                           \
+    blocks block_members;                                         \
+    break;                                                        \
   }
     SIMIT_STMT_PARTS(SIMIT_WALK_PARTS)
 #undef SIMIT_WALK_PARTS

@@ -34,7 +34,8 @@ void plan(ast::Assign& a) {
 void plan_block(const ast::Block& block) {
   for (const auto& s : block) {
     if (auto* a = s->as<ast::Assign>(); a && a->index_notation) plan(*a);
-    ast::for_each_stmt_part(*s, [](const ast::Expr&) {}, plan_block);
+    ast::for_each_stmt_part(
+        *s, [](const ast::Expr&) {}, plan_block);
   }
 }
 

@@ -33,8 +33,8 @@ namespace simit::interp {
 
 struct AssemblyPlan {
   struct Result {
-    bool is_matrix = false;  // a system matrix (else a system vector or scalar)
-    Shape block;             // one block's shape (scalar for unblocked results)
+    bool is_matrix = false;       // a system matrix (else a system vector or scalar)
+    Shape block;                  // one block's shape (scalar for unblocked results)
     runtime::PatternPtr pattern;  // matrices over edge sets: shared by all their matrices
     // The matrix this site produced last: reused (zeroed) when nothing else holds it.
     std::shared_ptr<runtime::SystemMatrix> last;

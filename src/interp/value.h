@@ -58,7 +58,7 @@ class Value {
     Bool,
     Complex,
     String,
-    Tensor,  // a dense tensor of order >= 1, possibly blocked (global vectors too)
+    Tensor,   // a dense tensor of order >= 1, possibly blocked (global vectors too)
     Element,  // one element of a bound set (set + index)
     Set,      // a bound set
     Tuple,    // the endpoint tuple of one edge (edge set + edge index)
@@ -70,7 +70,9 @@ class Value {
   Value(const Value& o) : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) {
     if (owns()) copy_from(o);  // out-of-line payloads are copied, the rest is plain data
   }
-  Value(Value&& o) noexcept : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) { o.kind_ = Kind::Empty; }
+  Value(Value&& o) noexcept : kind_(o.kind_), i_(o.i_), aux_(o.aux_), u_(o.u_) {
+    o.kind_ = Kind::Empty;
+  }
   Value& operator=(const Value& o) {
     if (this != &o) {
       Value copy(o);

@@ -82,7 +82,7 @@ end
   EXPECT_TRUE(b[0]->system_level);   // var x = verts.m
   EXPECT_FALSE(b[1]->system_level);  // a scalar
   EXPECT_FALSE(b[2]->system_level);
-  EXPECT_TRUE(b[3]->system_level);   // the loop: vector updates, no calls
+  EXPECT_TRUE(b[3]->system_level);  // the loop: vector updates, no calls
   const auto& loop = static_cast<const ast::While&>(*b[3]);
   EXPECT_TRUE(loop.body[0]->system_level);
   EXPECT_FALSE(loop.body[1]->system_level);
@@ -123,8 +123,9 @@ end
   EXPECT_EQ(target(4).assembles_result, 1);   // a component of K's block
   const ast::Block& d = body(*c, "dense");
   // A result without a set dimension is not assembled.
-  EXPECT_EQ(static_cast<const ast::Assign&>(*d[0]).targets[0]->as<ast::TensorRead>()->assembles_result,
-            -1);
+  EXPECT_EQ(
+      static_cast<const ast::Assign&>(*d[0]).targets[0]->as<ast::TensorRead>()->assembles_result,
+      -1);
 }
 
 TEST(IndexRanges, LoopsAndRangingReadsOfAMatrixProduct) {
