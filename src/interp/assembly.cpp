@@ -258,24 +258,15 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   MapContext& ctx = *map_;
   size_t res = 0;
   while (&ctx.values[res] != &m) ++res;
-  if (!ctx.grid) {
-    // `K(v(i), v(j))`, `K(p, p)`: the members are known without a search.
-    const int rm = member_of(*r.indices[0]);
-    const int cm = rm < 0 ? -1 : member_of(*r.indices[1]);
-    if (cm >= 0) {
-      const runtime::AssemblyIndex& a = m.matrix()->pattern().assembly();
-      const int rl = local_member(a.row_members, rm), cl = local_member(a.col_members, cm);
-      if (rl >= 0 && cl >= 0 && m.matrix()->pattern().assembled_through(*ctx.target->set)) {
-        Place p;
-        p.whole = false;
-        p.shape = ctx.blocks[res];
-        p.accumulate = ctx.reduce;
-        p.root = &m;
-        p.matrix_position = a.position(ctx.element, rl, cl);
-        p.offset = static_cast<size_t>(p.matrix_position) * p.shape.size();
-        return p;
-      }
-    }
+  if (const int32_t pos = member_block(r, m); pos >= 0) {
+    Place p;
+    p.whole = false;
+    p.shape = ctx.blocks[res];
+    p.accumulate = ctx.reduce;
+    p.root = &m;
+    p.matrix_position = pos;
+    p.offset = static_cast<size_t>(pos) * p.shape.size();
+    return p;
   }
   Value row = eval(*r.indices[0]), col = eval(*r.indices[1]);
   if (row.kind() != Value::Kind::Element || col.kind() != Value::Kind::Element)
@@ -342,29 +333,36 @@ bool Interpreter::result_write(const ast::Expr& target, Value& value) {
   p.accumulate = ctx.reduce;
   p.shape = ctx.blocks[res];
   if (root.kind() == Value::Kind::Matrix) {
-    if (r->indices.size() != 2 || !r->indices[0] || !r->indices[1]) return false;
-    const int rm = member_of(*r->indices[0]);
-    const int cm = rm < 0 ? -1 : member_of(*r->indices[1]);
-    if (cm < 0 || !root.matrix()->pattern().assembled_through(*ctx.target->set)) return false;
-    const runtime::AssemblyIndex& ai = root.matrix()->pattern().assembly();
-    const int rl = local_member(ai.row_members, rm), cl = local_member(ai.col_members, cm);
-    if (rl < 0 || cl < 0) return false;
-    p.matrix_position = ai.position(ctx.element, rl, cl);
+    p.matrix_position = member_block(*r, root);
+    if (p.matrix_position < 0) return false;
     p.offset = static_cast<size_t>(p.matrix_position) * p.shape.size();
     if (component && !block_component(*component, p)) return false;
   } else {
-    if (component) return false;
-    if (!root.is_tensor() || r->indices.size() != 1 || !r->indices[0]) return false;
+    if (component || !root.is_tensor() || r->indices.size() != 1 || !r->indices[0]) return false;
     const Shape& s = root.tensor().shape();
-    if (s.order() != 1) return false;
-    const int m = member_of(*r->indices[0]);
-    if (m < 0) return false;
-    const int32_t e = runtime::member_element(*ctx.target->set, ctx.element, m);
+    const int m = s.order() == 1 ? member_of(*r->indices[0]) : -1;
+    const int32_t e = m < 0 ? -1 : runtime::member_element(*ctx.target->set, ctx.element, m);
     if (e < 0 || e >= s.dim(0)) return false;
     p.offset = static_cast<size_t>(e) * p.shape.size();
   }
   write_place(p, std::move(value), target.span);
   return true;
+}
+
+// The block position of `K(x, y)` in matrix result `m` when x and y name members of the
+// visited element (`K(v(i), v(j))`, `K(p, p)`): from the pattern's per-element table, with no
+// search. -1 for anything else, which the general path evaluates and checks.
+int32_t Interpreter::member_block(const ast::TensorRead& r, const Value& m) {
+  const MapContext& ctx = *map_;
+  if (ctx.grid || r.indices.size() != 2 || !r.indices[0] || !r.indices[1]) return -1;
+  const runtime::MatrixPattern& pattern = m.matrix()->pattern();
+  if (!pattern.assembled_through(*ctx.target->set)) return -1;
+  const int rm = member_of(*r.indices[0]);
+  const int cm = rm < 0 ? -1 : member_of(*r.indices[1]);
+  if (cm < 0) return -1;
+  const runtime::AssemblyIndex& a = pattern.assembly();
+  const int rl = local_member(a.row_members, rm), cl = local_member(a.col_members, cm);
+  return rl < 0 || cl < 0 ? -1 : a.position(ctx.element, rl, cl);
 }
 
 // Narrows a block place to the component `(a, d)` of an unblocked matrix block; false for

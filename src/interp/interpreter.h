@@ -228,6 +228,7 @@ class Interpreter {
                                                        ComponentKind kind);
   Place matrix_place(const frontend::ast::TensorRead& r, Value& m);
   int member_of(const frontend::ast::Expr& index);
+  int32_t member_block(const frontend::ast::TensorRead& r, const Value& m);
   bool result_write(const frontend::ast::Expr& target, Value& value);
   bool block_component(const frontend::ast::TensorRead& r, Place& p);
   static int local_member(const std::vector<int>& members, int member);

@@ -42,20 +42,6 @@ Place Interpreter::resolve_place(const ast::Expr& target, Value* root_override) 
       size_t offset = p.whole ? 0 : p.offset;
       if (s.is_scalar() || static_cast<int>(r.indices.size()) != s.order())
         fail(r.span, "wrong number of indices for a tensor of shape " + s.str());
-      if (map_result && !map_->grid && s.order() == 1) {
-        // `f(p(0)) = t`: a member of the visited element, in its neighbourhood by
-        // construction, so its index needs neither an element value nor the check.
-        if (const int m = member_of(*r.indices[0]); m >= 0) {
-          const int32_t e = runtime::member_element(*map_->target->set, map_->element, m);
-          if (e >= 0 && e < s.dim(0)) {
-            Shape block = s.block();
-            p.whole = false;
-            p.offset = static_cast<size_t>(e) * block.size();
-            p.shape = block;
-            return p;
-          }
-        }
-      }
       size_t outer = 0;
       for (size_t k = 0; k < r.indices.size(); ++k) {
         if (!r.indices[k]) fail(r.span, "a slice cannot be assigned");
