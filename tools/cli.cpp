@@ -70,6 +70,12 @@ void add_test(CLI::App& app, Commands& c) {
   c.test->add_flag("--float32", c.test_options.float32, "Run programs with 32-bit floats");
   c.test->add_flag("--check-finite", c.test_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
+  c.test->add_option("--backend", c.test_options.backend,
+                     "What runs the sections: interpreter (default) or jit (hot maps compiled)")
+      ->check(CLI::IsMember({"interpreter", "jit"}));
+  c.test->add_option("--jit-threshold", c.test_options.jit_threshold,
+                     "jit: executions of a map before it is compiled (0: at once; default 2)")
+      ->check(CLI::NonNegativeNumber);
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
@@ -90,6 +96,20 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_flag("--float32", o.float32, "Run with 32-bit floats");
   c.run->add_flag("--check-finite", o.check_finite,
                   "Stop with a run-time error at the first NaN or infinity produced");
+  c.run->add_option("--backend", o.backend,
+                    "What runs the program: interpreter (default) or jit (hot map and apply sites "
+                    "compiled to native code with LLVM; the rest interpreted)")
+      ->check(CLI::IsMember({"interpreter", "jit"}));
+  c.run->add_option("--jit-threshold", o.jit_threshold,
+                    "jit: executions of a site before it is compiled (0: at once; default 2)")
+      ->check(CLI::NonNegativeNumber);
+  c.run->add_flag("--jit-stats", o.jit_stats,
+                  "jit: after the run, print each trace: site, key, compile ms, calls, ms spent, "
+                  "or why it ran interpreted");
+  c.run->add_option("--dump", o.dump, "jit: print each compiled trace: loop-ir, llvm (or both)")
+      ->type_name("KIND")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"loop-ir", "llvm"}));
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
       ->check(CLI::NonNegativeNumber);
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
@@ -200,6 +220,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.file = c.run_options.file;
       so.float32 = c.run_options.float32;
       so.check_finite = c.run_options.check_finite;
+      so.backend = c.run_options.backend;
+      so.jit_threshold = c.run_options.jit_threshold;
+      so.jit_stats = c.run_options.jit_stats;
+      so.dump = c.run_options.dump;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       return run_scene(so, out, err);
     }

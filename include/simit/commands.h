@@ -25,6 +25,11 @@ struct RunOptions {
   std::vector<std::string> args;  // one literal per parameter, e.g. `2.5`, `[1.0, 2.0]'`
   bool float32 = false;
   bool check_finite = false;
+  // The executor: "interpreter" (the reference) or "jit" (hot sites compiled with LLVM).
+  std::string backend = "interpreter";
+  long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
+  bool jit_stats = false;         // jit: print each trace's figures after the run
+  std::vector<std::string> dump;  // jit: "loop-ir", "llvm": print each compiled trace
 };
 
 // Prints what the program prints, then one `name = literal` line per result, to `out`.

@@ -26,8 +26,8 @@ class Tensor;
 // configuration).
 struct Options {
   enum class Backend { Interpreter, Cpu, Gpu };
-  // Cpu currently runs the reference interpreter (the driver wires the JIT in when it is
-  // built); Gpu is refused with "no GPU backend in this build".
+  // Cpu compiles hot maps with the JIT where the build has one (SIMIT_WITH_LLVM=ON) and runs
+  // the reference interpreter otherwise; Gpu is refused with "no GPU backend in this build".
   Backend backend = Backend::Interpreter;
   // 8: Simit `float` is binary64 and float fields are `double` on the host; 4: Simit `float`
   // is rounded to binary32 and float fields are `float` on the host.

@@ -21,6 +21,11 @@ struct SceneOptions {
   std::string png;         // overrides [output] png when not empty (relative to the current folder)
   bool float32 = false;
   bool check_finite = false;
+  // The executor: "interpreter" (the reference) or "jit" (hot sites compiled with LLVM).
+  std::string backend = "interpreter";
+  long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
+  bool jit_stats = false;         // jit: print each trace's figures after the run
+  std::vector<std::string> dump;  // jit: "loop-ir", "llvm": print each compiled trace
   bool progress_line = false;  // rewrite one progress line (a terminal) instead of plain lines
   // No output files and no timings (simit debug: its transcript must be reproducible).
   bool quiet = false;

@@ -16,12 +16,31 @@
 
 namespace simit::api {
 
-// What executes the program's functions. Only the reference interpreter exists today. A
-// compiled executor (the CPU or GPU JIT) becomes a second value here and is wired in by
-// Engine::make_executor: it is the interpreter's site hook (interp/assembly_plan.h), offered
-// every planned map and apply site, so the interpreter stays the driver of every run and the
-// host-facing calls below do not change.
-enum class ExecutorKind { Interpreter };
+// What executes the program's functions: the reference interpreter, or the tracing JIT
+// (src/jit), which is the interpreter's site hook (interp/assembly_plan.h): it is offered
+// every planned map and apply site and compiles the hot ones to native code, so the
+// interpreter stays the driver of every run and the host-facing calls below do not change.
+enum class ExecutorKind { Interpreter, Jit };
+
+// "interpreter" or "jit".
+const char* executor_name(ExecutorKind k);
+// Whether this build has the JIT (configured with SIMIT_WITH_LLVM=ON).
+bool jit_available();
+// The executor named "interpreter" or "jit"; false for any other name.
+bool executor_from_name(const std::string& name, ExecutorKind& kind);
+// Sets `o`'s executor and JIT settings from a front end's options (`--backend`,
+// `--jit-threshold`, `--dump=loop-ir,llvm` printing to `dump_to`). Returns "" or what is wrong
+// (an unknown backend or dump kind, a JIT asked of a build without one).
+std::string configure_backend(struct EngineOptions& o, const std::string& backend, long threshold,
+                              const std::vector<std::string>& dump, std::ostream* dump_to);
+
+// The JIT's settings (ignored by the interpreter).
+struct JitSettings {
+  long threshold = -1;          // executions before a site is compiled; -1: the default
+  std::ostream* dump = nullptr;  // where --dump prints compiled traces (null: nowhere)
+  bool dump_loop_ir = false;
+  bool dump_llvm = false;
+};
 
 // Settings of one engine; passed down, never global.
 struct EngineOptions {
@@ -39,7 +58,9 @@ struct EngineOptions {
   interp::StatementHook* hook = nullptr;
   // Offered every planned map / apply site before the interpreter runs it (tests of the
   // executor seam); null with ExecutorKind::Interpreter runs everything in the interpreter.
+  // ExecutorKind::Jit installs its own.
   interp::SiteHook* sites = nullptr;
+  JitSettings jit;
 };
 
 // Runs the functions of one compiled program. Bindings and globals persist between calls,
@@ -80,11 +101,21 @@ class Engine {
   // receives it with every statement).
   const interp::Interpreter& interpreter() const { return *executor_; }
 
+  // Switches the executor between calls (the REPL's `:set backend`); bindings, values and
+  // patterns stay. Throws std::runtime_error when this build has no JIT.
+  void set_executor(ExecutorKind kind);
+  ExecutorKind executor() const { return options_.executor; }
+  // `--jit-stats`: each trace's site, key, compile time, calls and time spent (nothing
+  // under the interpreter).
+  void print_jit_stats(std::ostream& os) const;
+
  private:
   std::unique_ptr<interp::Interpreter> make_executor() const;
+  void install_jit();
 
   std::shared_ptr<const CompiledProgram> compiled_;
   EngineOptions options_;
+  std::unique_ptr<interp::SiteHook> jit_;  // declared first: outlives the interpreter using it
   std::unique_ptr<interp::Interpreter> executor_;
 };
 

@@ -249,7 +249,9 @@ void Function::Impl::init() {
     throw BindError(std::move(problems));
   }
   api::EngineOptions eo;
-  eo.executor = api::ExecutorKind::Interpreter;  // Backend::Cpu as well, until the JIT is built
+  // Cpu is the JIT where this build has one, the interpreter otherwise.
+  eo.executor = options.backend == Options::Backend::Cpu && api::jit_available() ? api::ExecutorKind::Jit
+                                                                                 : api::ExecutorKind::Interpreter;
   eo.float32 = options.float_size == 4;
   eo.check_finite = options.check_finite;
   eo.out = options.out;

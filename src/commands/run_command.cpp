@@ -77,12 +77,17 @@ int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream&
   run_options.check_finite = options.check_finite;
   run_options.out = &out;
   run_options.trap = hooks.trap;
+  if (std::string bad = api::configure_backend(run_options, options.backend, options.jit_threshold,
+                                               options.dump, &out);
+      !bad.empty())
+    return usage(err, bad);
   try {
     api::Engine engine(c, run_options);
     std::vector<interp::Value> results = engine.call(*f, std::move(args));
     for (size_t i = 0; i < results.size(); ++i)
       out << f->results[i].name << " = "
           << interp::literal_text(results[i], is_column(*f->results[i].var->type)) << "\n";
+    if (options.jit_stats) engine.print_jit_stats(out);
   } catch (const interp::RuntimeError& e) {
     out.flush();
     err << e.render();

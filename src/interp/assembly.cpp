@@ -159,7 +159,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
     --depth_;
     ++plan.runs;
     if (options_.sites && !trap_->armed()) {
-      SiteCall call{plan, partial, ctx->values};
+      SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at};
       if (options_.sites->run_site(call)) {
         map_ = saved;
         map_depth_ = saved_depth;

@@ -49,14 +49,17 @@ struct AssemblyPlan {
   long runs = 0;  // how many times the site ran (a compiled executor's hot counter)
 };
 
+class Interpreter;
+
 // What a compiled executor is handed for one execution of a planned site.
 struct SiteCall {
   AssemblyPlan& plan;
   const std::vector<Value>& partial_args;  // the values of `map f(a, b) to S`'s a, b
   std::deque<Value>& results;              // zeroed results to accumulate into
+  runtime::Set& target;                    // plan.target, writable (apply writes its fields)
+  const Interpreter& interpreter;          // globals, options, the trap (Ctrl-C)
+  const frontend::SourceSpan& at;          // the map expression or apply statement
 };
-
-class Interpreter;
 
 class SiteHook {
  public:

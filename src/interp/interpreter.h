@@ -66,6 +66,12 @@ class Interpreter {
   const Value* local(const frontend::ast::Variable& var) const;
 
   const Options& options() const { return options_; }
+  // The trap point's switch (the host's, or the interpreter's own): a compiled executor
+  // looks at it between chunks of elements for a pending interrupt.
+  Trap& trap() const { return *trap_; }
+  // Installs (or with null removes) the executor seam's hook between runs: switching the
+  // executor copies nothing, the sets and values stay where they are.
+  void set_site_hook(SiteHook* sites) { options_.sites = sites; }
   // The storage of a variable of the running function (or a global), for a SiteHook that
   // runs a statement: reads and writes go straight to the interpreter's own values.
   Value& variable(const frontend::ast::Variable& var);

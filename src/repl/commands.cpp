@@ -30,7 +30,7 @@ const CommandHelp kCommands[] = {
     {"print", ":print SET.FIELD[i]", "one element's field value (or a whole field)"},
     {"time", ":time STMT", "run a statement and print how long it took"},
     {"run", ":run FUNC [N]", "run a function without parameters N times (default 1)"},
-    {"set", ":set OPTION VALUE", "float32 on|off, check_finite on|off, print_limit N"},
+    {"set", ":set OPTION VALUE", "float32 on|off, check_finite on|off, print_limit N, backend interpreter|jit"},
     {"reset", ":reset", "forget every declaration, variable and scene"},
     {"quit", ":quit", "leave (Ctrl-D too)"},
 };
@@ -210,7 +210,7 @@ void Session::set_option(const std::string& arg) {
   std::vector<std::string> w = split_blanks(arg);
   if (w.size() != 2) {
     err_ << ":set needs an option and a value (float32 on|off, check_finite on|off, "
-            "print_limit N)\n";
+            "print_limit N, backend interpreter|jit)\n";
     return;
   }
   bool flag = false;
@@ -236,8 +236,15 @@ void Session::set_option(const std::string& arg) {
     } catch (const std::exception&) {
       err_ << ":set print_limit: expected a whole number, not '" << w[1] << "'\n";
     }
+  } else if (w[0] == "backend") {
+    api::EngineOptions probe;
+    if (std::string bad = api::configure_backend(probe, w[1], 0, {}, nullptr); !bad.empty()) {
+      err_ << ":set backend: " << bad << "\n";
+      return;
+    }
+    options_.backend = w[1];
   } else {
-    err_ << ":set: no option '" << w[0] << "' (float32, check_finite, print_limit)\n";
+    err_ << ":set: no option '" << w[0] << "' (float32, check_finite, print_limit, backend)\n";
     return;
   }
 }

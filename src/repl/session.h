@@ -25,6 +25,7 @@ struct SessionOptions {
   bool float32 = false;       // round every float to binary32 (scenes are reloaded)
   bool check_finite = false;  // stop at the first NaN or infinity
   int print_limit = 20;       // elements `:print SET.FIELD` lists before summarising
+  std::string backend = "interpreter";  // or "jit": hot maps compiled (threshold 0 here)
 };
 
 class Session {

@@ -21,6 +21,12 @@ Scene::~Scene() = default;
 std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& err) {
   auto impl = std::make_unique<Impl>();
   impl->options = options;
+  api::EngineOptions probe;
+  if (std::string bad = api::configure_backend(probe, options.backend, options.jit_threshold, options.dump, nullptr);
+      !bad.empty()) {
+    err << options.file << ": error: " << bad << "\n";
+    return nullptr;
+  }
   try {
     impl->file = read_scene_file(options.file);
   } catch (const SceneError& e) {

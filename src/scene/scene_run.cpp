@@ -86,6 +86,8 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.check_finite = options_.check_finite;
   eo.out = &out;
   eo.trap = trap_;
+  // Checked by Scene::open: cannot fail here.
+  api::configure_backend(eo, options_.backend, options_.jit_threshold, options_.dump, &out);
   return eo;
 }
 
@@ -103,6 +105,7 @@ void SceneRun::run(int frames, std::ostream& out) {
   const double total_ms = run_frames(engine, frames, out);
   if (options_.progress_line && frames > 0) out << '\n';
   print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
+  if (options_.jit_stats) engine.print_jit_stats(out);
   output_.write_final_csv();
 }
 

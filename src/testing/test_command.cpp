@@ -10,6 +10,11 @@ int run_test_command(const std::vector<std::string>& paths, const TestCommandOpt
   api::EngineOptions engine;
   engine.float32 = options.float32;
   engine.check_finite = options.check_finite;
+  if (std::string bad = api::configure_backend(engine, options.backend, options.jit_threshold, {}, nullptr);
+      !bad.empty()) {
+    err << "simit test: " << bad << "\n";
+    return 2;
+  }
   InterpExecutor executor(engine);
   TestOptions run;
   run.verbose = options.verbose;

@@ -1,0 +1,38 @@
+// What a code generator offers the trace controller: a trace in, a native kernel out. The
+// CPU generator (jit/cpu) is the only one that includes LLVM's headers.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "jit/loop_ir.h"
+
+namespace simit::jit {
+
+// A compiled trace runs the elements [begin, end) of its target set. `arrays` holds one
+// pointer per ArraySlot, `scalars` one double per scalar argument (ints and booleans
+// converted exactly), `endpoints` the target's endpoint table. Returns 0, or 1 + the index
+// of the failed check in Trace::errors with the element in *failed_element.
+using KernelFn = int32_t (*)(void* const* arrays, const double* scalars, const int32_t* endpoints,
+                             int32_t begin, int32_t end, int32_t* failed_element);
+
+class Kernel {
+ public:
+  virtual ~Kernel() = default;
+  KernelFn fn = nullptr;
+  double compile_ms = 0.0;
+  std::string llvm_ir;  // the optimised module, when asked for (`--dump=llvm`)
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  // Null with `error` set when the trace could not be compiled.
+  virtual std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) = 0;
+};
+
+// The host CPU through LLVM ORC; null with `error` set when LLVM cannot target this machine.
+std::unique_ptr<Backend> make_cpu_backend(std::string& error);
+
+}  // namespace simit::jit

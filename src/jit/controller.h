@@ -1,0 +1,65 @@
+// The trace controller: the compiled executor behind the interpreter's site hook. It counts
+// each site's executions, traces and compiles the hot ones for their key, keeps the kernels,
+// and falls back to the interpreter (recording why) for whatever it cannot compile.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "interp/assembly_plan.h"
+#include "jit/backend.h"
+#include "jit/trace_site.h"
+#include "jit/tunables.h"
+
+namespace simit::jit {
+
+struct JitOptions {
+  long threshold = kHotThreshold;  // executions before a site is compiled (0: at once)
+  bool float32 = false;            // the interpreter's float32 mode
+  bool check_finite = false;       // the interpreter's check-finite mode
+  // Where `--dump=loop-ir,llvm` prints each compiled trace; null prints nothing.
+  std::ostream* dump = nullptr;
+  bool dump_loop_ir = false;
+  bool dump_llvm = false;
+};
+
+// One trace's figures for `--jit-stats`.
+struct TraceStats {
+  std::string site;    // function and line of the map
+  std::string key;     // what it was compiled for
+  std::string status;  // "compiled", or why it runs interpreted
+  double compile_ms = 0.0;
+  long calls = 0;
+  double run_ms = 0.0;
+  size_t ir_nodes = 0;
+};
+
+class TraceController : public interp::SiteHook {
+ public:
+  explicit TraceController(JitOptions options);
+  ~TraceController() override;
+
+  bool run_site(interp::SiteCall& call) override;
+
+  std::vector<TraceStats> stats() const;
+  // A table of stats(), one line per trace.
+  void print_stats(std::ostream& os) const;
+  // Whether the host can compile at all (LLVM found a target); why not otherwise.
+  const std::string& unavailable() const { return backend_error_; }
+
+ private:
+  struct Entry;
+  struct SiteState;
+  Entry* entry_for(interp::SiteCall& call);
+  bool run_kernel(Entry& e, interp::SiteCall& call);
+
+  JitOptions options_;
+  std::unique_ptr<Backend> backend_;
+  std::string backend_error_;
+  std::map<const void*, std::unique_ptr<SiteState>> sites_;
+};
+
+}  // namespace simit::jit

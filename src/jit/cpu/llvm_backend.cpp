@@ -1,0 +1,417 @@
+// The CPU code generator: loop IR to LLVM IR, optimised for the host and linked through one
+// ORC session, one resource tracker per kernel (dropping a kernel frees its code).
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <unordered_map>
+
+#include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
+#include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
+#include <llvm/ExecutionEngine/Orc/LLJIT.h>
+#include <llvm/IR/IRBuilder.h>
+#include <llvm/IR/LLVMContext.h>
+#include <llvm/IR/MDBuilder.h>
+#include <llvm/IR/Module.h>
+#include <llvm/IR/Verifier.h>
+#include <llvm/Passes/PassBuilder.h>
+#include <llvm/Support/TargetSelect.h>
+#include <llvm/Support/raw_ostream.h>
+#include <llvm/Target/TargetMachine.h>
+
+#include "jit/backend.h"
+#include "jit/tunables.h"
+
+namespace simit::jit {
+
+namespace {
+
+using llvm::IRBuilder;
+using llvm::Value;
+
+std::string message_of(llvm::Error e) { return llvm::toString(std::move(e)); }
+
+// The one ORC session of the process: its code lives as long as the kernels that own it.
+class Session {
+ public:
+  static Session* get(std::string& error) {
+    static std::once_flag once;
+    static std::unique_ptr<Session> session;
+    static std::string failure;
+    std::call_once(once, [] {
+      llvm::InitializeNativeTarget();
+      llvm::InitializeNativeTargetAsmPrinter();
+      auto s = std::unique_ptr<Session>(new Session());
+      failure = s->start();
+      if (failure.empty()) session = std::move(s);
+    });
+    error = failure;
+    return session.get();
+  }
+
+  llvm::orc::LLJIT& jit() { return *jit_; }
+  llvm::TargetMachine& target() { return *tm_; }
+
+ private:
+  std::string start() {
+    auto jtmb = llvm::orc::JITTargetMachineBuilder::detectHost();
+    if (!jtmb) return message_of(jtmb.takeError());
+    // The arithmetic contract: no fused multiply-add, whatever the host offers.
+    jtmb->getOptions().AllowFPOpFusion = llvm::FPOpFusion::Strict;
+    jtmb->getFeatures().AddFeature("fma", false);
+    jtmb->getFeatures().AddFeature("avx512f", false);
+    jtmb->setCodeGenOptLevel(llvm::CodeGenOptLevel::Aggressive);
+    auto tm = jtmb->createTargetMachine();
+    if (!tm) return message_of(tm.takeError());
+    tm_ = std::move(*tm);
+    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*jtmb).create();
+    if (!jit) return message_of(jit.takeError());
+    jit_ = std::move(*jit);
+    auto gen = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
+        jit_->getDataLayout().getGlobalPrefix());
+    if (!gen) return message_of(gen.takeError());
+    jit_->getMainJITDylib().addGenerator(std::move(*gen));
+    return "";
+  }
+
+  std::unique_ptr<llvm::orc::LLJIT> jit_;
+  std::unique_ptr<llvm::TargetMachine> tm_;
+};
+
+class CpuKernel : public Kernel {
+ public:
+  explicit CpuKernel(llvm::orc::ResourceTrackerSP rt) : rt_(std::move(rt)) {}
+  ~CpuKernel() override {
+    if (rt_) llvm::consumeError(rt_->remove());
+  }
+
+ private:
+  llvm::orc::ResourceTrackerSP rt_;
+};
+
+// Emits one trace as a function of the KernelFn signature.
+class Emitter {
+ public:
+  Emitter(const Trace& t, llvm::Module& m) : t_(t), m_(m), ctx_(m.getContext()), b_(ctx_) {}
+
+  llvm::Function* run(const std::string& name);
+
+ private:
+  llvm::Type* type(Ty t) {
+    switch (t) {
+      case Ty::F64: return b_.getDoubleTy();
+      case Ty::I32: return b_.getInt32Ty();
+      case Ty::Bool: return b_.getInt1Ty();
+    }
+    return nullptr;
+  }
+  llvm::Type* storage(const ArraySlot& a) {
+    if (a.ty == Ty::F64) return a.single ? b_.getFloatTy() : b_.getDoubleTy();
+    if (a.ty == Ty::I32) return b_.getInt32Ty();
+    return b_.getInt8Ty();
+  }
+  // Address of component `comp` of element `index` of array `slot`.
+  Value* address(int slot, Value* index, int comp) {
+    const ArraySlot& a = t_.arrays[slot];
+    Value* i = b_.CreateSExt(index, b_.getInt64Ty());
+    Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), b_.getInt64(comp));
+    return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
+  }
+  Value* math(const Expr& e);
+  Value* expr(const Expr& e);
+  void block(const std::vector<Stmt>& body);
+  void stmt(const Stmt& s);
+
+  const Trace& t_;
+  llvm::Module& m_;
+  llvm::LLVMContext& ctx_;
+  IRBuilder<> b_;
+  llvm::Function* fn_ = nullptr;
+  std::vector<Value*> arrays_, scalars_, locals_, endpoints_;
+  Value* element_ = nullptr;
+  Value* failed_ = nullptr;
+};
+
+Value* Emitter::math(const Expr& e) {
+  const auto f = static_cast<MathFn>(e.op);
+  std::vector<Value*> args;
+  for (const ExprRef& o : e.ops) args.push_back(expr(*o));
+  switch (f) {
+    case MathFn::Sqrt: return b_.CreateUnaryIntrinsic(llvm::Intrinsic::sqrt, args[0]);
+    case MathFn::Abs: return b_.CreateUnaryIntrinsic(llvm::Intrinsic::fabs, args[0]);
+    case MathFn::Max:
+    case MathFn::Min: {
+      // fmax / fmin as glibc computes them: a NaN operand yields the other one; otherwise
+      // x > y ? x : y (x < y for fmin), so equal operands (+0, -0) give y.
+      Value *x = args[0], *y = args[1];
+      Value* pick = f == MathFn::Max ? b_.CreateFCmpOGT(x, y) : b_.CreateFCmpOLT(x, y);
+      Value* v = b_.CreateSelect(pick, x, y);
+      v = b_.CreateSelect(b_.CreateFCmpUNO(y, y), x, v);
+      return b_.CreateSelect(b_.CreateFCmpUNO(x, x), y, v);
+    }
+    default: break;
+  }
+  std::vector<llvm::Type*> params(args.size(), b_.getDoubleTy());
+  auto* ft = llvm::FunctionType::get(b_.getDoubleTy(), params, false);
+  llvm::FunctionCallee callee = m_.getOrInsertFunction(math_name(f), ft);
+  if (auto* fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
+    fn->setDoesNotThrow();
+    fn->setDoesNotAccessMemory();  // errno is never read back
+  }
+  llvm::CallInst* call = b_.CreateCall(callee, args);
+  // The C library's result, not LLVM's idea of it: no folding into other operations.
+  call->addFnAttr(llvm::Attribute::NoBuiltin);
+  return call;
+}
+
+Value* Emitter::expr(const Expr& e) {
+  switch (e.kind) {
+    case ExprKind::Const:
+      if (e.ty == Ty::F64) return llvm::ConstantFP::get(b_.getDoubleTy(), e.f);
+      if (e.ty == Ty::I32) return b_.getInt32(static_cast<uint32_t>(e.i));
+      return b_.getInt1(e.i != 0);
+    case ExprKind::Scalar: {
+      Value* d = scalars_[e.slot];
+      if (e.ty == Ty::F64) return d;
+      if (e.ty == Ty::I32) return b_.CreateFPToSI(d, b_.getInt32Ty());
+      return b_.CreateFCmpUNE(d, llvm::ConstantFP::get(b_.getDoubleTy(), 0.0));
+    }
+    case ExprKind::Element: return element_;
+    case ExprKind::Endpoint: return endpoints_[e.slot];
+    case ExprKind::Load: {
+      const ArraySlot& a = t_.arrays[e.slot];
+      Value* v = b_.CreateLoad(storage(a), address(e.slot, expr(*e.ops[0]), e.comp));
+      if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
+      if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
+      return v;
+    }
+    case ExprKind::Local: return b_.CreateLoad(type(e.ty), locals_[e.slot]);
+    case ExprKind::Unary: {
+      Value* x = expr(*e.ops[0]);
+      switch (static_cast<UnOp>(e.op)) {
+        case UnOp::Neg: return e.ty == Ty::F64 ? b_.CreateFNeg(x) : b_.CreateSub(b_.getInt32(0), x);
+        case UnOp::Not: return b_.CreateNot(x);
+        case UnOp::Round32:
+          return b_.CreateFPExt(b_.CreateFPTrunc(x, b_.getFloatTy()), b_.getDoubleTy());
+        case UnOp::ToF64: return b_.CreateSIToFP(x, b_.getDoubleTy());
+      }
+      return x;
+    }
+    case ExprKind::Binary: {
+      Value *x = expr(*e.ops[0]), *y = expr(*e.ops[1]);
+      const bool f = e.ty == Ty::F64;
+      switch (static_cast<BinOp>(e.op)) {
+        case BinOp::Add: return f ? b_.CreateFAdd(x, y) : b_.CreateAdd(x, y);
+        case BinOp::Sub: return f ? b_.CreateFSub(x, y) : b_.CreateSub(x, y);
+        case BinOp::Mul: return f ? b_.CreateFMul(x, y) : b_.CreateMul(x, y);
+        case BinOp::Div: return b_.CreateFDiv(x, y);
+        case BinOp::And: return b_.CreateAnd(x, y);
+        case BinOp::Or: return b_.CreateOr(x, y);
+        case BinOp::Xor: return b_.CreateXor(x, y);
+      }
+      return x;
+    }
+    case ExprKind::Compare: {
+      Value *x = expr(*e.ops[0]), *y = expr(*e.ops[1]);
+      using P = llvm::CmpInst::Predicate;
+      static const P fp[] = {P::FCMP_OEQ, P::FCMP_UNE, P::FCMP_OLT,
+                             P::FCMP_OGT, P::FCMP_OLE, P::FCMP_OGE};
+      static const P ip[] = {P::ICMP_EQ,  P::ICMP_NE,  P::ICMP_SLT,
+                             P::ICMP_SGT, P::ICMP_SLE, P::ICMP_SGE};
+      if (e.ops[0]->ty == Ty::F64) return b_.CreateFCmp(fp[e.op], x, y);
+      return b_.CreateICmp(ip[e.op], x, y);
+    }
+    case ExprKind::Select:
+      return b_.CreateSelect(expr(*e.ops[0]), expr(*e.ops[1]), expr(*e.ops[2]));
+    case ExprKind::Math: return math(e);
+  }
+  return nullptr;
+}
+
+void Emitter::stmt(const Stmt& s) {
+  switch (s.kind) {
+    case StmtKind::SetLocal: b_.CreateStore(expr(*s.value), locals_[s.slot]); return;
+    case StmtKind::Store: {
+      const ArraySlot& a = t_.arrays[s.slot];
+      Value* v = expr(*s.value);
+      if (a.ty == Ty::F64 && a.single) v = b_.CreateFPTrunc(v, b_.getFloatTy());
+      if (a.ty == Ty::Bool) v = b_.CreateZExt(v, b_.getInt8Ty());
+      b_.CreateStore(v, address(s.slot, expr(*s.index), s.comp));
+      return;
+    }
+    case StmtKind::Assemble: {
+      Value* at;
+      if (s.pair >= 0) {
+        // The block's position in the matrix comes from the pattern's per-element table.
+        const int result = t_.arrays[s.slot].index;
+        int table = -1;
+        for (size_t i = 0; i < t_.arrays.size(); ++i)
+          if (t_.arrays[i].kind == ArraySlot::Kind::Table && t_.arrays[i].index == result)
+            table = static_cast<int>(i);
+        Value* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
+        at = address(s.slot, pos, s.comp);
+      } else {
+        at = address(s.slot, expr(*s.index), s.comp);
+      }
+      Value* v = expr(*s.value);
+      if (t_.reduce) v = b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), at), v);
+      b_.CreateStore(v, at);
+      return;
+    }
+    case StmtKind::If: {
+      Value* c = expr(*s.value);
+      auto* then_bb = llvm::BasicBlock::Create(ctx_, "then", fn_);
+      auto* else_bb = llvm::BasicBlock::Create(ctx_, "else", fn_);
+      auto* join = llvm::BasicBlock::Create(ctx_, "join", fn_);
+      b_.CreateCondBr(c, then_bb, else_bb);
+      b_.SetInsertPoint(then_bb);
+      block(s.body);
+      b_.CreateBr(join);
+      b_.SetInsertPoint(else_bb);
+      block(s.orelse);
+      b_.CreateBr(join);
+      b_.SetInsertPoint(join);
+      return;
+    }
+    case StmtKind::Check: {
+      Value* ok = expr(*s.value);
+      auto* fail = llvm::BasicBlock::Create(ctx_, "fail", fn_);
+      auto* cont = llvm::BasicBlock::Create(ctx_, "ok", fn_);
+      b_.CreateCondBr(ok, cont, fail, llvm::MDBuilder(ctx_).createLikelyBranchWeights());
+      b_.SetInsertPoint(fail);
+      b_.CreateStore(element_, failed_);
+      b_.CreateRet(b_.getInt32(s.error + 1));
+      b_.SetInsertPoint(cont);
+      return;
+    }
+  }
+}
+
+void Emitter::block(const std::vector<Stmt>& body) {
+  for (const Stmt& s : body) stmt(s);
+}
+
+llvm::Function* Emitter::run(const std::string& name) {
+  llvm::Type* ptr = b_.getPtrTy();
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(),
+                                     {ptr, ptr, ptr, b_.getInt32Ty(), b_.getInt32Ty(), ptr}, false);
+  fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
+  auto arg = fn_->arg_begin();
+  Value *arrays = &*arg++, *scalars = &*arg++, *endpoints = &*arg++;
+  Value *begin = &*arg++, *end = &*arg++;
+  failed_ = &*arg;
+  for (int i = 0; i < 3; ++i) fn_->addParamAttr(i, llvm::Attribute::NoAlias);
+
+  auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
+  b_.SetInsertPoint(entry);
+  // Everything invariant over the elements is read once, before the loop.
+  for (size_t i = 0; i < t_.arrays.size(); ++i)
+    arrays_.push_back(
+        b_.CreateLoad(ptr, b_.CreateConstInBoundsGEP1_64(ptr, arrays, i), t_.arrays[i].name));
+  for (size_t i = 0; i < t_.scalars.size(); ++i)
+    scalars_.push_back(b_.CreateLoad(b_.getDoubleTy(),
+                                     b_.CreateConstInBoundsGEP1_64(b_.getDoubleTy(), scalars, i)));
+  for (Ty t : t_.locals) locals_.push_back(b_.CreateAlloca(type(t)));
+
+  auto* head = llvm::BasicBlock::Create(ctx_, "element", fn_);
+  auto* body = llvm::BasicBlock::Create(ctx_, "body", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  llvm::PHINode* e = b_.CreatePHI(b_.getInt32Ty(), 2, "e");
+  e->addIncoming(begin, entry);
+  b_.CreateCondBr(b_.CreateICmpSLT(e, end), body, done);
+  b_.SetInsertPoint(body);
+  element_ = e;
+  if (t_.arity > 0) {
+    Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_.arity));
+    for (int k = 0; k < t_.arity; ++k)
+      endpoints_.push_back(b_.CreateLoad(
+          b_.getInt32Ty(),
+          b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoints, b_.CreateAdd(base, b_.getInt64(k)))));
+  }
+  block(t_.body);
+  Value* next = b_.CreateAdd(e, b_.getInt32(1));
+  e->addIncoming(next, b_.GetInsertBlock());
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+  b_.CreateRet(b_.getInt32(0));
+  return fn_;
+}
+
+void optimise(llvm::Module& m, llvm::TargetMachine& tm) {
+  llvm::LoopAnalysisManager lam;
+  llvm::FunctionAnalysisManager fam;
+  llvm::CGSCCAnalysisManager cgam;
+  llvm::ModuleAnalysisManager mam;
+  llvm::PassBuilder pb(&tm);
+  pb.registerModuleAnalyses(mam);
+  pb.registerCGSCCAnalyses(cgam);
+  pb.registerFunctionAnalyses(fam);
+  pb.registerLoopAnalyses(lam);
+  pb.crossRegisterProxies(lam, fam, cgam, mam);
+  const llvm::OptimizationLevel level =
+      kOptLevel >= 3 ? llvm::OptimizationLevel::O3 : llvm::OptimizationLevel::O2;
+  llvm::ModulePassManager mpm = pb.buildPerModuleDefaultPipeline(level);
+  mpm.run(m, mam);
+}
+
+class CpuBackend : public Backend {
+ public:
+  explicit CpuBackend(Session& s) : s_(s) {}
+
+  std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
+    const auto start = std::chrono::steady_clock::now();
+    static std::atomic<int> serial{0};
+    const std::string name = "simit_kernel_" + std::to_string(serial++);
+    auto ctx = std::make_unique<llvm::LLVMContext>();
+    auto mod = std::make_unique<llvm::Module>(name, *ctx);
+    mod->setDataLayout(s_.jit().getDataLayout());
+    mod->setTargetTriple(s_.target().getTargetTriple().str());
+    llvm::Function* fn = Emitter(trace, *mod).run(name);
+    fn->addFnAttr("target-cpu", s_.target().getTargetCPU());
+    fn->addFnAttr("target-features", s_.target().getTargetFeatureString());
+    std::string broken;
+    llvm::raw_string_ostream bs(broken);
+    if (llvm::verifyModule(*mod, &bs)) {
+      error = "LLVM rejected the generated code: " + bs.str();
+      return nullptr;
+    }
+    optimise(*mod, s_.target());
+    std::string ir;
+    if (keep_ir) {
+      llvm::raw_string_ostream os(ir);
+      mod->print(os, nullptr);
+    }
+    auto rt = s_.jit().getMainJITDylib().createResourceTracker();
+    if (llvm::Error e =
+            s_.jit().addIRModule(rt, llvm::orc::ThreadSafeModule(std::move(mod), std::move(ctx)))) {
+      error = message_of(std::move(e));
+      return nullptr;
+    }
+    auto sym = s_.jit().lookup(name);
+    if (!sym) {
+      error = message_of(sym.takeError());
+      llvm::consumeError(rt->remove());
+      return nullptr;
+    }
+    auto k = std::make_unique<CpuKernel>(rt);
+    k->fn = sym->toPtr<KernelFn>();
+    k->llvm_ir = std::move(ir);
+    k->compile_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return k;
+  }
+
+ private:
+  Session& s_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_cpu_backend(std::string& error) {
+  Session* s = Session::get(error);
+  if (!s) return nullptr;
+  return std::make_unique<CpuBackend>(*s);
+}
+
+}  // namespace simit::jit

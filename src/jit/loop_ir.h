@@ -1,0 +1,148 @@
+// The loop IR a traced map site is compiled from: scalar expressions and statements run once
+// per element of the target set, with every array the kernel touches named by a slot.
+//
+// A trace is straight-line scalar code: the tracer (jit/trace_site.h) has already inlined the
+// calls, unrolled the loops over constant ranges and split every small dense tensor into its
+// components, so what is left is arithmetic, loads, guarded blocks and the assembly writes.
+// Every node keeps the source span it came from, so a failing check names the `.sim` line.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "frontend/source.h"
+
+namespace simit::jit {
+
+// Scalar types of the IR: binary64, 32-bit int, and truth values.
+enum class Ty : uint8_t { F64, I32, Bool };
+const char* ty_name(Ty t);
+
+// One list of expression kinds and one of statement kinds; the enums, the printer's names
+// and the verifier's dispatch derive from them.
+#define SIMIT_LOOP_EXPRS(X)                                                        \
+  X(Const)    /* f (F64) or i (I32, Bool)                                       */ \
+  X(Scalar)   /* the call's scalar argument `slot`                              */ \
+  X(Element)  /* the index of the visited element                               */ \
+  X(Endpoint) /* endpoint `slot` of the visited element                         */ \
+  X(Load)     /* component `comp` of array `slot` at element ops[0]            */  \
+  X(Local)    /* the value of local `slot`                                      */ \
+  X(Unary)    /* op(ops[0])                                                     */ \
+  X(Binary)   /* ops[0] op ops[1]                                               */ \
+  X(Compare)  /* ops[0] op ops[1], a Bool                                       */ \
+  X(Select)   /* ops[0] ? ops[1] : ops[2]                                       */ \
+  X(Math)     /* C library function `op` of ops                                 */
+#define SIMIT_LOOP_STMTS(X)                                                          \
+  X(SetLocal) /* local `slot` = value                                            */  \
+  X(Store)    /* array `slot` at element `index`, component `comp` = value       */  \
+  X(Assemble) /* result `slot` += (or =) value, at a vector element or a block    */ \
+  X(If)       /* if value then body else orelse                                  */  \
+  X(Check)    /* if not value: stop with error `error`                           */
+
+enum class ExprKind : uint8_t {
+#define SIMIT_LOOP_ENUM(n) n,
+  SIMIT_LOOP_EXPRS(SIMIT_LOOP_ENUM)
+};
+enum class StmtKind : uint8_t { SIMIT_LOOP_STMTS(SIMIT_LOOP_ENUM) };
+#undef SIMIT_LOOP_ENUM
+const char* expr_kind_name(ExprKind k);
+const char* stmt_kind_name(StmtKind k);
+
+enum class UnOp : uint8_t { Neg, Not, Round32, ToF64 };
+enum class BinOp : uint8_t { Add, Sub, Mul, Div, And, Or, Xor };
+enum class CmpOp : uint8_t { Eq, Ne, Lt, Gt, Le, Ge };
+enum class MathFn : uint8_t {
+  Sin,
+  Cos,
+  Tan,
+  Asin,
+  Acos,
+  Atan2,
+  Sqrt,
+  Cbrt,
+  Log,
+  Exp,
+  Pow,
+  Abs,
+  Max,
+  Min
+};
+const char* math_name(MathFn f);
+
+struct Expr;
+using ExprRef = std::shared_ptr<const Expr>;
+
+struct Expr {
+  ExprKind kind = ExprKind::Const;
+  Ty ty = Ty::F64;
+  uint8_t op = 0;  // UnOp, BinOp, CmpOp or MathFn by kind
+  int slot = 0;    // Scalar, Endpoint, Load, Local
+  int comp = 0;    // Load
+  double f = 0.0;  // Const F64
+  int64_t i = 0;   // Const I32 / Bool
+  std::vector<ExprRef> ops;
+  frontend::SourceSpan span;
+};
+
+struct Stmt {
+  StmtKind kind = StmtKind::SetLocal;
+  int slot = 0;                    // SetLocal: local; Store: array; Assemble: result array
+  int comp = 0;                    // Store / Assemble: component within the element's block
+  int pair = -1;                   // Assemble into a matrix: the (row member, column member) pair
+  int error = -1;                  // Check: index into Trace::errors
+  ExprRef index;                   // Store / Assemble into a vector: the element written
+  ExprRef value;                   // SetLocal, Store, Assemble: the value; If, Check: the condition
+  std::vector<Stmt> body, orelse;  // If
+  frontend::SourceSpan span;
+};
+
+// What an array slot of a trace holds; the controller fills the pointers per call.
+struct ArraySlot {
+  enum class Kind : uint8_t {
+    Field,   // a field of `member` (0: the target set, k + 1: endpoint set k)
+    Vector,  // a partial argument that is a global vector (one block per element)
+    Result,  // result `index`'s components (a global vector or a matrix's values)
+    Table,   // result `index`'s per-element block table (AssemblyIndex::table)
+  };
+  Kind kind = Kind::Field;
+  int member = 0;       // Field
+  int index = 0;        // Field: the set's field index; Vector: partial argument; Result, Table
+  Ty ty = Ty::F64;      // component type as stored
+  bool single = false;  // binary32 storage of a float field
+  bool written = false;
+  int components = 1;  // per element (per block for results)
+  std::string name;    // for dumps and messages
+};
+
+// A run-time check that failed: where, and what to say.
+struct ErrorSite {
+  frontend::SourceSpan span;
+  std::string message;
+};
+
+// One compiled unit: the per-element body of a map or apply site.
+struct Trace {
+  std::string name;     // e.g. "tet_force@fem.sim:165"
+  int arity = 0;        // endpoints per element of the target set
+  bool reduce = false;  // assembly writes add (else they overwrite)
+  std::vector<ArraySlot> arrays;
+  std::vector<Ty> scalars;  // the call's scalar arguments, by slot
+  std::vector<Ty> locals;   // local slots, by number
+  std::vector<int> pairs;   // per matrix result (by result index): pairs per element, or 0
+  std::vector<Stmt> body;
+  std::vector<ErrorSite> errors;
+  bool writes_fields = false;  // some Store (an apply with inout fields)
+};
+
+// Prints the trace as text (`--dump=loop-ir`).
+void print(std::ostream& os, const Trace& t);
+// Checks the invariants every pass relies on: operand types, slots in range, locals set
+// before they are read on every path. Returns the first violation, or "" when it holds.
+std::string verify(const Trace& t);
+// Counts the nodes of a trace (for size limits and statistics).
+size_t node_count(const Trace& t);
+
+}  // namespace simit::jit

@@ -1,0 +1,1271 @@
+// The tracer (jit/trace_site.h): symbolic execution of a mapped function into loop IR.
+#include "jit/trace_site.h"
+
+#include <algorithm>
+#include <map>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "frontend/ast_walk.h"
+#include "jit/tunables.h"
+
+namespace simit::jit {
+
+namespace ast = frontend::ast;
+using frontend::IndexSet;
+using frontend::ScalarKind;
+using frontend::SourceSpan;
+using frontend::Type;
+
+namespace {
+
+// The tracer gives up: the site stays interpreted, with this reason.
+struct GiveUp {
+  std::string reason;
+};
+[[noreturn]] void give_up(const SourceSpan& at, const std::string& why) {
+  std::string where;
+  if (at.valid()) where = " (line " + std::to_string(at.start().line) + ")";
+  throw GiveUp{why + where};
+}
+
+// ---------------------------------------------------------------------------
+// Expression constructors, folding constants as they go.
+
+ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
+
+ExprRef fconst(double v) {
+  Expr e;
+  e.kind = ExprKind::Const;
+  e.ty = Ty::F64;
+  e.f = v;
+  return make(std::move(e));
+}
+ExprRef iconst(int64_t v, Ty ty = Ty::I32) {
+  Expr e;
+  e.kind = ExprKind::Const;
+  e.ty = ty;
+  e.i = v;
+  return make(std::move(e));
+}
+bool is_const(const ExprRef& e) { return e->kind == ExprKind::Const; }
+
+ExprRef unary(UnOp op, Ty ty, ExprRef a, SourceSpan at = {}) {
+  if (is_const(a)) {
+    switch (op) {
+      case UnOp::Neg:
+        if (ty == Ty::F64) return fconst(-a->f);
+        return iconst(static_cast<int32_t>(0u - static_cast<uint32_t>(a->i)));
+      case UnOp::Not: return iconst(!a->i, Ty::Bool);
+      case UnOp::Round32: return fconst(static_cast<double>(static_cast<float>(a->f)));
+      case UnOp::ToF64: return fconst(static_cast<double>(a->i));
+    }
+  }
+  Expr e;
+  e.kind = ExprKind::Unary;
+  e.ty = ty;
+  e.op = static_cast<uint8_t>(op);
+  e.ops = {std::move(a)};
+  e.span = at;
+  return make(std::move(e));
+}
+
+ExprRef binary(BinOp op, Ty ty, ExprRef a, ExprRef b, SourceSpan at = {}) {
+  if (is_const(a) && is_const(b)) {
+    if (ty == Ty::F64) {
+      switch (op) {
+        case BinOp::Add: return fconst(a->f + b->f);
+        case BinOp::Sub: return fconst(a->f - b->f);
+        case BinOp::Mul: return fconst(a->f * b->f);
+        case BinOp::Div: return fconst(a->f / b->f);
+        default: break;
+      }
+    } else if (ty == Ty::I32) {
+      const uint32_t x = static_cast<uint32_t>(a->i), y = static_cast<uint32_t>(b->i);
+      switch (op) {
+        case BinOp::Add: return iconst(static_cast<int32_t>(x + y));
+        case BinOp::Sub: return iconst(static_cast<int32_t>(x - y));
+        case BinOp::Mul: return iconst(static_cast<int32_t>(x * y));
+        default: break;
+      }
+    } else {
+      switch (op) {
+        case BinOp::And: return iconst(a->i && b->i, Ty::Bool);
+        case BinOp::Or: return iconst(a->i || b->i, Ty::Bool);
+        case BinOp::Xor: return iconst((a->i != 0) != (b->i != 0), Ty::Bool);
+        default: break;
+      }
+    }
+  }
+  if (ty == Ty::I32 && op == BinOp::Div) give_up(at, "integer division is not compiled");
+  Expr e;
+  e.kind = ExprKind::Binary;
+  e.ty = ty;
+  e.op = static_cast<uint8_t>(op);
+  e.ops = {std::move(a), std::move(b)};
+  e.span = at;
+  return make(std::move(e));
+}
+
+ExprRef compare(CmpOp op, ExprRef a, ExprRef b, SourceSpan at = {}) {
+  if (is_const(a) && is_const(b)) {
+    const bool f = a->ty == Ty::F64;
+    const double x = f ? a->f : static_cast<double>(a->i), y = f ? b->f : static_cast<double>(b->i);
+    bool r = false;
+    switch (op) {
+      case CmpOp::Eq: r = x == y; break;
+      case CmpOp::Ne: r = x != y; break;
+      case CmpOp::Lt: r = x < y; break;
+      case CmpOp::Gt: r = x > y; break;
+      case CmpOp::Le: r = x <= y; break;
+      case CmpOp::Ge: r = x >= y; break;
+    }
+    return iconst(r, Ty::Bool);
+  }
+  Expr e;
+  e.kind = ExprKind::Compare;
+  e.ty = Ty::Bool;
+  e.op = static_cast<uint8_t>(op);
+  e.ops = {std::move(a), std::move(b)};
+  e.span = at;
+  return make(std::move(e));
+}
+
+ExprRef math(MathFn f, std::vector<ExprRef> args, SourceSpan at) {
+  Expr e;
+  e.kind = ExprKind::Math;
+  e.ty = Ty::F64;
+  e.op = static_cast<uint8_t>(f);
+  e.ops = std::move(args);
+  e.span = at;
+  return make(std::move(e));
+}
+
+ExprRef leaf(ExprKind k, Ty ty, int slot) {
+  Expr e;
+  e.kind = k;
+  e.ty = ty;
+  e.slot = slot;
+  return make(std::move(e));
+}
+
+// ---------------------------------------------------------------------------
+// Symbolic values of the traced function's expressions.
+
+struct Sym {
+  enum class Kind { None, Tensor, Element, Tuple, Vector, Result };
+  Kind kind = Kind::None;
+  Ty ty = Ty::F64;
+  std::vector<int> dims;   // Tensor: dimensions (none for a scalar)
+  std::vector<ExprRef> c;  // Tensor: components, row-major
+  int member = -1;         // Element: 0 the visited element, k + 1 its endpoint k
+  int slot = -1;           // Vector: array slot; Result: result index
+  bool inout = false;      // Element: its fields may be written
+
+  size_t size() const { return c.size(); }
+  bool scalar() const { return kind == Kind::Tensor && dims.empty(); }
+};
+
+Sym tensor(Ty ty, std::vector<int> dims, std::vector<ExprRef> c) {
+  Sym s;
+  s.kind = Sym::Kind::Tensor;
+  s.ty = ty;
+  s.dims = std::move(dims);
+  s.c = std::move(c);
+  return s;
+}
+Sym scalar(Ty ty, ExprRef e) { return tensor(ty, {}, {std::move(e)}); }
+
+Ty ty_of(ScalarKind k, const SourceSpan& at) {
+  switch (k) {
+    case ScalarKind::Float: return Ty::F64;
+    case ScalarKind::Int: return Ty::I32;
+    case ScalarKind::Bool: return Ty::Bool;
+    default: give_up(at, std::string(frontend::to_string(k)) + " values are not compiled");
+  }
+}
+
+// The fixed dimensions of a small dense tensor type (none for a scalar).
+std::vector<int> dims_of(const Type& t, const SourceSpan& at) {
+  if (t.kind == Type::Kind::Scalar) return {};
+  if (t.kind != Type::Kind::Tensor)
+    give_up(at, "a value of type " + frontend::to_string(t) + " is not compiled");
+  if (t.block && t.block->kind != Type::Kind::Scalar)
+    give_up(at, "blocked dense tensors are not compiled");
+  std::vector<int> d;
+  for (const IndexSet& i : t.dims) {
+    if (i.kind != IndexSet::Kind::Fixed) give_up(at, "a tensor over a set is not compiled here");
+    d.push_back(i.size);
+  }
+  return d;
+}
+
+Sym zero_of(const Type& t, const SourceSpan& at) {
+  const Ty ty = ty_of(t.component(), at);
+  std::vector<int> d = dims_of(t, at);
+  size_t n = 1;
+  for (int x : d) n *= static_cast<size_t>(x);
+  return tensor(ty, std::move(d),
+                std::vector<ExprRef>(n, ty == Ty::F64 ? fconst(0.0) : iconst(0, ty)));
+}
+
+// Constants of the program (and the literal values of externs, for their shapes).
+Sym const_of(const interp::Value& v, const SourceSpan& at) {
+  using K = interp::Value::Kind;
+  switch (v.kind()) {
+    case K::Float: return scalar(Ty::F64, fconst(v.as_float()));
+    case K::Int: return scalar(Ty::I32, iconst(v.as_int()));
+    case K::Bool: return scalar(Ty::Bool, iconst(v.as_bool(), Ty::Bool));
+    case K::Tensor: {
+      const runtime::Tensor& t = v.tensor();
+      if (t.shape().is_blocked()) give_up(at, "blocked constants are not compiled");
+      std::vector<int> dims;
+      for (int i = 0; i < t.shape().order(); ++i) dims.push_back(t.shape().dim(i));
+      std::vector<ExprRef> c;
+      for (size_t i = 0; i < t.size(); ++i) {
+        switch (t.kind()) {
+          case runtime::ComponentKind::Float: c.push_back(fconst(t.floats()[i])); break;
+          case runtime::ComponentKind::Int: c.push_back(iconst(t.ints()[i])); break;
+          case runtime::ComponentKind::Bool: c.push_back(iconst(t.bools()[i], Ty::Bool)); break;
+          default: give_up(at, "constants of this component type are not compiled");
+        }
+      }
+      const Ty ty = t.kind() == runtime::ComponentKind::Float ? Ty::F64
+                    : t.kind() == runtime::ComponentKind::Int ? Ty::I32
+                                                              : Ty::Bool;
+      return tensor(ty, std::move(dims), std::move(c));
+    }
+    default: give_up(at, "a constant of this kind is not compiled");
+  }
+}
+
+// Row-major offset of constant indices into dims.
+size_t offset_of(const std::vector<int>& dims, const std::vector<int64_t>& idx,
+                 const SourceSpan& at) {
+  size_t off = 0;
+  for (size_t k = 0; k < dims.size(); ++k) {
+    if (idx[k] < 0 || idx[k] >= dims[k]) give_up(at, "index out of range");
+    off = off * static_cast<size_t>(dims[k]) + static_cast<size_t>(idx[k]);
+  }
+  return off;
+}
+
+// ---------------------------------------------------------------------------
+
+class Tracer {
+ public:
+  explicit Tracer(const SiteShape& shape) : in_(shape) {}
+
+  TracedSite run();
+
+ private:
+  struct Frame {
+    std::unordered_map<const ast::Variable*, Sym> vars;
+    std::unordered_map<const ast::Variable*, int> bound_at;  // block depth of the binding
+    std::unordered_map<const ast::Variable*, std::vector<int>> merged;  // mutable locals
+  };
+  struct CachedLoad {
+    int local;
+    int block;
+  };
+
+  // Statements and locals.
+  void emit(Stmt s) { out_->push_back(std::move(s)); }
+  int new_local(Ty ty, bool mut) {
+    trace_.locals.push_back(ty);
+    mutable_.push_back(mut);
+    return static_cast<int>(trace_.locals.size() - 1);
+  }
+  ExprRef read_local(int l) { return leaf(ExprKind::Local, trace_.locals[l], l); }
+  void set_local(int l, ExprRef v, const SourceSpan& at) {
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = l;
+    s.value = std::move(v);
+    s.span = at;
+    emit(std::move(s));
+  }
+  // A value that later statements may read: constants and reads of locals nothing rewrites
+  // stay as they are; anything else is computed into a new local now.
+  ExprRef settle(const ExprRef& e, const SourceSpan& at) {
+    if (is_const(e) || (e->kind == ExprKind::Local && !mutable_[e->slot]) ||
+        e->kind == ExprKind::Element || e->kind == ExprKind::Scalar)
+      return e;
+    const int l = new_local(e->ty, false);
+    set_local(l, e, at);
+    return read_local(l);
+  }
+  Sym settle(Sym s, const SourceSpan& at) {
+    for (ExprRef& e : s.c) e = settle(e, at);
+    return s;
+  }
+  void check_size() {
+    if (++statements_ > kMaxTraceStatements) give_up({}, "the trace is too large to compile");
+  }
+
+  // Arrays and scalar arguments.
+  int array(ArraySlot a) {
+    for (size_t i = 0; i < trace_.arrays.size(); ++i) {
+      const ArraySlot& b = trace_.arrays[i];
+      if (b.kind == a.kind && b.member == a.member && b.index == a.index)
+        return static_cast<int>(i);
+    }
+    trace_.arrays.push_back(std::move(a));
+    return static_cast<int>(trace_.arrays.size() - 1);
+  }
+  int field_array(int member, const std::string& name, const SourceSpan& at);
+  ExprRef scalar_arg(Ty ty, ScalarSource src) {
+    for (size_t i = 0; i < sources_.size(); ++i)
+      if (sources_[i].partial == src.partial && sources_[i].global == src.global &&
+          sources_[i].component == src.component)
+        return leaf(ExprKind::Scalar, ty, static_cast<int>(i));
+    sources_.push_back(src);
+    trace_.scalars.push_back(ty);
+    return leaf(ExprKind::Scalar, ty, static_cast<int>(sources_.size() - 1));
+  }
+  ExprRef member_index(int member) {
+    return member == 0 ? leaf(ExprKind::Element, Ty::I32, 0)
+                       : leaf(ExprKind::Endpoint, Ty::I32, member - 1);
+  }
+  const runtime::Set& member_set(int member) const {
+    return runtime::member_set(*in_.target, member);
+  }
+
+  // Loads of fields, cached per block so that each component is read once.
+  ExprRef load(int slot, int member, int comp, const SourceSpan& at);
+  void forget_loads(int slot) {
+    for (auto it = loads_.begin(); it != loads_.end();)
+      it = std::get<0>(it->first) == slot ? loads_.erase(it) : std::next(it);
+  }
+
+  // Expressions.
+  Sym eval(const ast::Expr& e);
+  Sym eval_var(const ast::VarRef& r);
+  Sym eval_field(const ast::FieldRead& f);
+  Sym eval_tuple(const ast::TupleRead& t);
+  Sym eval_read(const ast::TensorRead& r);
+  Sym eval_binary(const ast::Binary& b);
+  Sym eval_compare(const ast::Compare& c);
+  Sym eval_call(const ast::Call& c);
+  std::vector<Sym> call_user(const ast::Call& c);
+  Sym eval_intrinsic(const ast::Call& c);
+  int64_t const_int(const ast::Expr& e);
+  Sym round(Sym s, const SourceSpan& at) {
+    if (!in_.float32 || s.kind != Sym::Kind::Tensor || s.ty != Ty::F64) return s;
+    for (ExprRef& e : s.c) e = unary(UnOp::Round32, Ty::F64, e, at);
+    return s;
+  }
+  Sym elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at);
+  Sym product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
+  ExprRef det(const std::vector<ExprRef>& a, int n, const std::vector<int>& rows,
+              const std::vector<int>& cols);
+
+  // Statements.
+  void exec_block(const ast::Block& b);
+  void exec(const ast::Stmt& s);
+  void exec_if(const ast::If& s);
+  void exec_if_from(const ast::If& s, size_t first);
+  void exec_for(const ast::ForRange& s);
+  void assign(const ast::Expr& target, Sym value, const SourceSpan& at);
+  void bind(const ast::Variable& v, Sym value, const SourceSpan& at);
+  void assign_result(const ast::TensorRead& r, const ast::TensorRead* component, Sym value,
+                     const SourceSpan& at);
+  void store_field(const ast::FieldRead& f, const std::vector<int64_t>* idx, Sym value,
+                   const SourceSpan& at);
+  void merge_assigned(const ast::Block& b);
+  void merge(const ast::Variable& v, const SourceSpan& at);
+
+  Frame& frame() { return frames_.back(); }
+
+  const SiteShape& in_;
+  Trace trace_;
+  std::vector<ScalarSource> sources_;
+  std::vector<bool> mutable_;
+  std::vector<Frame> frames_;
+  std::vector<Stmt>* out_ = &trace_.body;
+  std::vector<int> blocks_{0};  // the blocks open now, outermost first
+  int next_block_ = 1;
+  std::map<std::tuple<int, int, int>, CachedLoad> loads_;
+  size_t statements_ = 0;
+  int inline_depth_ = 0;
+};
+
+int Tracer::field_array(int member, const std::string& name, const SourceSpan& at) {
+  const runtime::Set& s = member_set(member);
+  const int f = s.field_index(name);
+  if (f < 0) give_up(at, "field '" + name + "' is not bound");
+  const runtime::FieldType& ft = s.field(f).type();
+  ArraySlot a;
+  a.kind = ArraySlot::Kind::Field;
+  a.member = member;
+  a.index = f;
+  switch (ft.kind) {
+    case runtime::ComponentKind::Float: a.ty = Ty::F64; break;
+    case runtime::ComponentKind::Int: a.ty = Ty::I32; break;
+    case runtime::ComponentKind::Bool: a.ty = Ty::Bool; break;
+    default: give_up(at, "fields of this component type are not compiled");
+  }
+  a.single = ft.single;
+  a.components = static_cast<int>(ft.components());
+  a.name = s.name() + "." + name;
+  return array(std::move(a));
+}
+
+ExprRef Tracer::load(int slot, int member, int comp, const SourceSpan& at) {
+  const auto key = std::make_tuple(slot, member, comp);
+  if (auto it = loads_.find(key); it != loads_.end()) {
+    if (std::find(blocks_.begin(), blocks_.end(), it->second.block) != blocks_.end())
+      return read_local(it->second.local);
+  }
+  Expr e;
+  e.kind = ExprKind::Load;
+  e.ty = trace_.arrays[slot].ty;
+  e.slot = slot;
+  e.comp = comp;
+  e.ops = {member_index(member)};
+  e.span = at;
+  const int l = new_local(e.ty, false);
+  set_local(l, make(std::move(e)), at);
+  loads_[key] = {l, blocks_.back()};
+  return read_local(l);
+}
+
+// ---------------------------------------------------------------------------
+// Expressions
+
+int64_t Tracer::const_int(const ast::Expr& e) {
+  Sym s = eval(e);
+  if (!s.scalar() || !is_const(s.c[0]) || s.ty != Ty::I32)
+    give_up(e.span, "an index that is not a constant");
+  return s.c[0]->i;
+}
+
+Sym Tracer::eval(const ast::Expr& e) {
+  switch (e.kind) {
+    case ast::NodeKind::IntLit:
+      return scalar(Ty::I32,
+                    iconst(static_cast<int32_t>(static_cast<const ast::IntLit&>(e).value)));
+    case ast::NodeKind::FloatLit:
+      return round(scalar(Ty::F64, fconst(static_cast<const ast::FloatLit&>(e).value)), e.span);
+    case ast::NodeKind::BoolLit:
+      return scalar(Ty::Bool, iconst(static_cast<const ast::BoolLit&>(e).value, Ty::Bool));
+    case ast::NodeKind::DenseLit: {
+      const auto& d = static_cast<const ast::DenseLit&>(e);
+      std::vector<ExprRef> c;
+      if (d.component == ScalarKind::Float) {
+        for (double v : d.floats) c.push_back(fconst(v));
+        return round(tensor(Ty::F64, d.shape, std::move(c)), e.span);
+      }
+      if (d.component == ScalarKind::Int) {
+        for (long long v : d.ints) c.push_back(iconst(static_cast<int32_t>(v)));
+        return tensor(Ty::I32, d.shape, std::move(c));
+      }
+      give_up(e.span, "complex literals are not compiled");
+    }
+    case ast::NodeKind::VarRef: return eval_var(static_cast<const ast::VarRef&>(e));
+    case ast::NodeKind::FieldRead: return eval_field(static_cast<const ast::FieldRead&>(e));
+    case ast::NodeKind::TupleRead: return eval_tuple(static_cast<const ast::TupleRead&>(e));
+    case ast::NodeKind::TensorRead: return eval_read(static_cast<const ast::TensorRead&>(e));
+    case ast::NodeKind::Unary: {
+      const auto& u = static_cast<const ast::Unary&>(e);
+      Sym x = eval(*u.operand);
+      if (x.kind != Sym::Kind::Tensor) give_up(e.span, "unary operator on a non-tensor");
+      if (u.op == ast::Unary::Op::Plus) return x;
+      if (u.op == ast::Unary::Op::Not) {
+        if (x.ty != Ty::Bool) give_up(e.span, "not of a non-boolean");
+        for (ExprRef& c : x.c) c = unary(UnOp::Not, Ty::Bool, c, e.span);
+        return x;
+      }
+      if (x.ty == Ty::Bool) give_up(e.span, "negation of a boolean");
+      for (ExprRef& c : x.c) c = unary(UnOp::Neg, x.ty, c, e.span);
+      return x;
+    }
+    case ast::NodeKind::Binary: return eval_binary(static_cast<const ast::Binary&>(e));
+    case ast::NodeKind::Compare: return eval_compare(static_cast<const ast::Compare&>(e));
+    case ast::NodeKind::Transpose: {
+      Sym x = eval(*static_cast<const ast::Transpose&>(e).operand);
+      if (x.kind != Sym::Kind::Tensor) give_up(e.span, "transpose of a non-tensor");
+      if (x.dims.size() <= 1) return x;
+      if (x.dims.size() != 2) give_up(e.span, "transpose of a tensor of order 3 or more");
+      const int m = x.dims[0], n = x.dims[1];
+      std::vector<ExprRef> c(x.c.size());
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < n; ++j)
+          c[static_cast<size_t>(j) * m + i] = x.c[static_cast<size_t>(i) * n + j];
+      return tensor(x.ty, {n, m}, std::move(c));
+    }
+    case ast::NodeKind::Call: return eval_call(static_cast<const ast::Call&>(e));
+    default: break;
+  }
+  give_up(e.span, std::string(ast::node_kind_name(e.kind)) + " expressions are not compiled");
+}
+
+Sym Tracer::eval_var(const ast::VarRef& r) {
+  const ast::Variable& v = *r.var;
+  using K = ast::Variable::Kind;
+  if (v.kind == K::GlobalConst || v.kind == K::Extern) {
+    const interp::Value* g = in_.global(v);
+    if (!g || g->empty()) give_up(r.span, "global '" + v.name + "' has no value");
+    Sym s = const_of(*g, r.span);
+    if (v.kind == K::Extern)  // externs may change between calls: read them at each call
+      for (size_t i = 0; i < s.c.size(); ++i)
+        s.c[i] = scalar_arg(s.ty, {-1, &v, static_cast<int>(i)});
+    return s;
+  }
+  auto it = frame().vars.find(&v);
+  if (it == frame().vars.end()) give_up(r.span, "'" + v.name + "' is read before it is set");
+  if (it->second.kind == Sym::Kind::Result)
+    give_up(r.span, "reading a result of the mapped function");
+  return it->second;
+}
+
+Sym Tracer::eval_field(const ast::FieldRead& f) {
+  if (f.of_set) give_up(f.span, "reading a whole set field");
+  Sym base = eval(*f.base);
+  if (base.kind != Sym::Kind::Element) give_up(f.span, "a field of something other than a member");
+  const int slot = field_array(base.member, f.field, f.span);
+  const ArraySlot& a = trace_.arrays[slot];
+  std::vector<int> dims = dims_of(*f.type, f.span);
+  std::vector<ExprRef> c;
+  for (int k = 0; k < a.components; ++k) c.push_back(load(slot, base.member, k, f.span));
+  return tensor(a.ty, std::move(dims), std::move(c));
+}
+
+Sym Tracer::eval_tuple(const ast::TupleRead& t) {
+  Sym base = eval(*t.base);
+  if (base.kind != Sym::Kind::Tuple) give_up(t.span, "a tuple other than the endpoints");
+  const int64_t k = t.index ? const_int(*t.index) : t.member_index;
+  if (k < 0 || k >= trace_.arity) give_up(t.span, "endpoint index out of range");
+  Sym s;
+  s.kind = Sym::Kind::Element;
+  s.member = static_cast<int>(k) + 1;
+  return s;
+}
+
+Sym Tracer::eval_read(const ast::TensorRead& r) {
+  if (r.index_notation) give_up(r.span, "index notation is not compiled");
+  Sym base = eval(*r.base);
+  if (base.kind == Sym::Kind::Vector) {
+    // `f(p)`: the block of a global vector argument at a member.
+    if (r.indices.size() != 1 || !r.indices[0])
+      give_up(r.span, "a global vector read that is not at a member");
+    Sym at = eval(*r.indices[0]);
+    if (at.kind != Sym::Kind::Element)
+      give_up(r.span, "a global vector read that is not at a member");
+    const ArraySlot& a = trace_.arrays[base.slot];
+    std::vector<ExprRef> c;
+    for (int k = 0; k < a.components; ++k) c.push_back(load(base.slot, at.member, k, r.span));
+    return tensor(a.ty, dims_of(*r.type, r.span), std::move(c));
+  }
+  if (base.kind != Sym::Kind::Tensor) give_up(r.span, "reading from this value is not compiled");
+  if (r.indices.size() != base.dims.size()) give_up(r.span, "index count does not match");
+  // Constant indices and slices: the result keeps the sliced dimensions.
+  std::vector<int64_t> fixed(r.indices.size(), -1);
+  std::vector<int> out_dims;
+  for (size_t k = 0; k < r.indices.size(); ++k) {
+    if (r.indices[k])
+      fixed[k] = const_int(*r.indices[k]);
+    else
+      out_dims.push_back(base.dims[k]);
+  }
+  std::vector<ExprRef> c;
+  std::vector<int64_t> idx(fixed.size(), 0);
+  for (size_t k = 0; k < fixed.size(); ++k) idx[k] = fixed[k] >= 0 ? fixed[k] : 0;
+  while (true) {
+    c.push_back(base.c[offset_of(base.dims, idx, r.span)]);
+    int k = static_cast<int>(idx.size()) - 1;
+    for (; k >= 0; --k) {
+      if (fixed[k] >= 0) continue;
+      if (++idx[k] < base.dims[k]) break;
+      idx[k] = 0;
+    }
+    if (k < 0) break;
+  }
+  return tensor(base.ty, std::move(out_dims), std::move(c));
+}
+
+Sym Tracer::elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at) {
+  if (l.ty != r.ty) give_up(at, "operands of different component types");
+  if (!l.scalar() && !r.scalar() && l.dims != r.dims)
+    give_up(at, "element-wise operation on different shapes");
+  const Sym& shape = l.scalar() ? r : l;
+  std::vector<ExprRef> c;
+  for (size_t i = 0; i < shape.size(); ++i)
+    c.push_back(binary(op, l.ty, l.scalar() ? l.c[0] : l.c[i], r.scalar() ? r.c[0] : r.c[i], at));
+  return tensor(l.ty, shape.dims, std::move(c));
+}
+
+// Products sum from +0.0 over k in ascending order (docs/arithmetic.md); an outer product
+// is one rounding per component.
+Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at) {
+  if (l.ty != Ty::F64 || r.ty != Ty::F64)
+    give_up(at, "products of non-float tensors are not compiled");
+  auto sum = [&](int n, auto term) {
+    ExprRef s = fconst(0.0);
+    for (int k = 0; k < n; ++k) s = binary(BinOp::Add, Ty::F64, s, term(k), at);
+    return s;
+  };
+  auto mul = [&](const ExprRef& a, const ExprRef& b) {
+    return binary(BinOp::Mul, Ty::F64, a, b, at);
+  };
+  const size_t lo = l.dims.size(), ro = r.dims.size();
+  if (lo == 1 && ro == 1) {
+    const int n = l.dims[0], m = r.dims[0];
+    if (lrow && !rrow) {
+      if (n != m) give_up(at, "inner product of different lengths");
+      return scalar(Ty::F64, sum(n, [&](int k) { return mul(l.c[k], r.c[k]); }));
+    }
+    if (lrow || !rrow) give_up(at, "product of two vectors of the same orientation");
+    std::vector<ExprRef> c;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < m; ++j) c.push_back(mul(l.c[i], r.c[j]));
+    return tensor(Ty::F64, {n, m}, std::move(c));
+  }
+  if (lo == 2 && ro == 1) {
+    const int m = l.dims[0], n = l.dims[1];
+    if (r.dims[0] != n) give_up(at, "matrix-vector dimensions do not match");
+    std::vector<ExprRef> c;
+    for (int i = 0; i < m; ++i)
+      c.push_back(sum(n, [&](int k) { return mul(l.c[i * n + k], r.c[k]); }));
+    return tensor(Ty::F64, {m}, std::move(c));
+  }
+  if (lo == 1 && ro == 2) {
+    const int n = r.dims[0], m = r.dims[1];
+    if (l.dims[0] != n) give_up(at, "vector-matrix dimensions do not match");
+    std::vector<ExprRef> c;
+    for (int j = 0; j < m; ++j)
+      c.push_back(sum(n, [&](int k) { return mul(l.c[k], r.c[k * m + j]); }));
+    return tensor(Ty::F64, {m}, std::move(c));
+  }
+  if (lo == 2 && ro == 2) {
+    const int m = l.dims[0], n = l.dims[1], p = r.dims[1];
+    if (r.dims[0] != n) give_up(at, "matrix dimensions do not match");
+    std::vector<ExprRef> c;
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < p; ++j)
+        c.push_back(sum(n, [&](int k) { return mul(l.c[i * n + k], r.c[k * p + j]); }));
+    return tensor(Ty::F64, {m, p}, std::move(c));
+  }
+  give_up(at, "products of tensors of order 3 or more are not compiled");
+}
+
+Sym Tracer::eval_binary(const ast::Binary& b) {
+  using Op = ast::Binary::Op;
+  Sym l = eval(*b.lhs), r = eval(*b.rhs);
+  if (l.kind != Sym::Kind::Tensor || r.kind != Sym::Kind::Tensor)
+    give_up(b.span, "operators on system tensors are not compiled inside a mapped function");
+  // Operands used more than once (products, broadcasts) are computed once.
+  l = settle(std::move(l), b.span);
+  r = settle(std::move(r), b.span);
+  auto is_row = [](const ast::Expr& e) {
+    return e.type && e.type->kind == Type::Kind::Tensor && e.type->dims.size() == 1 && e.type->row;
+  };
+  Sym v;
+  switch (b.op) {
+    case Op::Add: v = elementwise(BinOp::Add, l, r, b.span); break;
+    case Op::Sub: v = elementwise(BinOp::Sub, l, r, b.span); break;
+    case Op::ElemMul: v = elementwise(BinOp::Mul, l, r, b.span); break;
+    case Op::ElemDiv:
+    case Op::Div:
+      if (l.ty != Ty::F64) give_up(b.span, "integer division is not compiled");
+      v = elementwise(BinOp::Div, l, r, b.span);
+      break;
+    case Op::Mul:
+      if (l.scalar() || r.scalar())
+        v = elementwise(BinOp::Mul, l, r, b.span);
+      else
+        v = product(l, is_row(*b.lhs), r, is_row(*b.rhs), b.span);
+      break;
+    case Op::And:
+    case Op::Or:
+    case Op::Xor:
+      if (l.ty != Ty::Bool || !l.scalar() || !r.scalar()) give_up(b.span, "logic on non-booleans");
+      v = elementwise(b.op == Op::And  ? BinOp::And
+                      : b.op == Op::Or ? BinOp::Or
+                                       : BinOp::Xor,
+                      l, r, b.span);
+      break;
+    default:
+      give_up(b.span,
+              std::string("operator ") + ast::binary_op_spelling(b.op) + " is not compiled");
+  }
+  return round(std::move(v), b.span);
+}
+
+Sym Tracer::eval_compare(const ast::Compare& c) {
+  std::vector<Sym> v;
+  for (const auto& o : c.operands) {
+    v.push_back(eval(*o));
+    if (!v.back().scalar()) give_up(c.span, "comparison of non-scalars");
+  }
+  ExprRef result = iconst(1, Ty::Bool);
+  for (size_t i = 0; i < c.ops.size(); ++i) {
+    if (v[i].ty != v[i + 1].ty) give_up(c.span, "comparison of different types");
+    if (v[i].ty == Ty::Bool && c.ops[i] != ast::Compare::Op::Eq && c.ops[i] != ast::Compare::Op::Ne)
+      give_up(c.span, "ordering of booleans");
+    ExprRef a = v[i].c[0], b = v[i + 1].c[0];
+    if (v[i].ty == Ty::Bool) {  // compare truth values as integers
+      a = make(Expr{ExprKind::Select, Ty::I32, 0, 0, 0, 0.0, 0, {a, iconst(1), iconst(0)}, c.span});
+      b = make(Expr{ExprKind::Select, Ty::I32, 0, 0, 0, 0.0, 0, {b, iconst(1), iconst(0)}, c.span});
+    }
+    ExprRef one = compare(static_cast<CmpOp>(c.ops[i]), a, b, c.span);
+    result = i == 0 ? one : binary(BinOp::And, Ty::Bool, one, result, c.span);
+  }
+  return scalar(Ty::Bool, result);
+}
+
+// det of the submatrix (rows x cols) of the n x n matrix a, by cofactor expansion along its
+// first row, as runtime/dense_linalg.cpp computes it.
+ExprRef Tracer::det(const std::vector<ExprRef>& a, int n, const std::vector<int>& rows,
+                    const std::vector<int>& cols) {
+  const size_t m = rows.size();
+  if (m == 1) return a[static_cast<size_t>(rows[0]) * n + cols[0]];
+  ExprRef sum = fconst(0.0);
+  for (size_t j = 0; j < m; ++j) {
+    std::vector<int> sub;
+    for (size_t c = 0; c < m; ++c)
+      if (c != j) sub.push_back(cols[c]);
+    ExprRef minor = det(a, n, std::vector<int>(rows.begin() + 1, rows.end()), sub);
+    if (j % 2) minor = unary(UnOp::Neg, Ty::F64, minor);
+    sum = binary(BinOp::Add, Ty::F64, sum,
+                 binary(BinOp::Mul, Ty::F64, a[static_cast<size_t>(rows[0]) * n + cols[j]], minor));
+  }
+  return sum;
+}
+
+Sym Tracer::eval_intrinsic(const ast::Call& c) {
+  using frontend::Intrinsic;
+  std::vector<Sym> a;
+  for (const auto& arg : c.args) {
+    a.push_back(settle(eval(*arg), c.span));
+    if (a.back().kind != Sym::Kind::Tensor) give_up(c.span, "an intrinsic of a non-tensor");
+  }
+  auto f1 = [&](MathFn f) {
+    if (!a[0].scalar() || a[0].ty != Ty::F64) give_up(c.span, "a math function of a non-float");
+    return scalar(Ty::F64, math(f, {a[0].c[0]}, c.span));
+  };
+  auto f2 = [&](MathFn f) {
+    if (!a[0].scalar() || !a[1].scalar() || a[0].ty != Ty::F64 || a[1].ty != Ty::F64)
+      give_up(c.span, "a math function of non-floats");
+    return scalar(Ty::F64, math(f, {a[0].c[0], a[1].c[0]}, c.span));
+  };
+  auto dot = [&](const Sym& x, const Sym& y) {
+    if (x.ty != Ty::F64 || y.ty != Ty::F64 || x.size() != y.size())
+      give_up(c.span, "dot of these operands");
+    ExprRef s = fconst(0.0);
+    for (size_t i = 0; i < x.size(); ++i)
+      s = binary(BinOp::Add, Ty::F64, s, binary(BinOp::Mul, Ty::F64, x.c[i], y.c[i], c.span),
+                 c.span);
+    return s;
+  };
+  auto square = [&](const Sym& m) {
+    if (m.dims.size() != 2 || m.dims[0] != m.dims[1] || m.dims[0] < 2 || m.dims[0] > 4 ||
+        m.ty != Ty::F64)
+      give_up(c.span, "det or inv of this shape is not compiled");
+    return m.dims[0];
+  };
+  Sym v;
+  switch (c.intrinsic) {
+    case Intrinsic::Sin: v = f1(MathFn::Sin); break;
+    case Intrinsic::Cos: v = f1(MathFn::Cos); break;
+    case Intrinsic::Tan: v = f1(MathFn::Tan); break;
+    case Intrinsic::Asin: v = f1(MathFn::Asin); break;
+    case Intrinsic::Acos: v = f1(MathFn::Acos); break;
+    case Intrinsic::Sqrt: v = f1(MathFn::Sqrt); break;
+    case Intrinsic::Cbrt: v = f1(MathFn::Cbrt); break;
+    case Intrinsic::Log: v = f1(MathFn::Log); break;
+    case Intrinsic::Exp: v = f1(MathFn::Exp); break;
+    case Intrinsic::Abs: v = f1(MathFn::Abs); break;
+    case Intrinsic::Atan2: v = f2(MathFn::Atan2); break;
+    case Intrinsic::Pow: v = f2(MathFn::Pow); break;
+    case Intrinsic::Max: v = f2(MathFn::Max); break;
+    case Intrinsic::Min: v = f2(MathFn::Min); break;
+    case Intrinsic::Dot: v = scalar(Ty::F64, dot(a[0], a[1])); break;
+    case Intrinsic::Norm: v = scalar(Ty::F64, math(MathFn::Sqrt, {dot(a[0], a[0])}, c.span)); break;
+    case Intrinsic::Cross: {
+      if (a[0].size() != 3 || a[1].size() != 3 || a[0].ty != Ty::F64)
+        give_up(c.span, "cross of these operands");
+      const auto& x = a[0].c;
+      const auto& y = a[1].c;
+      auto term = [&](int i, int j, int k, int l) {
+        return binary(BinOp::Sub, Ty::F64, binary(BinOp::Mul, Ty::F64, x[i], y[j], c.span),
+                      binary(BinOp::Mul, Ty::F64, x[k], y[l], c.span), c.span);
+      };
+      v = tensor(Ty::F64, {3}, {term(1, 2, 2, 1), term(2, 0, 0, 2), term(0, 1, 1, 0)});
+      break;
+    }
+    case Intrinsic::Det:
+    case Intrinsic::Det2:
+    case Intrinsic::Det4: {
+      const int n = square(a[0]);
+      std::vector<int> all(n);
+      for (int i = 0; i < n; ++i) all[i] = i;
+      v = scalar(Ty::F64, det(a[0].c, n, all, all));
+      break;
+    }
+    case Intrinsic::Inv:
+    case Intrinsic::Inv2:
+    case Intrinsic::Inv4: {
+      const int n = square(a[0]);
+      std::vector<int> all(n);
+      for (int i = 0; i < n; ++i) all[i] = i;
+      const ExprRef d = settle(det(a[0].c, n, all, all), c.span);
+      // The interpreter's singular-matrix error: the controller re-runs the site to report it.
+      trace_.errors.push_back({c.span, "inverse of a singular matrix (determinant is 0)"});
+      Stmt check;
+      check.kind = StmtKind::Check;
+      check.value = compare(CmpOp::Ne, d, fconst(0.0), c.span);
+      check.error = static_cast<int>(trace_.errors.size() - 1);
+      check.span = c.span;
+      emit(std::move(check));
+      std::vector<ExprRef> out(static_cast<size_t>(n) * n);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          std::vector<int> rows, cols;
+          for (int r = 0; r < n; ++r)
+            if (r != i) rows.push_back(r);
+          for (int q = 0; q < n; ++q)
+            if (q != j) cols.push_back(q);
+          ExprRef cof = det(a[0].c, n, rows, cols);
+          if ((i + j) % 2) cof = unary(UnOp::Neg, Ty::F64, cof);
+          out[static_cast<size_t>(j) * n + i] = binary(BinOp::Div, Ty::F64, cof, d, c.span);
+        }
+      v = tensor(Ty::F64, {n, n}, std::move(out));
+      break;
+    }
+    default:
+      give_up(c.span, std::string("intrinsic ") + frontend::intrinsic_name(c.intrinsic) +
+                          " is not compiled");
+  }
+  return round(std::move(v), c.span);
+}
+
+Sym Tracer::eval_call(const ast::Call& c) {
+  if (c.intrinsic != frontend::Intrinsic::None) return eval_intrinsic(c);
+  std::vector<Sym> r = call_user(c);
+  if (r.empty()) return {};
+  return r[0];
+}
+
+std::vector<Sym> Tracer::call_user(const ast::Call& c) {
+  const ast::FuncDecl& f = *c.func;
+  if (f.is_extern || !f.generics.empty())
+    give_up(c.span, "calls of extern or generic functions are not compiled");
+  if (++inline_depth_ > kMaxInlineDepth) give_up(c.span, "calls nested too deeply to inline");
+  std::vector<Sym> args;
+  for (const auto& a : c.args) args.push_back(settle(eval(*a), c.span));
+  Frame callee;
+  for (size_t i = 0; i < f.params.size() && i < args.size(); ++i) {
+    const ast::Param& p = f.params[i];
+    if (p.inout && args[i].kind == Sym::Kind::Tensor)
+      give_up(c.span, "inout tensor arguments are not compiled");
+    callee.vars[p.var] = args[i];
+    callee.bound_at[p.var] = static_cast<int>(blocks_.size());
+  }
+  for (const ast::Param& r : f.results) {
+    callee.vars[r.var] = zero_of(*r.var->type, r.span);
+    callee.bound_at[r.var] = static_cast<int>(blocks_.size());
+  }
+  // Loads cached by the caller stay valid: the callee reads the same arrays.
+  frames_.push_back(std::move(callee));
+  exec_block(f.body);
+  std::vector<Sym> out;
+  for (const ast::Param& r : f.results) out.push_back(frame().vars[r.var]);
+  frames_.pop_back();
+  --inline_depth_;
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Statements
+
+void Tracer::exec_block(const ast::Block& b) {
+  for (const auto& s : b) exec(*s);
+}
+
+void Tracer::exec(const ast::Stmt& s) {
+  check_size();
+  switch (s.kind) {
+    case ast::NodeKind::VarDecl: {
+      const auto& d = static_cast<const ast::VarDecl&>(s);
+      Sym v = d.init ? eval(*d.init) : zero_of(*d.var->type, d.span);
+      return bind(*d.var, std::move(v), d.span);
+    }
+    case ast::NodeKind::Assign: {
+      const auto& a = static_cast<const ast::Assign&>(s);
+      if (a.index_notation) give_up(a.span, "index notation is not compiled");
+      if (a.targets.size() == 1) return assign(*a.targets[0], eval(*a.value), a.span);
+      const auto* call = a.value->as<ast::Call>();
+      if (!call || !call->func)
+        give_up(a.span, "a multiple assignment from something other than a call");
+      std::vector<Sym> values = call_user(*call);
+      if (values.size() != a.targets.size()) give_up(a.span, "result count does not match");
+      for (size_t i = 0; i < values.size(); ++i)
+        assign(*a.targets[i], std::move(values[i]), a.span);
+      return;
+    }
+    case ast::NodeKind::ExprStmt: {
+      const auto& e = static_cast<const ast::ExprStmt&>(s);
+      const auto* call = e.expr->as<ast::Call>();
+      if (!call || !call->func)
+        give_up(s.span, "expression statements other than calls are not compiled");
+      call_user(*call);
+      return;
+    }
+    case ast::NodeKind::If: return exec_if(static_cast<const ast::If&>(s));
+    case ast::NodeKind::ForRange: return exec_for(static_cast<const ast::ForRange&>(s));
+    default: break;
+  }
+  give_up(s.span, std::string(ast::node_kind_name(s.kind)) + " statements are not compiled");
+}
+
+void Tracer::exec_for(const ast::ForRange& s) {
+  Sym lo = eval(*s.lo), hi = eval(*s.hi);
+  if (!lo.scalar() || !hi.scalar() || !is_const(lo.c[0]) || !is_const(hi.c[0]))
+    give_up(s.span, "a loop whose bounds are not constants");
+  for (int64_t i = lo.c[0]->i; i < hi.c[0]->i; ++i) {
+    frame().vars[s.var] = scalar(Ty::I32, iconst(i));
+    frame().bound_at[s.var] = static_cast<int>(blocks_.size());
+    exec_block(s.body);
+  }
+}
+
+// Variables assigned in a branch are given mutable locals before it, so that the value
+// after the if is whichever branch ran.
+void Tracer::merge(const ast::Variable& v, const SourceSpan& at) {
+  Frame& f = frame();
+  if (f.merged.count(&v)) return;
+  auto it = f.vars.find(&v);
+  if (it != f.vars.end() && it->second.kind != Sym::Kind::Tensor) return;  // elements, results
+  Sym cur = it != f.vars.end() ? it->second : zero_of(*v.type, at);
+  std::vector<int> locals;
+  for (ExprRef& c : cur.c) {
+    const int l = new_local(cur.ty, true);
+    set_local(l, c, at);
+    locals.push_back(l);
+    c = read_local(l);
+  }
+  f.merged[&v] = std::move(locals);
+  f.vars[&v] = std::move(cur);
+}
+
+void Tracer::merge_assigned(const ast::Block& b) {
+  // Every variable a statement in `b` (at any depth) assigns or declares.
+  std::vector<const ast::Variable*> found;
+  std::function<void(const ast::Block&)> scan = [&](const ast::Block& blk) {
+    for (const auto& st : blk) {
+      if (const auto* d = st->as<ast::VarDecl>()) found.push_back(d->var);
+      if (const auto* a = st->as<ast::Assign>()) {
+        for (const auto& t : a->targets) {
+          const ast::Expr* e = t.get();
+          while (true) {
+            if (const auto* r = e->as<ast::TensorRead>())
+              e = r->base.get();
+            else
+              break;
+          }
+          if (const auto* v = e->as<ast::VarRef>()) found.push_back(v->var);
+        }
+      }
+      if (const auto* i = st->as<ast::If>()) {
+        for (const auto& br : i->branches) scan(br);
+        scan(i->else_branch);
+      }
+      if (const auto* l = st->as<ast::ForRange>()) scan(l->body);
+    }
+  };
+  scan(b);
+  for (const ast::Variable* v : found)
+    if (v && v->type &&
+        (v->kind == ast::Variable::Kind::Local || v->kind == ast::Variable::Kind::Result ||
+         v->kind == ast::Variable::Kind::Param)) {
+      auto it = frame().vars.find(v);
+      if (it != frame().vars.end() && it->second.kind == Sym::Kind::Result) continue;
+      if (v->type->is_global()) continue;
+      merge(*v, b.empty() ? SourceSpan{} : b.front()->span);
+    }
+}
+
+void Tracer::exec_if(const ast::If& s) { exec_if_from(s, 0); }
+
+// Conditions that fold choose their branch now; the first that does not becomes an If whose
+// else part holds the rest of the chain (from condition `first` on).
+void Tracer::exec_if_from(const ast::If& s, size_t first) {
+  for (size_t i = first; i < s.conditions.size(); ++i) {
+    Sym c = eval(*s.conditions[i]);
+    if (!c.scalar() || c.ty != Ty::Bool) give_up(s.span, "a condition that is not a boolean");
+    if (is_const(c.c[0])) {
+      if (c.c[0]->i) return exec_block(s.branches[i]);
+      continue;
+    }
+    for (size_t j = i; j < s.branches.size(); ++j) merge_assigned(s.branches[j]);
+    merge_assigned(s.else_branch);
+    Stmt st;
+    st.kind = StmtKind::If;
+    st.value = c.c[0];
+    st.span = s.conditions[i]->span;
+    emit(std::move(st));
+    std::vector<Stmt> then_body, else_body;
+    auto run_in = [&](std::vector<Stmt>& body, auto fn) {
+      std::vector<Stmt>* saved = out_;
+      out_ = &body;
+      blocks_.push_back(next_block_++);
+      fn();
+      blocks_.pop_back();
+      out_ = saved;
+    };
+    run_in(then_body, [&] { exec_block(s.branches[i]); });
+    run_in(else_body, [&] { exec_if_from(s, i + 1); });
+    // The branches emitted into their own lists: the If is still the last statement here.
+    out_->back().body = std::move(then_body);
+    out_->back().orelse = std::move(else_body);
+    return;
+  }
+  exec_block(s.else_branch);
+}
+
+void Tracer::bind(const ast::Variable& v, Sym value, const SourceSpan& at) {
+  Frame& f = frame();
+  if (auto m = f.merged.find(&v); m != f.merged.end()) {
+    if (value.kind != Sym::Kind::Tensor || value.size() != m->second.size())
+      give_up(at, "an assignment that changes a variable's shape");
+    for (size_t i = 0; i < value.size(); ++i) set_local(m->second[i], value.c[i], at);
+    Sym& cur = f.vars[&v];
+    cur.dims = value.dims;
+    return;
+  }
+  if (auto b = f.bound_at.find(&v);
+      b != f.bound_at.end() && b->second < static_cast<int>(blocks_.size()))
+    give_up(at, "an assignment inside a branch to '" + v.name + "' that the tracer did not expect");
+  f.vars[&v] = value.kind == Sym::Kind::Tensor ? settle(std::move(value), at) : std::move(value);
+  f.bound_at[&v] = static_cast<int>(blocks_.size());
+}
+
+void Tracer::assign(const ast::Expr& target, Sym value, const SourceSpan& at) {
+  if (const auto* v = target.as<ast::VarRef>()) {
+    auto it = frame().vars.find(v->var);
+    if (it != frame().vars.end() && it->second.kind == Sym::Kind::Result)
+      give_up(at, "assigning a whole result of the mapped function");
+    if (value.kind == Sym::Kind::Tensor && it != frame().vars.end() &&
+        it->second.kind == Sym::Kind::Tensor && it->second.size() != value.size() &&
+        value.scalar()) {
+      // `v = 0.0` on a tensor broadcasts.
+      Sym b = it->second;
+      for (ExprRef& c : b.c) c = value.c[0];
+      return bind(*v->var, std::move(b), at);
+    }
+    return bind(*v->var, std::move(value), at);
+  }
+  if (const auto* f = target.as<ast::FieldRead>())
+    return store_field(*f, nullptr, std::move(value), at);
+  const auto* r = target.as<ast::TensorRead>();
+  if (!r) give_up(at, "this assignment target is not compiled");
+  if (r->index_notation) give_up(at, "index notation is not compiled");
+  // Writes into the function's system-tensor results.
+  // `K(x, y)(a, d) = s`: one component of a block (the pass marks the whole target).
+  if (const auto* inner = r->base->as<ast::TensorRead>(); inner && r->assembles_result >= 0)
+    return assign_result(*inner, r, std::move(value), at);
+  if (r->assembles_result >= 0) return assign_result(*r, nullptr, std::move(value), at);
+  std::vector<int64_t> idx;
+  for (const auto& i : r->indices) {
+    if (!i) give_up(at, "slice assignments are not compiled");
+    idx.push_back(const_int(*i));
+  }
+  if (const auto* f = r->base->as<ast::FieldRead>())
+    return store_field(*f, &idx, std::move(value), at);
+  const auto* base = r->base->as<ast::VarRef>();
+  if (!base) give_up(at, "this assignment target is not compiled");
+  auto it = frame().vars.find(base->var);
+  Sym cur = it != frame().vars.end() ? it->second : zero_of(*base->var->type, at);
+  if (cur.kind != Sym::Kind::Tensor) give_up(at, "a component write into a non-tensor");
+  if (!value.scalar() || value.ty != cur.ty) give_up(at, "a component write of a non-scalar");
+  const size_t off = offset_of(cur.dims, idx, at);
+  if (auto m = frame().merged.find(base->var); m != frame().merged.end()) {
+    set_local(m->second[off], value.c[0], at);
+    return;
+  }
+  cur.c[off] = value.c[0];
+  bind(*base->var, std::move(cur), at);
+}
+
+void Tracer::store_field(const ast::FieldRead& f, const std::vector<int64_t>* idx, Sym value,
+                         const SourceSpan& at) {
+  if (f.of_set) give_up(at, "writing a whole set field");
+  Sym base = eval(*f.base);
+  if (base.kind != Sym::Kind::Element || base.member != 0)
+    give_up(at, "a field write to another element");
+  const int slot = field_array(0, f.field, f.span);
+  ArraySlot& a = trace_.arrays[slot];
+  a.written = true;
+  trace_.writes_fields = true;
+  if (value.kind != Sym::Kind::Tensor || value.ty != a.ty)
+    give_up(at, "a field write of another type");
+  std::vector<int> dims = dims_of(*f.type, f.span);
+  size_t first = 0, count = static_cast<size_t>(a.components);
+  if (idx) {
+    first = offset_of(dims, *idx, at);
+    count = 1;
+  }
+  if (!value.scalar() && value.size() != count) give_up(at, "a field write of another shape");
+  value = settle(std::move(value), at);
+  for (size_t k = 0; k < count; ++k) {
+    Stmt s;
+    s.kind = StmtKind::Store;
+    s.slot = slot;
+    s.comp = static_cast<int>(first + k);
+    s.index = member_index(0);
+    s.value = value.scalar() ? value.c[0] : value.c[k];
+    s.span = at;
+    emit(std::move(s));
+  }
+  forget_loads(slot);
+}
+
+void Tracer::assign_result(const ast::TensorRead& r, const ast::TensorRead* component, Sym value,
+                           const SourceSpan& at) {
+  const auto* base = r.base->as<ast::VarRef>();
+  auto it = base ? frame().vars.find(base->var) : frame().vars.end();
+  if (it == frame().vars.end() || it->second.kind != Sym::Kind::Result || frames_.size() != 1)
+    give_up(at, "a result write outside the mapped function");
+  const int res = it->second.slot;
+  const int slot = array({ArraySlot::Kind::Result, 0, res, Ty::F64, false, true, 0, ""});
+  ArraySlot& a = trace_.arrays[slot];
+  if (value.kind != Sym::Kind::Tensor || value.ty != Ty::F64)
+    give_up(at, "a result write of a non-float");
+  std::vector<int64_t> sub;
+  if (component)
+    for (const auto& i : component->indices) {
+      if (!i) give_up(at, "slices of result blocks are not compiled");
+      sub.push_back(const_int(*i));
+    }
+  std::vector<int> members;
+  for (const auto& i : r.indices) {
+    if (!i) give_up(at, "a result write at a slice");
+    Sym m = eval(*i);
+    if (m.kind != Sym::Kind::Element) give_up(at, "a result write not at a member of the element");
+    members.push_back(m.member);
+  }
+  const runtime::MatrixPattern* pattern = in_.patterns[res];
+  int pair = -1;
+  ExprRef index;
+  if (pattern) {
+    if (members.size() != 2) give_up(at, "a matrix write with one index");
+    const runtime::AssemblyIndex& ai = pattern->assembly();
+    auto local = [&](const std::vector<int>& ms, int m) {
+      auto p = std::find(ms.begin(), ms.end(), m);
+      if (p == ms.end()) give_up(at, "a matrix write outside the element's pattern");
+      return static_cast<int>(p - ms.begin());
+    };
+    pair = local(ai.row_members, members[0]) * static_cast<int>(ai.col_members.size()) +
+           local(ai.col_members, members[1]);
+  } else {
+    if (members.size() != 1) give_up(at, "a vector write with two indices");
+    index = member_index(members[0]);
+  }
+  // The block's shape comes from the result's type.
+  const Type& rt = *base->var->type;
+  const std::vector<int> block = rt.block ? dims_of(*rt.block, at) : std::vector<int>{};
+  size_t bsize = 1;
+  for (int d : block) bsize *= static_cast<size_t>(d);
+  a.components = static_cast<int>(bsize);
+  size_t first = 0, count = bsize;
+  if (component) {
+    first = offset_of(block, sub, at);
+    count = 1;
+  }
+  if (!value.scalar() && value.size() != count) give_up(at, "a result write of another shape");
+  for (size_t k = 0; k < count; ++k) {
+    Stmt s;
+    s.kind = StmtKind::Assemble;
+    s.slot = slot;
+    s.comp = static_cast<int>(first + k);
+    s.pair = pair;
+    s.index = index;
+    s.value = value.scalar() ? value.c[0] : value.c[k];
+    s.span = at;
+    emit(std::move(s));
+  }
+}
+
+TracedSite Tracer::run() {
+  TracedSite out;
+  const ast::Assembly& site = *in_.site;
+  const ast::FuncDecl& f = *site.callee;
+  trace_.name = f.name;
+  if (site.func_span.valid()) trace_.name += ":" + std::to_string(site.func_span.start().line);
+  trace_.arity = in_.target->arity();
+  trace_.reduce = in_.reduce;
+  try {
+    if (!f.generics.empty()) give_up(site.func_span, "generic mapped functions are not compiled");
+    if (in_.target->is_grid()) give_up(site.func_span, "maps through grids are not compiled");
+    Frame top;
+    const auto& partial = *in_.partial_args;
+    size_t k = 0;
+    for (; k < partial.size(); ++k) {
+      const ast::Param& p = f.params[k];
+      if (p.inout) give_up(p.span, "inout partial arguments are not compiled");
+      const interp::Value& v = partial[k];
+      const Type& t = *p.var->type;
+      Sym s;
+      if (t.kind == Type::Kind::Tensor && t.is_global()) {
+        if (!v.is_tensor() || v.tensor().kind() != runtime::ComponentKind::Float ||
+            t.dims.size() != 1)
+          give_up(p.span, "a global argument other than a float vector");
+        ArraySlot a;
+        a.kind = ArraySlot::Kind::Vector;
+        a.index = static_cast<int>(k);
+        a.components = static_cast<int>(v.tensor().shape().block_size());
+        a.name = p.name;
+        s.kind = Sym::Kind::Vector;
+        s.slot = array(std::move(a));
+      } else {
+        s = const_of(v, p.span);
+        for (size_t i = 0; i < s.c.size(); ++i)
+          s.c[i] = scalar_arg(s.ty, {static_cast<int>(k), nullptr, static_cast<int>(i)});
+      }
+      top.vars[p.var] = std::move(s);
+    }
+    if (k < f.params.size()) {
+      Sym e;
+      e.kind = Sym::Kind::Element;
+      e.member = 0;
+      e.inout = f.params[k].inout;
+      top.vars[f.params[k++].var] = e;
+    }
+    if (site.pass_endpoints && k < f.params.size()) {
+      Sym t;
+      t.kind = Sym::Kind::Tuple;
+      top.vars[f.params[k++].var] = t;
+    }
+    if (k != f.params.size())
+      give_up(site.func_span, "a mapped function with unexpected parameters");
+    trace_.pairs.assign(f.results.size(), 0);
+    for (size_t i = 0; i < f.results.size(); ++i) {
+      Sym r;
+      r.kind = Sym::Kind::Result;
+      r.slot = static_cast<int>(i);
+      top.vars[f.results[i].var] = r;
+      if (in_.patterns[i]) {
+        trace_.pairs[i] = static_cast<int>(in_.patterns[i]->assembly().pairs());
+        array({ArraySlot::Kind::Table, 0, static_cast<int>(i), Ty::I32, false, false,
+               trace_.pairs[i], f.results[i].name + ".table"});
+      }
+      array({ArraySlot::Kind::Result, 0, static_cast<int>(i), Ty::F64, false, true, 1,
+             f.results[i].name});
+    }
+    frames_.push_back(std::move(top));
+    exec_block(f.body);
+  } catch (const GiveUp& g) {
+    out.reason = g.reason;
+    return out;
+  }
+  out.scalar_sources = sources_;
+  out.trace = std::move(trace_);
+  return out;
+}
+
+}  // namespace
+
+TracedSite trace_site(const SiteShape& shape) { return Tracer(shape).run(); }
+
+}  // namespace simit::jit

@@ -1,0 +1,23 @@
+// The JIT's tunables, in one table: when a site is hot, how hard to try, how big a trace may
+// grow, and how often a compiled loop looks for Ctrl-C.
+#pragma once
+
+#include <cstddef>
+
+namespace simit::jit {
+
+// Executions of a site before it is compiled (0: compile on its first execution). The
+// engine's option overrides it.
+inline constexpr long kHotThreshold = 2;
+// Compilations of one site that may fail before it stays interpreted for good.
+inline constexpr int kMaxFailures = 3;
+// Statements a trace may hold after inlining and unrolling.
+inline constexpr size_t kMaxTraceStatements = 200000;
+// Calls inlined inside one another.
+inline constexpr int kMaxInlineDepth = 32;
+// Elements a kernel runs between two checks for an interrupt (Ctrl-C).
+inline constexpr int kChunkElements = 16384;
+// LLVM's optimisation level for kernels (2 or 3).
+inline constexpr int kOptLevel = 2;
+
+}  // namespace simit::jit

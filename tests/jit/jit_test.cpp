@@ -1,0 +1,345 @@
+// The tracing JIT against the interpreter: the loop IR's verifier, traces of map and apply
+// sites compiled with LLVM and run bit for bit like the interpreter, the fallbacks with their
+// reasons, errors reported in the interpreter's words, and switching executors mid-run.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <sstream>
+
+#include "api/engine.h"
+#include "jit/loop_ir.h"
+
+namespace simit::jit {
+namespace {
+
+namespace ast = frontend::ast;
+using api::CompiledProgram;
+using api::Engine;
+using api::EngineOptions;
+using api::ExecutorKind;
+using interp::Value;
+
+// ---------------------------------------------------------------------------
+// The loop IR
+
+ExprRef c(double v) {
+  Expr e;
+  e.f = v;
+  return std::make_shared<const Expr>(e);
+}
+
+TEST(LoopIr, VerifierAcceptsAWellFormedTraceAndPrintsIt) {
+  Trace t;
+  t.name = "demo";
+  t.locals = {Ty::F64};
+  Stmt s;
+  s.kind = StmtKind::SetLocal;
+  s.slot = 0;
+  s.value = c(2.5);
+  t.body.push_back(s);
+  EXPECT_EQ(verify(t), "");
+  std::ostringstream os;
+  print(os, t);
+  EXPECT_NE(os.str().find("%0 = 2.5"), std::string::npos) << os.str();
+  EXPECT_EQ(node_count(t), 2u);
+}
+
+TEST(LoopIr, VerifierRejectsALocalReadBeforeItIsSetOnEveryPath) {
+  Trace t;
+  t.locals = {Ty::F64, Ty::F64};
+  Expr cond;
+  cond.ty = Ty::Bool;
+  cond.i = 1;
+  Stmt branch;
+  branch.kind = StmtKind::If;
+  branch.value = std::make_shared<const Expr>(cond);
+  Stmt set;
+  set.kind = StmtKind::SetLocal;
+  set.slot = 0;
+  set.value = c(1.0);
+  branch.body.push_back(set);  // only the then-branch sets %0
+  t.body.push_back(branch);
+  Expr read;
+  read.kind = ExprKind::Local;
+  read.slot = 0;
+  Stmt use;
+  use.kind = StmtKind::SetLocal;
+  use.slot = 1;
+  use.value = std::make_shared<const Expr>(read);
+  t.body.push_back(use);
+  EXPECT_EQ(verify(t), "local %0 read before it is set");
+  t.body[0].orelse.push_back(set);  // now both paths set it
+  EXPECT_EQ(verify(t), "");
+}
+
+TEST(LoopIr, VerifierRejectsMismatchedTypes) {
+  Trace t;
+  t.locals = {Ty::I32};
+  Stmt s;
+  s.kind = StmtKind::SetLocal;
+  s.slot = 0;
+  s.value = c(1.0);
+  t.body.push_back(s);
+  EXPECT_EQ(verify(t), "set local: operand is f64, expected i32");
+}
+
+// ---------------------------------------------------------------------------
+// Compiled sites against the interpreter
+
+const char* kProgram = R"(
+element Vertex
+  x : vector[3](float);
+  v : vector[3](float);
+  m : float;
+  pinned : bool;
+end
+element Tet
+  B : matrix[3,3](float);
+  W : float;
+end
+extern verts : set{Vertex};
+extern tets : set{Tet}(verts, verts, verts, verts);
+extern gain : float;
+
+const eye3 = [1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0];
+
+func edge_matrix(v : (Vertex * 4)) -> D : matrix[3,3](float)
+  for j in 0:3
+    e = v(j).x - v(3).x;
+    for i in 0:3
+      D(i, j) = e(i);
+    end
+  end
+end
+
+func rest(inout t : Tet, v : (Vertex * 4)) -> m : vector[verts](float)
+  Dm = edge_matrix(v);
+  t.B = inv(Dm);
+  t.W = -det(Dm) / 6.0;
+  for j in 0:4
+    m(v(j)) = 0.25 * t.W;
+  end
+end
+
+func hold(inout p : Vertex)
+  if p.pinned
+    p.v = 0.0;
+  else
+    p.v = gain * p.v + [0.0, -1.0, 0.0]';
+  end
+end
+
+func force(mu : float, t : Tet, v : (Vertex * 4)) -> f : vector[verts](vector[3](float))
+  F = edge_matrix(v) * t.B;
+  FinvT = inv(F)';
+  P = mu * (F - FinvT) + log(det(F)) * FinvT;
+  for j in 0:3
+    f(v(j)) = -t.W * (P * t.B(j, :)');
+  end
+  f(v(3)) = t.W * (P * (t.B(0, :) + t.B(1, :) + t.B(2, :))');
+end
+
+func stiffness(t : Tet, v : (Vertex * 4)) -> K : matrix[verts,verts](matrix[3,3](float))
+  F = edge_matrix(v) * t.B;
+  var s = 0.0;
+  if det(F) > 0.5
+    s = sqrt(det(F));
+  elif v(0).m > 100.0
+    s = -1.0;
+  else
+    s = max(0.25, v(1).m);
+  end
+  for i in 0:4
+    for j in 0:4
+      if not (v(i).pinned or v(j).pinned)
+        K(v(i), v(j)) = (s * t.W) * (F' * F) + eye3;
+        K(v(i), v(j))(0, 1) = t.W;
+      end
+    end
+  end
+end
+
+func mass(p : Vertex) -> M : matrix[verts,verts](matrix[3,3](float))
+  M(p, p) = p.m * eye3;
+end
+
+func rhs(f : vector[verts](vector[3](float)), p : Vertex) -> b : vector[verts](vector[3](float))
+  if not p.pinned
+    b(p) = p.m * p.v + 0.01 * f(p);
+  end
+end
+
+func count(p : Vertex) -> n : vector[verts](float)
+  var k = 0.0;
+  while k < 2.0
+    k = k + 1.0;
+  end
+  n(p) = k;
+end
+
+export func init()
+  verts.m = map rest to tets reduce +;
+end
+
+export func step() -> (A : matrix[verts,verts](matrix[3,3](float)), b : vector[verts](vector[3](float)),
+                       n : vector[verts](float))
+  apply hold to verts;
+  f = map force(2.0) to tets reduce +;
+  K = map stiffness to tets reduce +;
+  M = map mass to verts reduce +;
+  A = M - 0.01 * K;
+  b = map rhs(f) to verts reduce +;
+  n = map count to verts reduce +;
+end
+)";
+
+// Two tets sharing a face, one vertex pinned; coordinates not on a lattice so that every
+// operation rounds.
+struct Mesh {
+  runtime::Set verts{"verts"};
+  runtime::Set tets{"tets", {&verts, &verts, &verts, &verts}};
+
+  explicit Mesh(bool inverted = false) {
+    verts.add_many(5);
+    using runtime::ComponentKind;
+    verts.add_field("x", runtime::FieldType{ComponentKind::Float, {3}, false});
+    verts.add_field("v", runtime::FieldType{ComponentKind::Float, {3}, false});
+    verts.add_field("m", runtime::FieldType{ComponentKind::Float, {}, false});
+    verts.add_field("pinned", runtime::FieldType{ComponentKind::Bool, {}, false});
+    const double x[5][3] = {
+        {0.1, 0.0, 0.03}, {1.07, 0.11, 0.0}, {0.0, 0.93, 0.2}, {0.05, 0.1, 1.13}, {1.2, 1.1, 0.9}};
+    for (int i = 0; i < 5; ++i)
+      for (int k = 0; k < 3; ++k) {
+        verts.field(0).at<double>(i)[k] = inverted && i == 2 && k == 1 ? 0.0 : x[i][k];
+        verts.field(1).at<double>(i)[k] = 0.1 * (i + 1) - 0.07 * k;
+      }
+    verts.field(3).at<bool>(0)[0] = true;
+    const int32_t ends[] = {0, 1, 2, 3, 1, 2, 3, 4};
+    tets.add_edges(ends);
+    tets.add_field("B", runtime::FieldType{ComponentKind::Float, {3, 3}, false});
+    tets.add_field("W", runtime::FieldType{ComponentKind::Float, {}, false});
+  }
+};
+
+struct Program {
+  std::shared_ptr<const CompiledProgram> compiled =
+      CompiledProgram::from_source("jit_test.sim", kProgram);
+  Mesh mesh;
+  std::unique_ptr<Engine> engine;
+
+  Program(ExecutorKind kind, bool inverted = false) : mesh(inverted) {
+    EXPECT_TRUE(compiled->ok());
+    EngineOptions o;
+    o.executor = kind;
+    o.jit.threshold = 0;
+    engine = std::make_unique<Engine>(compiled, o);
+    engine->bind_set(*compiled->find_extern("verts"), mesh.verts);
+    engine->bind_set(*compiled->find_extern("tets"), mesh.tets);
+    engine->set_global(*compiled->find_extern("gain"), Value::of_float(0.75));
+  }
+  std::vector<Value> call(const char* f) { return engine->call(*compiled->find_func(f), {}); }
+  std::string stats() const {
+    std::ostringstream os;
+    engine->print_jit_stats(os);
+    return os.str();
+  }
+};
+
+// Bit-for-bit equality of two doubles arrays.
+void expect_same_bits(const double* a, const double* b, size_t n, const std::string& what) {
+  for (size_t i = 0; i < n; ++i)
+    EXPECT_EQ(std::memcmp(&a[i], &b[i], sizeof(double)), 0)
+        << what << "[" << i << "]: " << a[i] << " vs " << b[i];
+}
+
+void expect_same(const Value& a, const Value& b, const std::string& what) {
+  ASSERT_EQ(a.kind(), b.kind()) << what;
+  if (a.kind() == Value::Kind::Matrix) {
+    ASSERT_EQ(a.matrix()->value_count(), b.matrix()->value_count()) << what;
+    expect_same_bits(a.matrix()->values(), b.matrix()->values(), a.matrix()->value_count(), what);
+  } else {
+    ASSERT_EQ(a.tensor().size(), b.tensor().size()) << what;
+    expect_same_bits(a.tensor().floats(), b.tensor().floats(), a.tensor().size(), what);
+  }
+}
+
+void expect_same_fields(const runtime::Set& a, const runtime::Set& b) {
+  for (int f = 0; f < a.field_count(); ++f) {
+    const runtime::Field& fa = a.field(f);
+    if (fa.type().kind != runtime::ComponentKind::Float) continue;
+    expect_same_bits(fa.data<double>(), b.field(f).data<double>(), a.size() * fa.components(),
+                     a.name() + "." + fa.name());
+  }
+}
+
+TEST(Jit, CompiledSitesComputeTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  Program in(ExecutorKind::Interpreter), jit(ExecutorKind::Jit);
+  in.call("init");
+  jit.call("init");
+  expect_same_fields(in.mesh.verts, jit.mesh.verts);
+  expect_same_fields(in.mesh.tets, jit.mesh.tets);
+  std::vector<Value> a, b;
+  for (int frame = 0; frame < 3; ++frame) {
+    a = in.call("step");
+    b = jit.call("step");
+    ASSERT_EQ(a.size(), 3u);
+    expect_same(a[0], b[0], "A");
+    expect_same(a[1], b[1], "b");
+    expect_same(a[2], b[2], "n");
+    expect_same_fields(in.mesh.verts, jit.mesh.verts);
+  }
+  // The values are real ones: a block of A away from the pinned vertex is not zero.
+  const runtime::SystemMatrix& A = *a[0].matrix();
+  const int32_t at = A.pattern().find(1, 2);
+  ASSERT_GE(at, 0);
+  EXPECT_NE(A.block(at)[0], 0.0);
+  EXPECT_NE(A.block(at)[4], 0.0);
+  const std::string stats = jit.stats();
+  for (const char* site : {"rest", "hold", "force", "stiffness", "mass", "rhs"})
+    EXPECT_NE(stats.find(std::string(site) + " (line"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("interpreted: While statements are not compiled"), std::string::npos)
+      << stats;
+  // Every site but `count` compiled.
+  size_t compiled = 0;
+  for (size_t at = stats.find(" compiled\n"); at != std::string::npos;
+       at = stats.find(" compiled\n", at + 1))
+    ++compiled;
+  EXPECT_EQ(compiled, 6u) << stats;
+}
+
+TEST(Jit, ASingularMatrixIsReportedAsTheInterpreterReportsIt) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::string messages[2];
+  for (int k = 0; k < 2; ++k) {
+    Program r(k ? ExecutorKind::Jit : ExecutorKind::Interpreter, /*inverted=*/false);
+    r.call("init");
+    // Flatten tet 1 (vertices 1, 2, 3, 4) onto a plane: its F is singular.
+    for (int i = 1; i <= 4; ++i) r.mesh.verts.field(0).at<double>(i)[2] = 0.0;
+    r.mesh.verts.field(0).at<double>(0)[2] = 0.5;
+    try {
+      r.call("step");
+      ADD_FAILURE() << "no error";
+    } catch (const interp::RuntimeError& e) {
+      messages[k] = e.render();
+    }
+  }
+  EXPECT_NE(messages[0].find("singular"), std::string::npos) << messages[0];
+  EXPECT_EQ(messages[0], messages[1]);
+}
+
+TEST(Jit, SwitchingExecutorsMidRunCopiesNothingAndAgrees) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  Program in(ExecutorKind::Interpreter), mixed(ExecutorKind::Interpreter);
+  in.call("init");
+  mixed.call("init");
+  for (int frame = 0; frame < 4; ++frame) {
+    mixed.engine->set_executor(frame % 2 ? ExecutorKind::Interpreter : ExecutorKind::Jit);
+    std::vector<Value> a = in.call("step"), b = mixed.call("step");
+    expect_same(a[0], b[0], "A");
+    expect_same_fields(in.mesh.verts, mixed.mesh.verts);
+  }
+}
+
+}  // namespace
+}  // namespace simit::jit
