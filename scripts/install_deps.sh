@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs every build and test dependency of Simit from Debian packages (run as root; idempotent).
 # With --tests also the packages only the tests use (scripts/test.sh passes it); with --llvm
-# also LLVM 19, which only a build configured with -DSIMIT_WITH_LLVM=ON asks for (the JIT that
-# will use it is not written yet).
+# also LLVM 19, which the JIT needs (a build configured with -DSIMIT_WITH_LLVM=ON; setup.sh and
+# test.sh pass it).
 set -euo pipefail
 
 packages=(
