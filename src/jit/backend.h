@@ -17,10 +17,15 @@ namespace simit::jit {
 using KernelFn = int32_t (*)(void* const* arrays, const double* scalars, const int32_t* endpoints,
                              int32_t begin, int32_t end, int32_t* failed_element);
 
+// A compiled system trace: `scalars` holds the program's scalars (in, then out), `sizes` the
+// lengths the trace names. Returns 0.
+using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes);
+
 class Kernel {
  public:
   virtual ~Kernel() = default;
   KernelFn fn = nullptr;
+  SystemFn system = nullptr;
   double compile_ms = 0.0;
   std::string llvm_ir;  // the optimised module, when asked for (`--dump=llvm`)
 };
@@ -30,6 +35,8 @@ class Backend {
   virtual ~Backend() = default;
   // Null with `error` set when the trace could not be compiled.
   virtual std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) = 0;
+  virtual std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
+                                          std::string& error) = 0;
 };
 
 // The host CPU through LLVM ORC; null with `error` set when LLVM cannot target this machine.

@@ -26,7 +26,36 @@ struct TraceController::SiteState {
   std::string site;
 };
 
+struct TraceController::LoopEntry {
+  TracedSystem traced;
+  std::unique_ptr<Kernel> kernel;
+  std::vector<int64_t> sizes;       // the lengths it was traced for
+  std::vector<bool> writes_scalar;  // per scalar local
+  TraceStats stats;
+};
+
+struct TraceController::LoopState {
+  long runs = 0;
+  int failures = 0;
+  std::string gave_up;
+  std::vector<std::unique_ptr<LoopEntry>> entries;
+};
+
 namespace {
+
+// The lengths a system trace's sizes name, as the interpreter's values hold them now (-1
+// where a value is missing or of another kind).
+std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& in) {
+  std::vector<int64_t> out;
+  for (const SystemBinding::Size& s : b.sizes) {
+    const Value& v = in.variable(*s.var);
+    if (s.rows)
+      out.push_back(v.kind() == Value::Kind::Matrix && v.matrix() ? v.matrix()->rows() : -1);
+    else
+      out.push_back(v.is_tensor() ? static_cast<int64_t>(v.tensor().size()) : -1);
+  }
+  return out;
+}
 
 // What a kernel is specialised for: the target's identity and topology, the patterns of the
 // matrix results, the shapes of the partial arguments, the storage of the fields and the
@@ -226,10 +255,124 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   return true;
 }
 
+TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& loop,
+                                                            interp::Interpreter& in) {
+  auto& slot = loops_[&loop];
+  if (!slot) slot = std::make_unique<LoopState>();
+  LoopState& s = *slot;
+  for (auto& e : s.entries)
+    if (e->kernel && current_sizes(e->traced.binding, in) == e->sizes) return e.get();
+  if (!s.gave_up.empty()) return nullptr;
+  auto e = std::make_unique<LoopEntry>();
+  e->stats.site = "while (line " + std::to_string(loop.span.start().line) + ")";
+  auto fail = [&](std::string why, bool final) {
+    e->stats.status = "interpreted: " + std::move(why);
+    if (final || ++s.failures >= kMaxFailures) s.gave_up = e->stats.status;
+  };
+  if (!backend_) {
+    fail("no code generator: " + backend_error_, true);
+  } else if (options_.check_finite || options_.float32) {
+    fail(options_.check_finite ? "--check-finite runs system statements in the interpreter"
+                               : "float32 runs system statements in the interpreter",
+         true);
+  } else {
+    e->traced = trace_system(loop, in);
+    if (!e->traced.trace) {
+      fail(e->traced.reason, true);
+    } else {
+      SystemTrace& t = *e->traced.trace;
+      const int removed = fuse_passes(t);
+      e->sizes = current_sizes(e->traced.binding, in);
+      std::ostringstream key;
+      for (size_t i = 0; i < t.sizes.size(); ++i) key << (i ? ", " : "") << t.sizes[i];
+      key << "; " << removed << " loops fused away";
+      e->stats.key = key.str();
+      e->writes_scalar.assign(static_cast<size_t>(t.scalars), false);
+      for (const VectorOp& op : t.body)
+        for (const Stmt& st : op.body)
+          if (st.kind == StmtKind::SetLocal && st.slot < t.scalars)
+            e->writes_scalar[st.slot] = true;
+      std::string error;
+      e->kernel = backend_->compile(t, options_.dump_llvm, error);
+      if (!e->kernel) {
+        fail(error, false);
+      } else {
+        e->stats.status = "compiled";
+        e->stats.compile_ms = e->kernel->compile_ms;
+        if (options_.dump && options_.dump_loop_ir) print(*options_.dump, t);
+        if (options_.dump && options_.dump_llvm) *options_.dump << e->kernel->llvm_ir;
+      }
+    }
+  }
+  LoopEntry* out = e.get();
+  s.entries.push_back(std::move(e));
+  return out && out->kernel ? out : nullptr;
+}
+
+bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
+  const auto* loop = stmt.as<ast::While>();
+  if (!loop) return false;
+  auto& state = loops_[loop];
+  if (!state) state = std::make_unique<LoopState>();
+  if (++state->runs <= options_.threshold) return false;
+  LoopEntry* e = loop_entry_for(*loop, in);
+  if (!e) return false;
+  const auto start = std::chrono::steady_clock::now();
+  const SystemBinding& b = e->traced.binding;
+  const SystemTrace& t = *e->traced.trace;
+  for (const auto& [var, like] : b.created)
+    if (in.variable(*var).empty()) {
+      const runtime::Tensor& shape = in.variable(*like).tensor();
+      in.variable(*var) = Value::of_tensor(runtime::Tensor(shape.kind(), shape.shape()));
+    }
+  std::vector<void*> arrays(b.arrays.size(), nullptr);
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t i = 0; i < b.arrays.size(); ++i) {
+      if (t.arrays[i].written != (pass == 0)) continue;
+      Value& v = in.variable(*b.arrays[i].var);
+      using Part = SystemBinding::Array::Part;
+      switch (b.arrays[i].part) {
+        case Part::Vector:
+          arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
+                                          : const_cast<double*>(v.tensor().floats());
+          break;
+        case Part::RowPtr:
+          arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data());
+          break;
+        case Part::Cols:
+          arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().col_idx().data());
+          break;
+        case Part::Values: arrays[i] = v.matrix()->values(); break;
+      }
+    }
+  std::vector<double> scalars(b.scalars.size(), 0.0);
+  for (size_t i = 0; i < b.scalars.size(); ++i) {
+    const Value& v = in.variable(*b.scalars[i]);
+    if (!v.empty()) scalars[i] = component(v, 0);
+  }
+  e->kernel->system(arrays.data(), scalars.data(), e->sizes.data());
+  for (size_t i = 0; i < b.scalars.size(); ++i) {
+    if (!e->writes_scalar[i]) continue;
+    switch (b.scalar_types[i]) {
+      case Ty::F64: in.variable(*b.scalars[i]) = Value::of_float(scalars[i]); break;
+      case Ty::I32:
+        in.variable(*b.scalars[i]) = Value::of_int(static_cast<int32_t>(scalars[i]));
+        break;
+      case Ty::Bool: in.variable(*b.scalars[i]) = Value::of_bool(scalars[i] != 0.0); break;
+    }
+  }
+  e->stats.run_ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  ++e->stats.calls;
+  return true;
+}
+
 std::vector<TraceStats> TraceController::stats() const {
   std::vector<TraceStats> out;
   for (const auto& [site, s] : sites_)
     for (const auto& [key, e] : s->kernels) out.push_back(e->stats);
+  for (const auto& [loop, s] : loops_)
+    for (const auto& e : s->entries) out.push_back(e->stats);
   return out;
 }
 

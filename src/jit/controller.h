@@ -11,6 +11,7 @@
 
 #include "interp/assembly_plan.h"
 #include "jit/backend.h"
+#include "jit/system_trace.h"
 #include "jit/trace_site.h"
 #include "jit/tunables.h"
 
@@ -43,6 +44,8 @@ class TraceController : public interp::SiteHook {
   ~TraceController() override;
 
   bool run_site(interp::SiteCall& call) override;
+  // A while loop of system-level statements (a CG loop), compiled as a whole.
+  bool run_statement(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
 
   std::vector<TraceStats> stats() const;
   // A table of stats(), one line per trace.
@@ -53,6 +56,9 @@ class TraceController : public interp::SiteHook {
  private:
   struct Entry;
   struct SiteState;
+  struct LoopEntry;
+  struct LoopState;
+  LoopEntry* loop_entry_for(const frontend::ast::While& loop, interp::Interpreter& in);
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
 
@@ -60,6 +66,7 @@ class TraceController : public interp::SiteHook {
   std::unique_ptr<Backend> backend_;
   std::string backend_error_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
+  std::map<const void*, std::unique_ptr<LoopState>> loops_;
 };
 
 }  // namespace simit::jit

@@ -309,6 +309,28 @@ void print(std::ostream& os, const Trace& t) {
   print_block(os, t.body, 1);
 }
 
+void print(std::ostream& os, const SystemTrace& t) {
+  os << "system trace " << t.name << "\n";
+  for (size_t i = 0; i < t.arrays.size(); ++i)
+    os << "  a" << i << ": " << t.arrays[i].name << " " << ty_name(t.arrays[i].ty)
+       << (t.arrays[i].written ? " written" : "") << "\n";
+  for (size_t i = 0; i < t.sizes.size(); ++i) os << "  n" << i << ": " << t.sizes[i] << "\n";
+  os << "  while ";
+  print_expr(os, *t.condition);
+  os << "\n";
+  for (const VectorOp& op : t.body) {
+    switch (op.kind) {
+      case VectorOp::Kind::Scalar: os << "    scalar\n"; break;
+      case VectorOp::Kind::Pass: os << "    pass over n" << op.length << "\n"; break;
+      case VectorOp::Kind::SpMV:
+        os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
+           << op.block << "x" << op.block << ", then per component\n";
+        break;
+    }
+    print_block(os, op.body, 3);
+  }
+}
+
 std::string verify(const Trace& t) { return Verifier(t).run(); }
 
 size_t node_count(const Trace& t) { return count_block(t.body); }

@@ -137,8 +137,44 @@ struct Trace {
   bool writes_fields = false;  // some Store (an apply with inout fields)
 };
 
+// A run of system-level statements (a CG loop): scalar statements, fused passes over the
+// components of global vectors, and sparse matrix-vector products, inside a while loop.
+// Vectors are arrays of one-component elements indexed by the component (ExprKind::Element
+// is the component in a pass); locals 0 .. scalars-1 are the program's scalar variables,
+// read from the scalar array on entry and written back on exit.
+struct VectorOp {
+  enum class Kind : uint8_t {
+    Scalar,  // body once
+    Pass,    // body for each component k < sizes[length] (a fused loop)
+    SpMV,    // arrays[y] = matrix * arrays[x], row block by row block; then body for each
+             // component of the row just computed (a fused reduction over y)
+  };
+  Kind kind = Kind::Scalar;
+  std::vector<Stmt> body;
+  int length = -1;                           // Pass: index into the sizes
+  int row_ptr = -1, cols = -1, values = -1;  // SpMV: the matrix's arrays
+  int rows = -1;                             // SpMV: index into the sizes (block rows)
+  int x = -1, y = -1;                        // SpMV: vector arrays
+  int block = 1;                             // SpMV: block rows = block columns
+};
+
+struct SystemTrace {
+  std::string name;
+  std::vector<ArraySlot> arrays;
+  std::vector<Ty> locals;
+  int scalars = 0;                 // the first locals: the program's scalars, in and out
+  std::vector<std::string> sizes;  // what each size is (for dumps)
+  ExprRef condition;               // the while condition
+  std::vector<VectorOp> body;
+};
+
 // Prints the trace as text (`--dump=loop-ir`).
 void print(std::ostream& os, const Trace& t);
+void print(std::ostream& os, const SystemTrace& t);
+// Merges adjacent passes over the same vectors into one loop, folds a reduction over a
+// product's result into the product's row loop, and moves scalar statements that do not
+// depend on a pass above it (jit/fuse_passes.cpp). Returns the number of loops removed.
+int fuse_passes(SystemTrace& t);
 // Checks the invariants every pass relies on: operand types, slots in range, locals set
 // before they are read on every path. Returns the first violation, or "" when it holds.
 std::string verify(const Trace& t);

@@ -2,6 +2,7 @@
 // ORC session, one resource tracker per kernel (dropping a kernel frees its code).
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <unordered_map>
 
@@ -80,6 +81,7 @@ class Session {
 class CpuKernel : public Kernel {
  public:
   explicit CpuKernel(llvm::orc::ResourceTrackerSP rt) : rt_(std::move(rt)) {}
+  void* address = nullptr;
   ~CpuKernel() override {
     if (rt_) llvm::consumeError(rt_->remove());
   }
@@ -88,12 +90,16 @@ class CpuKernel : public Kernel {
   llvm::orc::ResourceTrackerSP rt_;
 };
 
-// Emits one trace as a function of the KernelFn signature.
+// Emits one trace as a function of the KernelFn signature, or a system trace as a SystemFn.
 class Emitter {
  public:
-  Emitter(const Trace& t, llvm::Module& m) : t_(t), m_(m), ctx_(m.getContext()), b_(ctx_) {}
+  Emitter(const Trace& t, llvm::Module& m)
+      : t_(&t), slots_(t.arrays), local_types_(t.locals), m_(m), ctx_(m.getContext()), b_(ctx_) {}
+  Emitter(const SystemTrace& t, llvm::Module& m)
+      : st_(&t), slots_(t.arrays), local_types_(t.locals), m_(m), ctx_(m.getContext()), b_(ctx_) {}
 
   llvm::Function* run(const std::string& name);
+  llvm::Function* run_system(const std::string& name);
 
  private:
   llvm::Type* type(Ty t) {
@@ -111,7 +117,7 @@ class Emitter {
   }
   // Address of component `comp` of element `index` of array `slot`.
   Value* address(int slot, Value* index, int comp) {
-    const ArraySlot& a = t_.arrays[slot];
+    const ArraySlot& a = slots_[slot];
     Value* i = b_.CreateSExt(index, b_.getInt64Ty());
     Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), b_.getInt64(comp));
     return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
@@ -120,8 +126,15 @@ class Emitter {
   Value* expr(const Expr& e);
   void block(const std::vector<Stmt>& body);
   void stmt(const Stmt& s);
+  // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
+  void loop(Value* begin, Value* end, const std::function<void(Value*)>& body);
+  void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  void load_arrays(Value* arrays);
 
-  const Trace& t_;
+  const Trace* t_ = nullptr;
+  const SystemTrace* st_ = nullptr;
+  const std::vector<ArraySlot>& slots_;
+  const std::vector<Ty>& local_types_;
   llvm::Module& m_;
   llvm::LLVMContext& ctx_;
   IRBuilder<> b_;
@@ -178,7 +191,7 @@ Value* Emitter::expr(const Expr& e) {
     case ExprKind::Element: return element_;
     case ExprKind::Endpoint: return endpoints_[e.slot];
     case ExprKind::Load: {
-      const ArraySlot& a = t_.arrays[e.slot];
+      const ArraySlot& a = slots_[e.slot];
       Value* v = b_.CreateLoad(storage(a), address(e.slot, expr(*e.ops[0]), e.comp));
       if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
       if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
@@ -231,7 +244,7 @@ void Emitter::stmt(const Stmt& s) {
   switch (s.kind) {
     case StmtKind::SetLocal: b_.CreateStore(expr(*s.value), locals_[s.slot]); return;
     case StmtKind::Store: {
-      const ArraySlot& a = t_.arrays[s.slot];
+      const ArraySlot& a = slots_[s.slot];
       Value* v = expr(*s.value);
       if (a.ty == Ty::F64 && a.single) v = b_.CreateFPTrunc(v, b_.getFloatTy());
       if (a.ty == Ty::Bool) v = b_.CreateZExt(v, b_.getInt8Ty());
@@ -242,10 +255,10 @@ void Emitter::stmt(const Stmt& s) {
       Value* at;
       if (s.pair >= 0) {
         // The block's position in the matrix comes from the pattern's per-element table.
-        const int result = t_.arrays[s.slot].index;
+        const int result = slots_[s.slot].index;
         int table = -1;
-        for (size_t i = 0; i < t_.arrays.size(); ++i)
-          if (t_.arrays[i].kind == ArraySlot::Kind::Table && t_.arrays[i].index == result)
+        for (size_t i = 0; i < slots_.size(); ++i)
+          if (slots_[i].kind == ArraySlot::Kind::Table && slots_[i].index == result)
             table = static_cast<int>(i);
         Value* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
         at = address(s.slot, pos, s.comp);
@@ -253,7 +266,7 @@ void Emitter::stmt(const Stmt& s) {
         at = address(s.slot, expr(*s.index), s.comp);
       }
       Value* v = expr(*s.value);
-      if (t_.reduce) v = b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), at), v);
+      if (t_->reduce) v = b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), at), v);
       b_.CreateStore(v, at);
       return;
     }
@@ -304,13 +317,13 @@ llvm::Function* Emitter::run(const std::string& name) {
   auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
   b_.SetInsertPoint(entry);
   // Everything invariant over the elements is read once, before the loop.
-  for (size_t i = 0; i < t_.arrays.size(); ++i)
+  for (size_t i = 0; i < slots_.size(); ++i)
     arrays_.push_back(
-        b_.CreateLoad(ptr, b_.CreateConstInBoundsGEP1_64(ptr, arrays, i), t_.arrays[i].name));
-  for (size_t i = 0; i < t_.scalars.size(); ++i)
+        b_.CreateLoad(ptr, b_.CreateConstInBoundsGEP1_64(ptr, arrays, i), slots_[i].name));
+  for (size_t i = 0; i < t_->scalars.size(); ++i)
     scalars_.push_back(b_.CreateLoad(b_.getDoubleTy(),
                                      b_.CreateConstInBoundsGEP1_64(b_.getDoubleTy(), scalars, i)));
-  for (Ty t : t_.locals) locals_.push_back(b_.CreateAlloca(type(t)));
+  for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
 
   auto* head = llvm::BasicBlock::Create(ctx_, "element", fn_);
   auto* body = llvm::BasicBlock::Create(ctx_, "body", fn_);
@@ -322,18 +335,152 @@ llvm::Function* Emitter::run(const std::string& name) {
   b_.CreateCondBr(b_.CreateICmpSLT(e, end), body, done);
   b_.SetInsertPoint(body);
   element_ = e;
-  if (t_.arity > 0) {
-    Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_.arity));
-    for (int k = 0; k < t_.arity; ++k)
+  if (t_->arity > 0) {
+    Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_->arity));
+    for (int k = 0; k < t_->arity; ++k)
       endpoints_.push_back(b_.CreateLoad(
           b_.getInt32Ty(),
           b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoints, b_.CreateAdd(base, b_.getInt64(k)))));
   }
-  block(t_.body);
+  block(t_->body);
   Value* next = b_.CreateAdd(e, b_.getInt32(1));
   e->addIncoming(next, b_.GetInsertBlock());
   b_.CreateBr(head);
   b_.SetInsertPoint(done);
+  b_.CreateRet(b_.getInt32(0));
+  return fn_;
+}
+
+void Emitter::load_arrays(Value* arrays) {
+  llvm::Type* ptr = b_.getPtrTy();
+  for (size_t i = 0; i < slots_.size(); ++i)
+    arrays_.push_back(
+        b_.CreateLoad(ptr, b_.CreateConstInBoundsGEP1_64(ptr, arrays, i), slots_[i].name));
+}
+
+void Emitter::loop(Value* begin, Value* end, const std::function<void(Value*)>& body) {
+  llvm::BasicBlock* pre = b_.GetInsertBlock();
+  auto* head = llvm::BasicBlock::Create(ctx_, "loop", fn_);
+  auto* inside = llvm::BasicBlock::Create(ctx_, "loop.body", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "loop.done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  llvm::PHINode* i = b_.CreatePHI(begin->getType(), 2);
+  i->addIncoming(begin, pre);
+  b_.CreateCondBr(b_.CreateICmpSLT(i, end), inside, done);
+  b_.SetInsertPoint(inside);
+  body(i);
+  i->addIncoming(b_.CreateAdd(i, llvm::ConstantInt::get(begin->getType(), 1)), b_.GetInsertBlock());
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+}
+
+// One op of a system trace. A product runs row block by row block: each component's sum
+// over the row's blocks in pattern order, then the fused body for each component of the row.
+void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
+  switch (op.kind) {
+    case VectorOp::Kind::Scalar: return block(op.body);
+    case VectorOp::Kind::Pass:
+      return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
+        element_ = k;
+        block(op.body);
+      });
+    case VectorOp::Kind::SpMV: {
+      const int bs = op.block;
+      llvm::Type* i64 = b_.getInt64Ty();
+      llvm::Type* f64 = b_.getDoubleTy();
+      std::vector<Value*> sums;
+      {
+        llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
+        for (int i = 0; i < bs; ++i) sums.push_back(entry.CreateAlloca(f64));
+      }
+      loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
+        for (Value* s : sums) b_.CreateStore(llvm::ConstantFP::get(f64, 0.0), s);
+        Value* lo = b_.CreateSExt(
+            b_.CreateLoad(b_.getInt32Ty(),
+                          b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+            i64);
+        Value* hi =
+            b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
+                                        b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
+                                                             b_.CreateAdd(r, b_.getInt64(1)))),
+                          i64);
+        loop(lo, hi, [&](Value* k) {
+          Value* col = b_.CreateSExt(
+              b_.CreateLoad(b_.getInt32Ty(),
+                            b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
+              i64);
+          Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
+          Value* xc = b_.CreateMul(col, b_.getInt64(bs));
+          for (int i = 0; i < bs; ++i) {
+            Value* s = b_.CreateLoad(f64, sums[i]);
+            for (int j = 0; j < bs; ++j) {
+              Value* a = b_.CreateLoad(
+                  f64, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                            b_.CreateAdd(blk, b_.getInt64(i * bs + j))));
+              Value* x = b_.CreateLoad(
+                  f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
+              s = b_.CreateFAdd(s, b_.CreateFMul(a, x));
+            }
+            b_.CreateStore(s, sums[i]);
+          }
+        });
+        Value* row = b_.CreateMul(r, b_.getInt64(bs));
+        for (int i = 0; i < bs; ++i)
+          b_.CreateStore(
+              b_.CreateLoad(f64, sums[i]),
+              b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
+        for (int i = 0; i < bs; ++i) {
+          element_ = b_.CreateTrunc(b_.CreateAdd(row, b_.getInt64(i)), b_.getInt32Ty());
+          block(op.body);
+        }
+      });
+      return;
+    }
+  }
+}
+
+// int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes): the program's
+// scalars in and out through `scalars`, the while loop in between.
+llvm::Function* Emitter::run_system(const std::string& name) {
+  llvm::Type* ptr = b_.getPtrTy();
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr}, false);
+  fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
+  auto arg = fn_->arg_begin();
+  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg;
+  auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
+  b_.SetInsertPoint(entry);
+  load_arrays(arrays);
+  for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
+  llvm::Type* f64 = b_.getDoubleTy();
+  for (int i = 0; i < st_->scalars; ++i) {
+    Value* d = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+    const Ty t = local_types_[i];
+    Value* v = t == Ty::F64   ? d
+               : t == Ty::I32 ? b_.CreateFPToSI(d, b_.getInt32Ty())
+                              : b_.CreateFCmpUNE(d, llvm::ConstantFP::get(f64, 0.0));
+    b_.CreateStore(v, locals_[i]);
+  }
+  std::vector<Value*> sizes;
+  for (size_t i = 0; i < st_->sizes.size(); ++i)
+    sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
+                                  b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
+  auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
+  auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  b_.CreateCondBr(expr(*st_->condition), body, done);
+  b_.SetInsertPoint(body);
+  for (const VectorOp& op : st_->body) vector_op(op, sizes);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+  for (int i = 0; i < st_->scalars; ++i) {
+    const Ty t = local_types_[i];
+    Value* v = b_.CreateLoad(type(t), locals_[i]);
+    Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
+    b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+  }
   b_.CreateRet(b_.getInt32(0));
   return fn_;
 }
@@ -360,6 +507,26 @@ class CpuBackend : public Backend {
   explicit CpuBackend(Session& s) : s_(s) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
+    auto k = build(keep_ir, error, [&](llvm::Module& m, const std::string& name) {
+      return Emitter(trace, m).run(name);
+    });
+    if (k) k->fn = reinterpret_cast<KernelFn>(k->address);
+    return k;
+  }
+  std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
+                                  std::string& error) override {
+    auto k = build(keep_ir, error, [&](llvm::Module& m, const std::string& name) {
+      return Emitter(trace, m).run_system(name);
+    });
+    if (k) k->system = reinterpret_cast<SystemFn>(k->address);
+    return k;
+  }
+
+ private:
+  // Emits a function into a new module, optimises it for the host and links it.
+  std::unique_ptr<CpuKernel> build(
+      bool keep_ir, std::string& error,
+      const std::function<llvm::Function*(llvm::Module&, const std::string&)>& emit) {
     const auto start = std::chrono::steady_clock::now();
     static std::atomic<int> serial{0};
     const std::string name = "simit_kernel_" + std::to_string(serial++);
@@ -367,7 +534,7 @@ class CpuBackend : public Backend {
     auto mod = std::make_unique<llvm::Module>(name, *ctx);
     mod->setDataLayout(s_.jit().getDataLayout());
     mod->setTargetTriple(s_.target().getTargetTriple().str());
-    llvm::Function* fn = Emitter(trace, *mod).run(name);
+    llvm::Function* fn = emit(*mod, name);
     fn->addFnAttr("target-cpu", s_.target().getTargetCPU());
     fn->addFnAttr("target-features", s_.target().getTargetFeatureString());
     std::string broken;
@@ -395,7 +562,7 @@ class CpuBackend : public Backend {
       return nullptr;
     }
     auto k = std::make_unique<CpuKernel>(rt);
-    k->fn = sym->toPtr<KernelFn>();
+    k->address = sym->toPtr<void*>();
     k->llvm_ir = std::move(ir);
     k->compile_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -1,0 +1,100 @@
+// Fusion of a system trace's vector ops: scalar statements move up past passes that do not
+// concern them, a reduction over a product's result joins the product's row loop, and
+// adjacent passes over vectors of one length become one loop. A CG iteration ends as three
+// loops: the product with p'Ap, the x and r updates with r'r, the p update.
+#include <set>
+
+#include "jit/loop_ir.h"
+
+namespace simit::jit {
+
+namespace {
+
+struct Uses {
+  std::set<int> reads, writes;  // locals
+  std::set<int> array_reads, array_writes;
+};
+
+void expr_uses(const Expr& e, Uses& u) {
+  if (e.kind == ExprKind::Local) u.reads.insert(e.slot);
+  if (e.kind == ExprKind::Load) u.array_reads.insert(e.slot);
+  for (const ExprRef& o : e.ops) expr_uses(*o, u);
+}
+
+void block_uses(const std::vector<Stmt>& body, Uses& u) {
+  for (const Stmt& s : body) {
+    if (s.value) expr_uses(*s.value, u);
+    if (s.index) expr_uses(*s.index, u);
+    if (s.kind == StmtKind::SetLocal) u.writes.insert(s.slot);
+    if (s.kind == StmtKind::Store) u.array_writes.insert(s.slot);
+    block_uses(s.body, u);
+    block_uses(s.orelse, u);
+  }
+}
+
+Uses uses_of(const VectorOp& op) {
+  Uses u;
+  block_uses(op.body, u);
+  if (op.kind == VectorOp::Kind::SpMV) {
+    u.array_reads.insert({op.row_ptr, op.cols, op.values, op.x});
+    u.array_writes.insert(op.y);
+  }
+  return u;
+}
+
+bool meets(const std::set<int>& a, const std::set<int>& b) {
+  for (int x : a)
+    if (b.count(x)) return true;
+  return false;
+}
+
+// A scalar op and a loop before it are independent: neither writes what the other touches.
+bool independent(const Uses& scalar, const Uses& loop) {
+  return !meets(scalar.writes, loop.reads) && !meets(scalar.writes, loop.writes) &&
+         !meets(scalar.reads, loop.writes) && scalar.array_reads.empty() &&
+         scalar.array_writes.empty();
+}
+
+}  // namespace
+
+int fuse_passes(SystemTrace& t) {
+  const size_t before = t.body.size();
+  std::vector<VectorOp>& ops = t.body;
+  // 1. Scalar ops move up past independent loops, and merge with the scalar op they reach.
+  for (size_t i = 1; i < ops.size(); ++i) {
+    if (ops[i].kind != VectorOp::Kind::Scalar) continue;
+    size_t j = i;
+    const Uses su = uses_of(ops[j]);
+    while (j > 0 && ops[j - 1].kind != VectorOp::Kind::Scalar &&
+           independent(su, uses_of(ops[j - 1]))) {
+      std::swap(ops[j - 1], ops[j]);
+      --j;
+    }
+    if (j > 0 && ops[j - 1].kind == VectorOp::Kind::Scalar) {
+      for (Stmt& s : ops[j].body) ops[j - 1].body.push_back(std::move(s));
+      ops.erase(ops.begin() + static_cast<long>(j));
+      i = j - 1;
+    }
+  }
+  // 2. Loops over the same length merge when the second reads no local the first writes (a
+  //    reduction's sum is only complete after its loop). Into a product's row loop goes only
+  //    a pass that writes no array: the rows after the current one still read the product's
+  //    operand.
+  std::vector<VectorOp> out;
+  for (VectorOp& op : ops) {
+    if (!out.empty() && op.kind == VectorOp::Kind::Pass &&
+        out.back().kind != VectorOp::Kind::Scalar && out.back().length == op.length) {
+      const Uses prev = uses_of(out.back()), cur = uses_of(op);
+      const bool into_product = out.back().kind == VectorOp::Kind::SpMV;
+      if (!meets(cur.reads, prev.writes) && (!into_product || cur.array_writes.empty())) {
+        for (Stmt& s : op.body) out.back().body.push_back(std::move(s));
+        continue;
+      }
+    }
+    out.push_back(std::move(op));
+  }
+  ops = std::move(out);
+  return static_cast<int>(before - ops.size());
+}
+
+}  // namespace simit::jit

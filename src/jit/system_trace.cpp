@@ -1,0 +1,513 @@
+// The system tracer (jit/system_trace.h): a while loop over global vectors and system
+// matrices, lowered statement by statement into vector ops.
+#include "jit/system_trace.h"
+
+#include <functional>
+#include <map>
+
+#include "frontend/ast_walk.h"
+
+namespace simit::jit {
+
+namespace ast = frontend::ast;
+using frontend::IndexSet;
+using frontend::SourceSpan;
+using frontend::Type;
+using interp::Value;
+
+namespace {
+
+struct GiveUp {
+  std::string reason;
+};
+[[noreturn]] void give_up(const SourceSpan& at, const std::string& why) {
+  std::string where;
+  if (at.valid()) where = " (line " + std::to_string(at.start().line) + ")";
+  throw GiveUp{why + where};
+}
+
+ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
+ExprRef fconst(double v) {
+  Expr e;
+  e.f = v;
+  return make(e);
+}
+ExprRef iconst(int64_t v, Ty ty) {
+  Expr e;
+  e.ty = ty;
+  e.i = v;
+  return make(e);
+}
+ExprRef node(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops, const SourceSpan& at) {
+  Expr e;
+  e.kind = k;
+  e.ty = ty;
+  e.op = op;
+  e.ops = std::move(ops);
+  e.span = at;
+  return make(std::move(e));
+}
+ExprRef local(int l, Ty ty) {
+  Expr e;
+  e.kind = ExprKind::Local;
+  e.ty = ty;
+  e.slot = l;
+  return make(e);
+}
+
+bool has_set_dim(const Type& t) {
+  if (t.kind != Type::Kind::Tensor) return false;
+  for (const IndexSet& d : t.dims)
+    if (d.kind != IndexSet::Kind::Fixed) return true;
+  return false;
+}
+bool is_vector(const Type& t) { return has_set_dim(t) && t.dims.size() == 1; }
+bool is_matrix(const Type& t) { return has_set_dim(t) && t.dims.size() == 2; }
+bool is_row(const ast::Expr& e) { return e.type && is_vector(*e.type) && e.type->row; }
+
+class SystemTracer {
+ public:
+  SystemTracer(const ast::While& loop, interp::Interpreter& in) : loop_(loop), in_(in) {}
+
+  TracedSystem run() {
+    TracedSystem out;
+    try {
+      collect();
+      t_.name = "while";
+      if (loop_.span.valid()) t_.name += ":" + std::to_string(loop_.span.start().line);
+      t_.scalars = static_cast<int>(b_.scalars.size());
+      t_.condition = scalar(*loop_.condition);
+      if (!t_.body.empty()) give_up(loop_.condition->span, "a loop condition over vectors");
+      for (const auto& s : loop_.body) stmt(*s);
+    } catch (const GiveUp& g) {
+      out.reason = g.reason;
+      return out;
+    }
+    out.trace = std::move(t_);
+    out.binding = std::move(b_);
+    return out;
+  }
+
+ private:
+  // Every variable the loop reads or writes, classified by its type.
+  void collect() {
+    std::function<void(const ast::Expr&)> expr = [&](const ast::Expr& e) {
+      if (const auto* r = e.as<ast::VarRef>()) note(*r->var, r->span);
+      ast::for_each_child(e, [&](const ast::Expr& c) { expr(c); });
+    };
+    expr(*loop_.condition);
+    for (const auto& s : loop_.body) {
+      if (const auto* d = s->as<ast::VarDecl>()) {
+        note(*d->var, d->span);
+        if (d->init) expr(*d->init);
+      } else if (const auto* a = s->as<ast::Assign>()) {
+        for (const auto& t : a->targets) expr(*t);
+        expr(*a->value);
+      } else {
+        give_up(s->span,
+                std::string(ast::node_kind_name(s->kind)) + " statements in a compiled loop");
+      }
+    }
+    // Vectors first assigned in the loop borrow the shape of a vector of the same type.
+    for (auto& [v, slot] : vector_slot_) {
+      const Value& val = in_.variable(*v);
+      if (!val.empty()) continue;
+      const ast::Variable* like = nullptr;
+      for (auto& [w, s2] : vector_slot_)
+        if (!in_.variable(*w).empty() && frontend::types_equal(*w->type, *v->type)) like = w;
+      if (!like)
+        give_up(v->span, "vector '" + v->name + "' has no value and no vector gives its shape");
+      b_.created.emplace_back(v, like);
+      size_of_[v] = size_of_[like];
+    }
+  }
+
+  void note(const ast::Variable& v, const SourceSpan& at) {
+    if (scalar_local_.count(&v) || vector_slot_.count(&v) || matrix_.count(&v)) return;
+    if (v.kind == ast::Variable::Kind::GlobalConst) return;
+    if (!v.type) give_up(at, "'" + v.name + "' has no type");
+    const Type& t = *v.type;
+    if (t.kind == Type::Kind::Scalar) {
+      Ty ty = t.scalar == frontend::ScalarKind::Float ? Ty::F64
+              : t.scalar == frontend::ScalarKind::Int ? Ty::I32
+              : t.scalar == frontend::ScalarKind::Bool
+                  ? Ty::Bool
+                  : (give_up(at, "a scalar of this type"), Ty::F64);
+      scalar_local_[&v] = static_cast<int>(t_.locals.size());
+      t_.locals.push_back(ty);
+      b_.scalars.push_back(&v);
+      b_.scalar_types.push_back(ty);
+      return;
+    }
+    if (is_vector(t)) {
+      if (t.component() != frontend::ScalarKind::Float) give_up(at, "a vector of non-floats");
+      vector_slot_[&v] = array(&v, SystemBinding::Array::Part::Vector, Ty::F64, v.name);
+      const Value& val = in_.variable(v);
+      if (!val.empty()) {
+        if (!val.is_tensor() || val.tensor().kind() != runtime::ComponentKind::Float)
+          give_up(at, "vector '" + v.name + "' does not hold floats");
+        size_of_[&v] = size(&v, false, static_cast<int64_t>(val.tensor().size()));
+        block_of_[&v] = static_cast<int>(val.tensor().shape().block_size());
+      }
+      return;
+    }
+    if (is_matrix(t)) {
+      const Value& val = in_.variable(v);
+      if (val.kind() != Value::Kind::Matrix || !val.matrix() || !val.matrix()->is_float())
+        give_up(at, "matrix '" + v.name + "' has no float value before the loop");
+      const runtime::SystemMatrix& m = *val.matrix();
+      if (m.block_rows() != m.block_cols()) give_up(at, "a matrix of non-square blocks");
+      Mat mat;
+      mat.row_ptr = array(&v, SystemBinding::Array::Part::RowPtr, Ty::I32, v.name + ".row_ptr");
+      mat.cols = array(&v, SystemBinding::Array::Part::Cols, Ty::I32, v.name + ".cols");
+      mat.values = array(&v, SystemBinding::Array::Part::Values, Ty::F64, v.name + ".values");
+      mat.rows = size(&v, true, m.rows());
+      mat.block = m.block_rows();
+      mat.length = static_cast<int64_t>(m.rows()) * m.block_rows();
+      matrix_[&v] = mat;
+      return;
+    }
+    give_up(at, "'" + v.name + "' of type " + frontend::to_string(t) + " in a compiled loop");
+  }
+
+  int array(const ast::Variable* v, SystemBinding::Array::Part part, Ty ty, std::string name) {
+    ArraySlot a;
+    a.kind = ArraySlot::Kind::Vector;
+    a.ty = ty;
+    a.components = 1;
+    a.name = std::move(name);
+    t_.arrays.push_back(a);
+    b_.arrays.push_back({v, part});
+    return static_cast<int>(t_.arrays.size() - 1);
+  }
+  // Sizes are shared by value: passes over vectors of equal length may fuse. The controller
+  // keys kernels by every length, so a length that changes gets a new trace.
+  int size(const ast::Variable* v, bool rows, int64_t n) {
+    const std::pair<bool, int64_t> key{rows, n};
+    if (auto it = sizes_.find(key); it != sizes_.end()) return it->second;
+    t_.sizes.push_back((rows ? "block rows of " : "components of ") + v->name + " (" +
+                       std::to_string(n) + ")");
+    b_.sizes.push_back({v, rows});
+    return sizes_[key] = static_cast<int>(t_.sizes.size() - 1);
+  }
+
+  // Ops: consecutive scalar statements share one Scalar op.
+  void scalar_stmt(Stmt s) {
+    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar) t_.body.emplace_back();
+    t_.body.back().body.push_back(std::move(s));
+  }
+  void set_local(int l, ExprRef v, const SourceSpan& at) {
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = l;
+    s.value = std::move(v);
+    s.span = at;
+    scalar_stmt(std::move(s));
+  }
+  int temp(Ty ty) {
+    t_.locals.push_back(ty);
+    return static_cast<int>(t_.locals.size() - 1);
+  }
+
+  int length_of(const ast::Expr& e) {
+    if (const auto* r = e.as<ast::VarRef>()) {
+      if (auto it = size_of_.find(r->var); it != size_of_.end()) return it->second;
+    }
+    if (const auto* t = e.as<ast::Transpose>()) return length_of(*t->operand);
+    if (const auto* b = e.as<ast::Binary>()) {
+      const bool lv = b->lhs->type && is_vector(*b->lhs->type);
+      return length_of(lv ? *b->lhs : *b->rhs);
+    }
+    if (const auto* u = e.as<ast::Unary>()) return length_of(*u->operand);
+    give_up(e.span, "the length of this vector expression");
+  }
+
+  // u' * v, dot(u, v): a reduction pass into a new local, from +0.0 in storage order.
+  ExprRef dot(const ast::Expr& u, const ast::Expr& v, const SourceSpan& at) {
+    const int n = length_of(u);
+    if (length_of(v) != n) give_up(at, "a dot product of vectors of different lengths");
+    const int t = temp(Ty::F64);
+    set_local(t, fconst(0.0), at);
+    ExprRef a = component(u), b = component(v);
+    VectorOp pass;
+    pass.kind = VectorOp::Kind::Pass;
+    pass.length = n;
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = t;
+    s.value = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add),
+                   {local(t, Ty::F64),
+                    node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {a, b}, at)},
+                   at);
+    s.span = at;
+    pass.body.push_back(std::move(s));
+    t_.body.push_back(std::move(pass));
+    return local(t, Ty::F64);
+  }
+
+  Ty scalar_ty(const ast::Expr& e) {
+    if (!e.type || e.type->kind != Type::Kind::Scalar)
+      give_up(e.span, "a non-scalar where a scalar was expected");
+    switch (e.type->scalar) {
+      case frontend::ScalarKind::Float: return Ty::F64;
+      case frontend::ScalarKind::Int: return Ty::I32;
+      case frontend::ScalarKind::Bool: return Ty::Bool;
+      default: give_up(e.span, "a scalar of this type");
+    }
+  }
+
+  ExprRef scalar(const ast::Expr& e) {
+    const Ty ty = scalar_ty(e);
+    switch (e.kind) {
+      case ast::NodeKind::IntLit:
+        return iconst(static_cast<int32_t>(e.as<ast::IntLit>()->value), Ty::I32);
+      case ast::NodeKind::FloatLit: return fconst(e.as<ast::FloatLit>()->value);
+      case ast::NodeKind::BoolLit: return iconst(e.as<ast::BoolLit>()->value, Ty::Bool);
+      case ast::NodeKind::VarRef: {
+        const ast::Variable& v = *e.as<ast::VarRef>()->var;
+        if (v.kind == ast::Variable::Kind::GlobalConst) {
+          const Value& g = in_.global(v);
+          if (g.kind() == Value::Kind::Float) return fconst(g.as_float());
+          if (g.kind() == Value::Kind::Int) return iconst(g.as_int(), Ty::I32);
+          if (g.kind() == Value::Kind::Bool) return iconst(g.as_bool(), Ty::Bool);
+          give_up(e.span, "a constant of this kind");
+        }
+        auto it = scalar_local_.find(&v);
+        if (it == scalar_local_.end()) give_up(e.span, "'" + v.name + "' is not a scalar");
+        return local(it->second, ty);
+      }
+      case ast::NodeKind::Unary: {
+        const auto& u = *e.as<ast::Unary>();
+        ExprRef x = scalar(*u.operand);
+        if (u.op == ast::Unary::Op::Plus) return x;
+        if (u.op == ast::Unary::Op::Not)
+          return node(ExprKind::Unary, Ty::Bool, static_cast<uint8_t>(UnOp::Not), {x}, e.span);
+        if (ty == Ty::F64)
+          return node(ExprKind::Unary, Ty::F64, static_cast<uint8_t>(UnOp::Neg), {x}, e.span);
+        give_up(e.span, "integer negation in a compiled loop");
+      }
+      case ast::NodeKind::Binary: {
+        const auto& b = *e.as<ast::Binary>();
+        using Op = ast::Binary::Op;
+        if (b.op == Op::Mul && is_row(*b.lhs) && b.rhs->type && is_vector(*b.rhs->type))
+          return dot(*b.lhs, *b.rhs, e.span);
+        ExprRef l = scalar(*b.lhs), r = scalar(*b.rhs);
+        if (l->ty != r->ty) give_up(e.span, "operands of different types");
+        BinOp op;
+        switch (b.op) {
+          case Op::Add: op = BinOp::Add; break;
+          case Op::Sub: op = BinOp::Sub; break;
+          case Op::Mul:
+          case Op::ElemMul: op = BinOp::Mul; break;
+          case Op::Div:
+          case Op::ElemDiv:
+            if (ty != Ty::F64) give_up(e.span, "integer division in a compiled loop");
+            op = BinOp::Div;
+            break;
+          case Op::And: op = BinOp::And; break;
+          case Op::Or: op = BinOp::Or; break;
+          case Op::Xor: op = BinOp::Xor; break;
+          default: give_up(e.span, "this operator in a compiled loop");
+        }
+        return node(ExprKind::Binary, l->ty, static_cast<uint8_t>(op), {l, r}, e.span);
+      }
+      case ast::NodeKind::Compare: {
+        const auto& c = *e.as<ast::Compare>();
+        std::vector<ExprRef> v;
+        for (const auto& o : c.operands) v.push_back(scalar(*o));
+        ExprRef result;
+        for (size_t i = 0; i < c.ops.size(); ++i) {
+          if (v[i]->ty != v[i + 1]->ty || v[i]->ty == Ty::Bool)
+            give_up(e.span, "this comparison in a compiled loop");
+          ExprRef one = node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(c.ops[i]),
+                             {v[i], v[i + 1]}, e.span);
+          result = result ? node(ExprKind::Binary, Ty::Bool, static_cast<uint8_t>(BinOp::And),
+                                 {one, result}, e.span)
+                          : one;
+        }
+        return result;
+      }
+      case ast::NodeKind::Call: {
+        const auto& c = *e.as<ast::Call>();
+        using frontend::Intrinsic;
+        if (c.intrinsic == Intrinsic::Dot) return dot(*c.args[0], *c.args[1], e.span);
+        if (c.intrinsic == Intrinsic::Norm) {
+          ExprRef d = dot(*c.args[0], *c.args[0], e.span);
+          return node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sqrt), {d}, e.span);
+        }
+        MathFn f;
+        switch (c.intrinsic) {
+          case Intrinsic::Sqrt: f = MathFn::Sqrt; break;
+          case Intrinsic::Abs: f = MathFn::Abs; break;
+          case Intrinsic::Log: f = MathFn::Log; break;
+          case Intrinsic::Exp: f = MathFn::Exp; break;
+          case Intrinsic::Max: f = MathFn::Max; break;
+          case Intrinsic::Min: f = MathFn::Min; break;
+          case Intrinsic::Pow: f = MathFn::Pow; break;
+          default: give_up(e.span, "this call in a compiled loop");
+        }
+        std::vector<ExprRef> args;
+        for (const auto& a : c.args) {
+          args.push_back(scalar(*a));
+          if (args.back()->ty != Ty::F64) give_up(e.span, "a math function of a non-float");
+        }
+        return node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(f), std::move(args), e.span);
+      }
+      default: break;
+    }
+    give_up(e.span, std::string(ast::node_kind_name(e.kind)) + " expressions in a compiled loop");
+  }
+
+  // Component k of a vector expression (ExprKind::Element is k).
+  ExprRef component(const ast::Expr& e) {
+    if (!e.type || !is_vector(*e.type)) return scalar(e);
+    switch (e.kind) {
+      case ast::NodeKind::VarRef: {
+        auto it = vector_slot_.find(e.as<ast::VarRef>()->var);
+        if (it == vector_slot_.end()) give_up(e.span, "an unknown vector");
+        Expr l;
+        l.kind = ExprKind::Load;
+        l.slot = it->second;
+        Expr k;
+        k.kind = ExprKind::Element;
+        k.ty = Ty::I32;
+        l.ops = {make(k)};
+        l.span = e.span;
+        return make(std::move(l));
+      }
+      case ast::NodeKind::Transpose: return component(*e.as<ast::Transpose>()->operand);
+      case ast::NodeKind::Unary: {
+        const auto& u = *e.as<ast::Unary>();
+        ExprRef x = component(*u.operand);
+        if (u.op == ast::Unary::Op::Plus) return x;
+        if (u.op == ast::Unary::Op::Neg)
+          return node(ExprKind::Unary, Ty::F64, static_cast<uint8_t>(UnOp::Neg), {x}, e.span);
+        break;
+      }
+      case ast::NodeKind::Binary: {
+        const auto& b = *e.as<ast::Binary>();
+        using Op = ast::Binary::Op;
+        const bool lv = is_vector(*b.lhs->type), rv = is_vector(*b.rhs->type);
+        BinOp op;
+        switch (b.op) {
+          case Op::Add: op = BinOp::Add; break;
+          case Op::Sub: op = BinOp::Sub; break;
+          case Op::Mul:
+          case Op::ElemMul:
+            if (b.op == Op::Mul && lv && rv)
+              give_up(e.span, "a product of two vectors inside a vector expression");
+            op = BinOp::Mul;
+            break;
+          case Op::Div:
+          case Op::ElemDiv: op = BinOp::Div; break;
+          default: give_up(e.span, "this operator on vectors in a compiled loop");
+        }
+        if ((op == BinOp::Add || op == BinOp::Sub) && !(lv && rv))
+          give_up(e.span, "a vector plus a scalar");
+        if (lv && rv && length_of(*b.lhs) != length_of(*b.rhs))
+          give_up(e.span, "vectors of different lengths");
+        ExprRef l = component(*b.lhs), r = component(*b.rhs);
+        if (l->ty != Ty::F64 || r->ty != Ty::F64)
+          give_up(e.span, "a vector operation on non-floats");
+        return node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(op), {l, r}, e.span);
+      }
+      default: break;
+    }
+    give_up(e.span,
+            std::string(ast::node_kind_name(e.kind)) + " vector expressions in a compiled loop");
+  }
+
+  void assign(const ast::Variable& target, const ast::Expr& value, const SourceSpan& at) {
+    if (auto it = scalar_local_.find(&target); it != scalar_local_.end()) {
+      ExprRef v = scalar(value);
+      if (v->ty != t_.locals[it->second]) give_up(at, "an assignment of another type");
+      return set_local(it->second, v, at);
+    }
+    auto vt = vector_slot_.find(&target);
+    if (vt == vector_slot_.end()) give_up(at, "an assignment to '" + target.name + "'");
+    t_.arrays[vt->second].written = true;
+    // `y = A * x`: a sparse product.
+    if (const auto* b = value.as<ast::Binary>(); b && b->op == ast::Binary::Op::Mul) {
+      const auto* a = b->lhs->as<ast::VarRef>();
+      const auto* x = b->rhs->as<ast::VarRef>();
+      if (a && matrix_.count(a->var)) {
+        if (!x || !vector_slot_.count(x->var))
+          give_up(at, "a matrix times something other than a vector variable");
+        if (x->var == &target) give_up(at, "a product written into its own operand");
+        const Mat& m = matrix_.at(a->var);
+        if (block_of_.count(x->var) && block_of_.at(x->var) != m.block)
+          give_up(at, "vector blocks differ from the matrix's");
+        const runtime::SystemMatrix& mv = *in_.variable(*a->var).matrix();
+        const Value& xv = in_.variable(*x->var);
+        if (xv.empty() || static_cast<int64_t>(xv.tensor().size()) != mv.scalar_cols() ||
+            t_.sizes.empty() || size_of_.at(&target) != size_of_.at(x->var) ||
+            mv.scalar_rows() != mv.scalar_cols())
+          give_up(at, "a product whose lengths do not match");
+        VectorOp op;
+        op.kind = VectorOp::Kind::SpMV;
+        op.row_ptr = m.row_ptr;
+        op.cols = m.cols;
+        op.values = m.values;
+        op.rows = m.rows;
+        op.block = m.block;
+        op.x = vector_slot_.at(x->var);
+        op.y = vt->second;
+        op.length = size_of_.at(&target);
+        t_.body.push_back(std::move(op));
+        return;
+      }
+    }
+    const int n = size_of_.at(&target);
+    if (value.type && is_vector(*value.type) && length_of(value) != n)
+      give_up(at, "an assignment of another length");
+    ExprRef v = component(value);
+    VectorOp pass;
+    pass.kind = VectorOp::Kind::Pass;
+    pass.length = n;
+    Stmt s;
+    s.kind = StmtKind::Store;
+    s.slot = vt->second;
+    Expr k;
+    k.kind = ExprKind::Element;
+    k.ty = Ty::I32;
+    s.index = make(k);
+    s.value = v;
+    s.span = at;
+    pass.body.push_back(std::move(s));
+    t_.body.push_back(std::move(pass));
+  }
+
+  void stmt(const ast::Stmt& s) {
+    if (const auto* d = s.as<ast::VarDecl>()) {
+      if (!d->init) give_up(s.span, "a declaration without a value");
+      return assign(*d->var, *d->init, s.span);
+    }
+    const auto& a = *s.as<ast::Assign>();
+    if (a.index_notation || a.targets.size() != 1)
+      give_up(s.span, "this assignment in a compiled loop");
+    const auto* target = a.targets[0]->as<ast::VarRef>();
+    if (!target) give_up(s.span, "an assignment to part of a variable");
+    assign(*target->var, *a.value, s.span);
+  }
+
+  struct Mat {
+    int row_ptr, cols, values, rows, block;
+    int64_t length;
+  };
+
+  const ast::While& loop_;
+  interp::Interpreter& in_;
+  SystemTrace t_;
+  SystemBinding b_;
+  std::map<const ast::Variable*, int> scalar_local_, vector_slot_, size_of_, block_of_;
+  std::map<const ast::Variable*, Mat> matrix_;
+  std::map<std::pair<bool, int64_t>, int> sizes_;
+};
+
+}  // namespace
+
+TracedSystem trace_system(const ast::While& loop, interp::Interpreter& in) {
+  return SystemTracer(loop, in).run();
+}
+
+}  // namespace simit::jit
