@@ -96,16 +96,29 @@ void BlockCsr::set_zero() {
   for (Mat3& b : blocks_) b.setZero();
 }
 
+// The product reads blocks and vectors as plain double arrays (Eigen's 3x3 product kernel
+// measured a third slower here on a 160k-tet mesh).
+static_assert(sizeof(Mat3) == 9 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double));
+
 double BlockCsr::multiply_dot(const Vec3s& p, Vec3s& y) const {
   const int n = block_rows();
+  const int* start = row_start_.data();
   const int* cols = columns_.data();
-  const Mat3* blocks = blocks_.data();
+  const double* blocks = blocks_.data()->data();  // column-major 3x3, 9 doubles apart
+  const double* pv = p.data()->data();
+  double* yv = y.data()->data();
   double dot = 0.0;
   for (int i = 0; i < n; ++i) {
-    Vec3 acc = Vec3::Zero();
-    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) acc.noalias() += blocks[k] * p[cols[k]];
-    y[i] = acc;
-    dot += p[i].dot(acc);
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+    for (int k = start[i]; k < start[i + 1]; ++k) {
+      const double* b = blocks + 9 * static_cast<size_t>(k);
+      const double* q = pv + 3 * static_cast<size_t>(cols[k]);
+      y0 += b[0] * q[0] + b[3] * q[1] + b[6] * q[2];
+      y1 += b[1] * q[0] + b[4] * q[1] + b[7] * q[2];
+      y2 += b[2] * q[0] + b[5] * q[1] + b[8] * q[2];
+    }
+    yv[3 * i] = y0, yv[3 * i + 1] = y1, yv[3 * i + 2] = y2;
+    dot += pv[3 * i] * y0 + pv[3 * i + 1] * y1 + pv[3 * i + 2] * y2;
   }
   return dot;
 }
