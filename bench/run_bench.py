@@ -37,7 +37,8 @@ prints one row per run:
 about 40 s a frame under the interpreter). --compare-baseline LABEL=DIR adds rows for the
 baselines of another build folder (an older version, say); --fem-sim-form adds a row for
 fem_baseline --sim-form, whose stiffness is evaluated as fem.sim writes it rather than in
-closed form.
+closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
+machine's load inflates far less than wall time (compare baselines with baselines then).
 
 Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
 iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through --cg-tol and
@@ -240,6 +241,8 @@ def run_baseline(case, args, workdir, notes, label, build, extra_args):
     stem = os.path.join(workdir, "%s-%s-%s" % (case.example, case.mesh,
                                                 re.sub(r"[^\w-]+", "_", label)))
     argv = [os.path.join(build, "bench", case.example + "_baseline")] + extra_args
+    if args.baseline_cpu_clock:
+        argv.append("--cpu-clock")
     if "cg_tol" in case.tensors:
         argv += ["--cg-tol", repr(float(case.tensors["cg_tol"]))]
     if "cg_max" in case.tensors:
@@ -421,6 +424,9 @@ def main():
     p.add_argument("--compare-baseline", action="append", default=[], metavar="LABEL=DIR",
                    help="also run the baselines of another build folder DIR as rows LABEL "
                         "(e.g. an older version of the baselines; repeatable)")
+    p.add_argument("--baseline-cpu-clock", action="store_true",
+                   help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
+                        "busy machine inflates less than wall time; simit stays on wall time")
     p.add_argument("--fem-sim-form", action="store_true",
                    help="also run fem_baseline --sim-form (the stiffness as fem.sim writes it)")
     p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
@@ -480,6 +486,9 @@ def main():
     _, floor, _ = run_child(["true"], os.devnull, 10)
     print("Peak MB has a floor of %.0f MB (this script's own RSS, which Linux counts into the "
           "child's peak at exec)." % floor)
+    if args.baseline_cpu_clock:
+        print("The baselines' times are thread CPU time (--cpu-clock), simit's wall time: "
+              "ratios between the two mix clocks.")
     print("Total wall time %.0f s." % (time.monotonic() - started))
     for n in notes:
         print("note: " + n)

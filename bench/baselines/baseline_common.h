@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 
 #include <array>
-#include <chrono>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,15 +18,16 @@ using Vec3s = std::vector<Vec3>;
 struct Options {
   std::string input;  // mesh path (or, for cloth, the grid size)
   int frames = 10;
-  std::string csv;        // final positions go here
-  bool check = false;     // exit nonzero when a position is not finite
-  double cg_tol = -1.0;   // --cg-tol: CG stops at r'r <= cg_tol (< 0: the example's default)
-  int cg_max = -1;        // --cg-max: CG iteration cap (< 0: the example's default)
-  bool sim_form = false;  // --sim-form: element matrices evaluated as the .sim writes them
+  std::string csv;         // final positions go here
+  bool check = false;      // exit nonzero when a position is not finite
+  double cg_tol = -1.0;    // --cg-tol: CG stops at r'r <= cg_tol (< 0: the example's default)
+  int cg_max = -1;         // --cg-max: CG iteration cap (< 0: the example's default)
+  bool sim_form = false;   // --sim-form: element matrices evaluated as the .sim writes them
+  bool cpu_clock = false;  // --cpu-clock: frames timed in thread CPU time, not wall time
 };
 
-// NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--sim-form] INPUT [FRAMES]; prints
-// usage and exits on bad arguments (--sim-form only where has_sim_form).
+// NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock] [--sim-form] INPUT
+// [FRAMES]; prints usage and exits on bad arguments (--sim-form only where has_sim_form).
 Options parse_options(int argc, char** argv, const std::string& default_input,
                       bool has_sim_form = false);
 
@@ -92,13 +92,17 @@ class ConjugateGradient {
   Vec3s r_, p_, ap_;
 };
 
+// Wall time, or with --cpu-clock this thread's CPU time (on a busy machine wall time also
+// counts the time the thread waits for a core; the baselines run on one thread).
 class Stopwatch {
  public:
-  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  Stopwatch() : start_ms_(now_ms()) {}
   double lap_ms();  // since construction or the previous lap
+  static void use_cpu_clock(bool on);
 
  private:
-  std::chrono::steady_clock::time_point start_;
+  static double now_ms();
+  double start_ms_;
 };
 
 // One line per frame and, at the end, the median and mean (the machine's load shows in
