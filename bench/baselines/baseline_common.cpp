@@ -101,8 +101,8 @@ void BlockCsr::set_zero() {
   for (Mat3& b : blocks_) b.setZero();
 }
 
-// The product reads blocks and vectors as plain double arrays (Eigen's 3x3 product kernel
-// measured a third slower here on a 160k-tet mesh).
+// The product reads blocks and vectors as plain double arrays, with three scalar row sums:
+// a few percent faster here than Eigen's fixed-size 3x3 product on a 160k-tet mesh.
 static_assert(sizeof(Mat3) == 9 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double));
 
 double BlockCsr::multiply_dot(const Vec3s& p, Vec3s& y) const {
