@@ -2,7 +2,9 @@
 """The examples' benchmark table: every executor of `simit` against the Eigen baselines.
 
 Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
-                          [--only SUBSTRING] [--executors interpreter,...] [--out FILE]...
+                          [--only SUBSTRING] [--baseline-only SUBSTRING]...
+                          [--compare-baseline LABEL=DIR]... [--fem-sim-form]
+                          [--executors interpreter,...] [--out FILE]...
 
 For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon160k;
 springs: bunny; cloth: the generated N x N square for each --cloth size) it runs the scene
@@ -25,7 +27,18 @@ prints one row per run:
   LOC          non-blank, non-comment lines of the .sim program or of the baseline's own
                .cpp (the helpers every baseline shares, baseline_common.{h,cpp}, are counted
                once in the footnote);
-  vs baseline  ms/frame divided by the baseline's ms/frame measured in this run.
+  vs baseline  ms/frame divided by the baseline's ms/frame measured in this run;
+  rel. err     max |x - x_ref| / max |x_ref| over the final positions, x_ref those of the
+               first executor run (the interpreter by default; "-" when none ran).
+               With CG stopped by its iteration cap this is mostly rounding amplified by
+               unpreconditioned CG; the scene_*_vs_baseline tests compare converged runs.
+
+--baseline-only SUBSTRING runs only the baselines on the matching cases (dragon160k takes
+about 40 s a frame under the interpreter). --compare-baseline LABEL=DIR adds rows for the
+baselines of another build folder (an older version, say); --fem-sim-form adds a row for
+fem_baseline --sim-form, whose stiffness is evaluated as fem.sim writes it rather than in
+closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
+machine's load inflates far less than wall time (compare baselines with baselines then).
 
 Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
 iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through --cg-tol and
@@ -33,7 +46,8 @@ iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through -
 where they differ.
 
 Not a test: nothing here passes or fails on time. The machine's load shows in the numbers;
-the medians damp it. The default (about 10 minutes with the interpreter on a 2-core machine)
+the medians damp it, and --repeat N runs every case N times, keeping for each runner the
+least of the N medians of each timing column (load only ever adds time). The default (about 10 minutes with the interpreter on a 2-core machine)
 runs 5 frames of each example; --frames changes that for all of them.
 """
 import argparse
@@ -53,9 +67,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 def scene_run(executor_flags):
     """The argv of `simit run` with extra flags selecting an executor."""
-    def argv(simit, scene, frames, outdir):
+    def argv(simit, scene, frames, outdir, final_csv):
         return ([simit, "run"] + executor_flags +
-                ["--frames", str(frames), "--output", outdir, scene])
+                ["--frames", str(frames), "--output", outdir, "--final-csv", final_csv, scene])
     return argv
 
 
@@ -216,37 +230,83 @@ def row_of(case, who, frames_run, code, peak, data, loc):
         "solve": median(data["solve"]),
         "iterations": median(data["iterations"]) if data["iterations"] else None,
         "residual": data["residual"][-1] if data["residual"] else None,
-        "peak_mb": peak, "loc": loc, "ratio": None,
+        "peak_mb": peak, "loc": loc, "ratio": None, "error": None,
     }
+
+
+def run_baseline(case, args, workdir, notes, label, build, extra_args):
+    """Runs one baseline build's EXAMPLE_baseline on CASE; returns (row, per-frame data,
+    final positions CSV)."""
+    frames = args.frames or case.default_frames
+    stem = os.path.join(workdir, "%s-%s-%s" % (case.example, case.mesh,
+                                                re.sub(r"[^\w-]+", "_", label)))
+    argv = [os.path.join(build, "bench", case.example + "_baseline")] + extra_args
+    if args.baseline_cpu_clock:
+        argv.append("--cpu-clock")
+    if "cg_tol" in case.tensors:
+        argv += ["--cg-tol", repr(float(case.tensors["cg_tol"]))]
+    if "cg_max" in case.tensors:
+        argv += ["--cg-max", str(int(case.tensors["cg_max"]))]
+    positions = stem + "-positions.csv"
+    argv += ["--csv", positions, case.baseline_input, str(frames)]
+    print("  " + " ".join(argv), flush=True)
+    code, peak, _ = run_child(argv, stem + ".log", args.timeout)
+    data = read_baseline_log(stem + ".log")
+    if code != 0:
+        notes.append("%s %s exited with %d (log %s.log)" % (case.name, label, code, stem))
+    # Another build's source is not at hand: its LOC is left blank.
+    loc = count_loc(case.baseline_source) if build == args.build else None
+    row = row_of(case, label, frames, code, peak, data, loc)
+    return row, data, positions
+
+
+def read_positions(path):
+    """The x,y,z rows of a positions CSV (simit --final-csv or a baseline's --csv)."""
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return [tuple(float(v) for v in r) for r in rows[1:] if r]
+
+
+def relative_error(path, reference):
+    """max |x - x_ref| / max |x_ref| over every coordinate, or None when unreadable."""
+    try:
+        a, ref = read_positions(path), read_positions(reference)
+    except (OSError, ValueError):
+        return None
+    if len(a) != len(ref) or not ref:
+        return None
+    scale = max(abs(c) for p in ref for c in p)
+    return max(abs(x - y) for p, q in zip(a, ref) for x, y in zip(p, q)) / scale
+
+
+def baseline_only(case, args):
+    return any(pattern in case.name for pattern in args.baseline_only)
 
 
 def measure(case, args, workdir, notes):
     frames = args.frames or case.default_frames
     rows = []
     # The baseline first: its numbers are the reference of this case's ratios.
-    base_log = os.path.join(workdir, case.example + "-" + case.mesh + "-baseline.log")
-    argv = [os.path.join(args.build, "bench", case.example + "_baseline")]
-    if "cg_tol" in case.tensors:
-        argv += ["--cg-tol", repr(float(case.tensors["cg_tol"]))]
-    if "cg_max" in case.tensors:
-        argv += ["--cg-max", str(int(case.tensors["cg_max"]))]
-    argv += ["--csv", os.path.join(workdir, "baseline_positions.csv"), case.baseline_input,
-             str(frames)]
-    print("  " + " ".join(argv), flush=True)
-    code, peak, _ = run_child(argv, base_log, args.timeout)
-    base = read_baseline_log(base_log)
-    if code != 0:
-        notes.append("%s baseline exited with %d (log %s)" % (case.name, code, base_log))
-    base_row = row_of(case, "baseline", frames, code, peak, base, count_loc(case.baseline_source))
+    base_row, base, base_positions = run_baseline(case, args, workdir, notes, "baseline",
+                                                  args.build, [])
     base_row["ratio"] = 1.0
-    for name in args.executors:
+    variants = [(label, build, []) for label, build in args.compare_baseline]
+    if case.example == "fem" and args.fem_sim_form:
+        variants.insert(0, ("baseline --sim-form", args.build, ["--sim-form"]))
+    others = []  # (row, final positions) of the other baselines
+    for label, build, extra in variants:
+        row, _, positions = run_baseline(case, args, workdir, notes, label, build, extra)
+        others.append((row, positions))
+    reference = None  # the first executor's final positions: the error column's reference
+    for name in ([] if baseline_only(case, args) else args.executors):
         make_argv, available = EXECUTORS[name]
         if not available(args.simit):
             notes.append("%s: executor %s is not available in this simit" % (case.name, name))
             continue
         outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" + name)
         shutil.rmtree(outdir, ignore_errors=True)
-        argv = make_argv(args.simit, case.scene, frames, outdir)
+        positions = outdir + "-final.csv"
+        argv = make_argv(args.simit, case.scene, frames, outdir, positions)
         print("  " + " ".join(argv), flush=True)
         code, peak, wall = run_child(argv, outdir + ".log", args.timeout)
         try:
@@ -260,6 +320,10 @@ def measure(case, args, workdir, notes):
         row = row_of(case, name, frames, code, peak, data, count_loc(case.program))
         if base_row["ms"] > 0:
             row["ratio"] = row["ms"] / base_row["ms"]
+        if reference is None and code == 0:
+            reference = positions
+        else:
+            row["error"] = relative_error(positions, reference) if reference else None
         # Same stopping rule, same iterates: the iteration counts should match frame by frame.
         if data["iterations"] or base["iterations"]:
             diffs = [(k + 1, a, b) for k, (a, b) in
@@ -269,14 +333,35 @@ def measure(case, args, workdir, notes):
                              % (case.name, name, ", ".join("%d (%d vs %d)" % d for d in diffs)
                                 or "(frame counts differ)"))
         rows.append(row)
-    rows.append(base_row)
+    for row, positions in [(base_row, base_positions)] + others:
+        if row is not base_row and base_row["ms"] > 0:
+            row["ratio"] = row["ms"] / base_row["ms"]
+        if reference:
+            row["error"] = relative_error(positions, reference)
+        rows.append(row)
+    return rows
+
+
+def fastest_of(runs):
+    """One row per runner from several runs of a case: the least median of each timing
+    column (a busy machine only ever adds time), the rest from the first run, and the
+    ratios recomputed against the baseline's combined row."""
+    rows = [dict(r) for r in runs[0]]
+    for row, *others in zip(rows, *runs[1:]):
+        for key in ("ms", "assembly", "solve"):
+            row[key] = min([row[key]] + [o[key] for o in others])
+        row["ok"] = row["ok"] and all(o["ok"] for o in others)
+    base = next(r for r in rows if r["runner"] == "baseline")
+    for row in rows:
+        row["ratio"] = row["ms"] / base["ms"] if base["ms"] > 0 else None
     return rows
 
 
 COLUMNS = [("example", "example"), ("mesh", "mesh"), ("runner", "runner"),
            ("frames", "frames"), ("ms", "ms/frame"), ("assembly", "assembly ms"),
            ("solve", "solve ms"), ("iterations", "CG it/frame"), ("residual", "rel. resid."),
-           ("peak_mb", "peak MB"), ("loc", "LOC"), ("ratio", "vs baseline")]
+           ("peak_mb", "peak MB"), ("loc", "LOC"), ("ratio", "vs baseline"),
+           ("error", "rel. err")]
 
 
 def cell(row, key):
@@ -287,7 +372,7 @@ def cell(row, key):
         return "%.1f" % v if v >= 10 else "%.3f" % v
     if key == "iterations":
         return "%g" % v
-    if key == "residual":
+    if key in ("residual", "error"):
         return "%.2e" % v
     if key == "peak_mb":
         return "%.0f" % v
@@ -333,7 +418,21 @@ def main():
     p.add_argument("--frames", type=int, default=0,
                    help="frames per run (default: 5; 3 for dragon160k)")
     p.add_argument("--dragon160k", action="store_true", help="also fem on dragon160k (slow)")
+    p.add_argument("--baseline-only", action="append", default=[], metavar="SUBSTRING",
+                   help="run only the baselines on the cases whose example/mesh contains this "
+                        "(repeatable; e.g. dragon160k, an hour under the interpreter)")
+    p.add_argument("--compare-baseline", action="append", default=[], metavar="LABEL=DIR",
+                   help="also run the baselines of another build folder DIR as rows LABEL "
+                        "(e.g. an older version of the baselines; repeatable)")
+    p.add_argument("--baseline-cpu-clock", action="store_true",
+                   help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
+                        "busy machine inflates less than wall time; simit stays on wall time")
+    p.add_argument("--fem-sim-form", action="store_true",
+                   help="also run fem_baseline --sim-form (the stiffness as fem.sim writes it)")
     p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
+    p.add_argument("--repeat", type=int, default=1,
+                   help="run each case N times and keep each timing's least median "
+                        "(default 1; for a busy machine)")
     p.add_argument("--only", default="", help="run only the cases whose example/mesh contains this")
     p.add_argument("--executors", default=",".join(EXECUTORS),
                    help="comma-separated, from: " + ", ".join(EXECUTORS))
@@ -346,10 +445,18 @@ def main():
     args.simit = os.path.join(args.build, "tools", "simit")
     args.cloth = [int(n) for n in args.cloth.split(",") if n.strip()]
     args.executors = [e for e in args.executors.split(",") if e]
+    compare = []
+    for spec in args.compare_baseline:
+        label, sep, build = spec.partition("=")
+        if not sep or not label or not build:
+            p.error("--compare-baseline needs LABEL=DIR, got '%s'" % spec)
+        compare.append((label, os.path.abspath(build)))
+    args.compare_baseline = compare
     for e in args.executors:
         if e not in EXECUTORS:
             p.error("unknown executor '%s' (known: %s)" % (e, ", ".join(EXECUTORS)))
-    missing = [f for f in [args.simit] + [os.path.join(args.build, "bench", x + "_baseline")
+    missing = [f for f in [args.simit] + [os.path.join(build, "bench", x + "_baseline")
+                                          for build in [args.build] + [b for _, b in compare]
                                           for x in ("fem", "springs", "cloth")]
                if not os.access(f, os.X_OK)]
     if missing:
@@ -363,7 +470,8 @@ def main():
     try:
         for case in cases(args, workdir):
             print("%s (%d frames)" % (case.name, args.frames or case.default_frames), flush=True)
-            rows += measure(case, args, workdir, notes)
+            runs = [measure(case, args, workdir, notes) for _ in range(args.repeat)]
+            rows += fastest_of(runs)
     finally:
         if not args.keep:
             shutil.rmtree(workdir, ignore_errors=True)
@@ -378,6 +486,9 @@ def main():
     _, floor, _ = run_child(["true"], os.devnull, 10)
     print("Peak MB has a floor of %.0f MB (this script's own RSS, which Linux counts into the "
           "child's peak at exec)." % floor)
+    if args.baseline_cpu_clock:
+        print("The baselines' times are thread CPU time (--cpu-clock), simit's wall time: "
+              "ratios between the two mix clocks.")
     print("Total wall time %.0f s." % (time.monotonic() - started))
     for n in notes:
         print("note: " + n)

@@ -1,56 +1,77 @@
-// Pieces shared by the hand-written Eigen baselines: command line, block sparse pattern, CG,
-// timing and output.
+// Pieces shared by the hand-written Eigen baselines: command line, a block-CSR matrix of 3x3
+// blocks, CG with fused vector passes, timing and output.
 #pragma once
 
 #include <Eigen/Dense>
-#include <Eigen/Sparse>
 
 #include <array>
-#include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace simit::baseline {
 
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
-using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+using Vec3s = std::vector<Vec3>;
 
 struct Options {
-  std::string input;       // mesh path (or, for cloth, the grid size)
+  std::string input;  // mesh path (or, for cloth, the grid size)
   int frames = 10;
   std::string csv;         // final positions go here
   bool check = false;      // exit nonzero when a position is not finite
   double cg_tol = -1.0;    // --cg-tol: CG stops at r'r <= cg_tol (< 0: the example's default)
   int cg_max = -1;         // --cg-max: CG iteration cap (< 0: the example's default)
+  bool sim_form = false;   // --sim-form: element matrices evaluated as the .sim writes them
+  bool cpu_clock = false;  // --cpu-clock: frames timed in thread CPU time, not wall time
 };
 
-// NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] INPUT [FRAMES]; prints usage and exits on bad arguments.
-Options parse_options(int argc, char** argv, const std::string& default_input);
+// NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock] [--sim-form] INPUT
+// [FRAMES]; prints usage and exits on bad arguments (--sim-form only where has_sim_form).
+Options parse_options(int argc, char** argv, const std::string& default_input,
+                      bool has_sim_form = false);
 
-// A 3n x 3n scalar CSR matrix made of 3x3 blocks, whose pattern (the diagonal plus every
-// pair of vertices that share an element) is built once; assembly then adds into the values
-// in place. The three scalar rows of a block row have the same columns, so block (i, j) is
-// found by its slot (the rank of j among i's neighbours): entry (3i+r, 3j+c) is value
-// outer[3i+r] + 3*slot + c.
-class BlockPattern {
+// The blocks an assembly writes, collected before the matrix is built: the diagonal (every
+// row keeps one, for the mass) plus each (row, column) pair added.
+class BlockPatternBuilder {
  public:
-  // `elements` lists each element's vertices, `arity` per element.
-  BlockPattern(int vertex_count, const std::vector<int>& elements, int arity);
-
-  SparseMatrix& matrix() { return a_; }
-  const SparseMatrix& matrix() const { return a_; }
-  int slot(int i, int j) const;  // j must be a neighbour of i (or i itself)
-  int diagonal_slot(int i) const { return diagonal_slot_[i]; }
-  void set_zero() { std::fill_n(a_.valuePtr(), a_.nonZeros(), 0.0); }
-  // Adds s * block at slot `slot` of block row i.
-  void add(int i, int slot, const Mat3& block, double s = 1.0);
+  explicit BlockPatternBuilder(int block_rows);
+  void add(int i, int j) { pairs_.push_back({i, j}); }
+  int block_rows() const { return rows_; }
+  // Sorted, duplicate-free pairs, diagonal included.
+  std::vector<std::pair<int, int>> finish() &&;
 
  private:
-  SparseMatrix a_;
-  std::vector<int> first_;   // start of each vertex's neighbour list in neighbours_
-  std::vector<int> neighbours_;
-  std::vector<int> diagonal_slot_;
+  int rows_;
+  std::vector<std::pair<int, int>> pairs_;
+};
+
+// A square matrix of 3x3 blocks in block-CSR order, its pattern fixed at construction; the
+// assembly refills the values in place each frame through block indices it looks up once.
+class BlockCsr {
+ public:
+  explicit BlockCsr(BlockPatternBuilder&& pattern);
+
+  int block_rows() const { return static_cast<int>(row_start_.size()) - 1; }
+  size_t block_count() const { return columns_.size(); }
+  // Index of block (i, j) in blocks(), or -1 when the pattern does not hold it.
+  int find(int i, int j) const;
+  int diagonal(int i) const { return diagonal_[i]; }
+  Mat3& block(int k) { return blocks_[k]; }
+  void set_zero();
+  // y = A p; returns p'y, summed in the same pass.
+  double multiply_dot(const Vec3s& p, Vec3s& y) const;
+  // r = b - A x and p = r; returns r'r, summed in the same pass.
+  double residual(const Vec3s& b, const Vec3s& x, Vec3s& r, Vec3s& p) const;
+  // Bytes one CG iteration streams at least: the blocks, their column indices and row
+  // starts once, and every vector read or written by the three passes once.
+  double cg_bytes_per_iteration() const;
+
+ private:
+  std::vector<int> row_start_;  // block row i holds blocks row_start_[i] .. row_start_[i+1]-1
+  std::vector<int> columns_;
+  std::vector<int> diagonal_;
+  std::vector<Mat3> blocks_;
 };
 
 struct CgResult {
@@ -59,20 +80,33 @@ struct CgResult {
 };
 
 // Unpreconditioned CG from the initial guess in x, stopping at r'r <= tol or after
-// max_iterations: the rule of the .sim programs, so iteration counts compare.
-CgResult conjugate_gradient(const SparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-                            double tol, int max_iterations);
-
-class Stopwatch {
+// max_iterations: the rule of the .sim programs, so iteration counts compare. One
+// iteration is three passes over the vectors: A p with p'Ap; x and r with r'r; p. The
+// work vectors are allocated once.
+class ConjugateGradient {
  public:
-  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
-  double lap_ms();  // since construction or the previous lap
+  explicit ConjugateGradient(int block_rows) : r_(block_rows), p_(block_rows), ap_(block_rows) {}
+  CgResult solve(const BlockCsr& a, const Vec3s& b, Vec3s& x, double tol, int max_iterations);
 
  private:
-  std::chrono::steady_clock::time_point start_;
+  Vec3s r_, p_, ap_;
 };
 
-// One line per frame and a mean at the end.
+// Wall time, or with --cpu-clock this thread's CPU time (on a busy machine wall time also
+// counts the time the thread waits for a core; the baselines run on one thread).
+class Stopwatch {
+ public:
+  Stopwatch() : start_ms_(now_ms()) {}
+  double lap_ms();  // since construction or the previous lap
+  static void use_cpu_clock(bool on);
+
+ private:
+  static double now_ms();
+  double start_ms_;
+};
+
+// One line per frame and, at the end, the median and mean (the machine's load shows in
+// single frames; the median damps it).
 struct FrameLog {
   std::string first_label, second_label;  // what the two timings measure
   std::vector<std::array<double, 2>> ms;
@@ -83,6 +117,6 @@ struct FrameLog {
 
 // Writes "x,y,z" per vertex (17 significant digits) and, with options.check, returns false
 // when a coordinate is not finite.
-bool finish(const Options& options, const std::vector<Vec3>& x);
+bool finish(const Options& options, const Vec3s& x);
 
 }  // namespace simit::baseline

@@ -1,5 +1,7 @@
 // Hand-written Eigen version of examples/cloth/cloth.sim: membrane stretching on triangles,
 // discrete-shells bending on hinges, explicit Velocity Verlet, on a generated square cloth.
+// Each step is two passes: the forces over faces and hinges, then one over the points
+// (acceleration, velocity and the next step's positions fused).
 // Usage: cloth_baseline [--check] [--csv FILE] [N] [FRAMES]   (N x N vertices, default 32)
 #include <cmath>
 #include <cstdio>
@@ -29,8 +31,7 @@ struct HingeRest {
 
 // Signed dihedral angle of hinge (a, b, c, d), triangles (a, b, c) and (b, a, d), and its
 // gradient per point (Bridson et al. 2003).
-double dihedral(const std::vector<Vec3>& x, const simit::runtime::Hinge& hg,
-                std::array<Vec3, 4>& g) {
+double dihedral(const Vec3s& x, const simit::runtime::Hinge& hg, std::array<Vec3, 4>& g) {
   const Vec3 &a = x[hg[0]], &b = x[hg[1]], &c = x[hg[2]], &d = x[hg[3]];
   const Vec3 e = b - a;
   const double le = e.norm();
@@ -56,7 +57,7 @@ int main(int argc, char** argv) {
   // A unit square in the xz-plane at y = 0, each quad split along one diagonal with the same
   // winding; pinned at the corners (0, 0, 0) and (1, 0, 0).
   const int n = side * side;
-  std::vector<Vec3> x(n), v(n, Vec3::Zero()), acc(n, Vec3::Zero()), f(n);
+  Vec3s x(n), v(n, Vec3::Zero()), acc(n, Vec3::Zero()), f(n);
   std::vector<char> pinned(n, 0);
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i)
@@ -88,14 +89,14 @@ int main(int argc, char** argv) {
   for (int k = 0; k < nh; ++k) {
     const auto& hg = hinges[k];
     const Vec3 e = x[hg[1]] - x[hg[0]];
-    const double areas = 0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() +
-                                e.cross(x[hg[3]] - x[hg[1]]).norm());
+    const double areas =
+        0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() + e.cross(x[hg[3]] - x[hg[1]]).norm());
     hinge_rest[k] = {dihedral(x, hg, g), 3.0 * kb * e.squaredNorm() / areas};
   }
   std::printf("cloth %dx%d: %d points, %d faces, %d hinges\n", side, side, n, nf, nh);
 
-  auto accelerations = [&](std::vector<Vec3>& out) {
-    std::fill(f.begin(), f.end(), Vec3::Zero());
+  // Adds the membrane and bending forces into f (zero on entry).
+  auto add_forces = [&]() {
     for (int k = 0; k < nf; ++k) {
       const auto& t = faces[k];
       const FaceRest& r = face_rest[k];
@@ -110,28 +111,38 @@ int main(int argc, char** argv) {
       f[t[1]] += H.col(0);
       f[t[2]] += H.col(1);
     }
+    std::array<Vec3, 4> grad;
     for (int k = 0; k < nh; ++k) {
       const auto& hg = hinges[k];
-      const double theta = dihedral(x, hg, g);
+      const double theta = dihedral(x, hg, grad);
       const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
-      for (int i = 0; i < 4; ++i) f[hg[i]] += s * g[i];
+      for (int i = 0; i < 4; ++i) f[hg[i]] += s * grad[i];
     }
-    for (int i = 0; i < n; ++i) out[i] = pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity);
   };
+  auto acceleration = [&](int i) { return pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity); };
 
-  accelerations(acc);
-  std::vector<Vec3> acc_new(n);
+  std::fill(f.begin(), f.end(), Vec3::Zero());
+  add_forces();
+  for (int i = 0; i < n; ++i) acc[i] = acceleration(i), f[i].setZero();
   FrameLog log{"forces", "integration", {}};
   for (int frame = 1; frame <= options.frames; ++frame) {
     double force_ms = 0.0, integrate_ms = 0.0;
     Stopwatch clock;
+    for (int i = 0; i < n; ++i) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
+    integrate_ms += clock.lap_ms();
     for (int s = 0; s < substeps; ++s) {
-      for (int i = 0; i < n; ++i) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
-      integrate_ms += clock.lap_ms();
-      accelerations(acc_new);
+      add_forces();
       force_ms += clock.lap_ms();
-      for (int i = 0; i < n; ++i) v[i] += (0.5 * h) * (acc[i] + acc_new[i]);
-      acc.swap(acc_new);
+      // One pass per step over the points: the new acceleration, the velocity, f cleared for
+      // the next step and, unless the frame ends here, the next step's positions.
+      const bool last = s + 1 == substeps;
+      for (int i = 0; i < n; ++i) {
+        const Vec3 a_new = acceleration(i);
+        v[i] += (0.5 * h) * (acc[i] + a_new);
+        acc[i] = a_new;
+        f[i].setZero();
+        if (!last) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
+      }
       integrate_ms += clock.lap_ms();
     }
     log.frame(frame, force_ms, integrate_ms);

@@ -1,6 +1,8 @@
 // Hand-written Eigen version of examples/fem/fem.sim: Neo-Hookean tets, linearly-implicit
-// backward Euler, unpreconditioned CG with the same stopping rule.
-// Usage: fem_baseline [--check] [--csv FILE] [MESH] [FRAMES]
+// backward Euler, unpreconditioned CG with the same stopping rule. The matrix is a block-CSR
+// of 3x3 blocks holding only the blocks fem.sim writes: the diagonal, and the pairs of
+// vertices that share a tet when neither is pinned.
+// Usage: fem_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--sim-form] [MESH] [FRAMES]
 #include <cmath>
 #include <cstdio>
 
@@ -14,33 +16,68 @@ namespace {
 
 const double E = 5e3, nu = 0.45, density = 1000.0, h = 0.005;
 const double default_cg_tol = 1e-12;  // --cg-tol overrides
-const int default_cg_max = 100;  // --cg-max overrides
+const int default_cg_max = 100;       // --cg-max overrides
 const Vec3 gravity(0.0, -10.0, 0.0);
 
 struct TetRest {
-  Mat3 B;                        // Dm^-1
-  double W;                      // rest volume
-  std::array<Vec3, 4> g;         // shape-function gradients; g[3] = -(g0 + g1 + g2)
+  Mat3 B;                 // Dm^-1
+  double W;               // rest volume
+  std::array<Vec3, 4> g;  // shape-function gradients; g[3] = -(g0 + g1 + g2)
 };
 
-Mat3 edge_matrix(const std::vector<Vec3>& x, const simit::runtime::Tet& t) {
+Mat3 edge_matrix(const Vec3s& x, const simit::runtime::Tet& t) {
   Mat3 d;
   for (int j = 0; j < 3; ++j) d.col(j) = x[t[j]] - x[t[3]];
   return d;
 }
 
+// A += -h^2 K for one tet, K's block (i, j) in closed form: with a_i = F^-T g_i,
+// K_ij = -W (mu (g_i'g_j) I + c a_j a_i' + lambda a_i a_j'), c = mu - lambda log J. It is
+// fem.sim's dP expression multiplied out (dF = e_d g_j' makes each term rank one).
+void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, const Mat3& FinvT,
+                   double c, double mu, double lambda) {
+  std::array<Vec3, 4> af;
+  for (int i = 0; i < 4; ++i) af[i] = FinvT * r.g[i];
+  const double s = h * h * r.W;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      if (k[4 * i + j] < 0) continue;
+      Mat3& block = a.block(k[4 * i + j]);
+      block.noalias() += (s * c) * af[j] * af[i].transpose();
+      block.noalias() += (s * lambda) * af[i] * af[j].transpose();
+      block.diagonal().array() += s * mu * r.g[i].dot(r.g[j]);
+    }
+}
+
+// The same blocks evaluated as fem.sim writes them: K's column (j, d) is -W dP g_i with
+// dP = mu dF + c F^-T dF' F^-T + lambda tr(F^-1 dF) F^-T, dF = e_d g_j' (--sim-form).
+void add_stiffness_as_sim(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r,
+                          const Mat3& Finv, double c, double mu, double lambda) {
+  const Mat3 FinvT = Finv.transpose();
+  for (int j = 0; j < 4; ++j) {
+    if (k[5 * j] < 0) continue;  // corner j pinned: fem.sim writes none of its column
+    for (int d = 0; d < 3; ++d) {
+      const Mat3 dF = Vec3::Unit(d) * r.g[j].transpose();
+      const double tr = r.g[j].dot(Finv.col(d));
+      const Mat3 dP = mu * dF + c * (FinvT * dF.transpose() * FinvT) + (lambda * tr) * FinvT;
+      for (int i = 0; i < 4; ++i)
+        if (k[4 * i + j] >= 0) a.block(k[4 * i + j]).col(d) += (h * h * r.W) * (dP * r.g[i]);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options options = parse_options(argc, argv, "examples/data/bunny.1.node");
+  const Options options = parse_options(argc, argv, "examples/data/bunny.1.node", true);
   const double cg_tol = options.cg_tol >= 0 ? options.cg_tol : default_cg_tol;
   const int cg_max = options.cg_max >= 0 ? options.cg_max : default_cg_max;
   const simit::runtime::Mesh mesh = simit::runtime::read_mesh(options.input);
   const int n = static_cast<int>(mesh.points.size());
   const int nt = static_cast<int>(mesh.tets.size());
 
-  std::vector<Vec3> x(n);
-  std::vector<Vec3> v(n, Vec3(0.1, 0.0, 0.1));
+  Vec3s x(n);
+  Vec3s v(n, Vec3(0.1, 0.0, 0.1));
   std::vector<char> pinned(n);
   for (int i = 0; i < n; ++i) {
     x[i] = Vec3(mesh.points[i][0], mesh.points[i][1], mesh.points[i][2]);
@@ -48,12 +85,11 @@ int main(int argc, char** argv) {
     if (pinned[i]) v[i].setZero();
   }
 
-  // Precomputation: rest shape, lumped masses, the pattern and each tet's block slots.
+  // Precomputation: rest shape, lumped masses, the pattern and each tet's block indices.
   Stopwatch setup;
   std::vector<TetRest> rest(nt);
   std::vector<double> m(n, 0.0);
-  std::vector<int> tet_vertices;
-  tet_vertices.reserve(4 * nt);
+  BlockPatternBuilder builder(n);
   for (int e = 0; e < nt; ++e) {
     const auto& t = mesh.tets[e];
     const Mat3 dm = edge_matrix(x, t);
@@ -62,29 +98,34 @@ int main(int argc, char** argv) {
     r.W = -dm.determinant() / 6.0;
     for (int j = 0; j < 3; ++j) r.g[j] = r.B.row(j).transpose();
     r.g[3] = -(r.B.row(0) + r.B.row(1) + r.B.row(2)).transpose();
-    for (int j = 0; j < 4; ++j) {
-      m[t[j]] += 0.25 * density * r.W;
-      tet_vertices.push_back(t[j]);
-    }
+    for (int j = 0; j < 4; ++j) m[t[j]] += 0.25 * density * r.W;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        if (!pinned[t[i]] && !pinned[t[j]]) builder.add(t[i], t[j]);
   }
-  BlockPattern pattern(n, tet_vertices, 4);
-  std::vector<std::array<int, 16>> slots(nt);
+  BlockCsr a(std::move(builder));
+  // Block (t[i], t[j]) of tet e is blocks[e][4 i + j]; -1 where a corner is pinned.
+  std::vector<std::array<int, 16>> blocks(nt);
   for (int e = 0; e < nt; ++e)
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) slots[e][4 * i + j] = pattern.slot(mesh.tets[e][i], mesh.tets[e][j]);
-  std::printf("%s: %d vertices, %d tets, %ld nonzeros, set-up %.3f ms\n", options.input.c_str(),
-              n, nt, static_cast<long>(pattern.matrix().nonZeros()), setup.lap_ms());
+      for (int j = 0; j < 4; ++j) {
+        const auto& t = mesh.tets[e];
+        blocks[e][4 * i + j] = pinned[t[i]] || pinned[t[j]] ? -1 : a.find(t[i], t[j]);
+      }
+  std::printf("%s: %d vertices, %d tets, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms\n",
+              options.input.c_str(), n, nt, a.block_count(), a.cg_bytes_per_iteration(),
+              setup.lap_ms());
 
   const double mu = 0.5 * E / nu;  // sic: the original host's formula
   const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  std::vector<Vec3> f(n);
-  Eigen::VectorXd b(3 * n), vel(3 * n);
+  Vec3s f(n), b(n);
+  ConjugateGradient cg(n);
   FrameLog log{"assembly", "solve", {}};
   for (int frame = 1; frame <= options.frames; ++frame) {
     Stopwatch clock;
-    pattern.set_zero();
+    a.set_zero();
     std::fill(f.begin(), f.end(), Vec3::Zero());
-    for (int i = 0; i < n; ++i) pattern.add(i, pattern.diagonal_slot(i), m[i] * Mat3::Identity());
+    for (int i = 0; i < n; ++i) a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
     for (int e = 0; e < nt; ++e) {
       const auto& t = mesh.tets[e];
       const TetRest& r = rest[e];
@@ -94,33 +135,18 @@ int main(int argc, char** argv) {
       const double logJ = std::log(F.determinant());
       const Mat3 P = mu * (F - FinvT) + lambda * logJ * FinvT;
       for (int j = 0; j < 4; ++j) f[t[j]] += -r.W * (P * r.g[j]);
-      // A = M - h^2 K, K's column (j, d) being -W dP(e_d g_j') g_i for each corner i.
       const double c = mu - lambda * logJ;
-      std::array<Mat3, 16> blocks;
-      for (int j = 0; j < 4; ++j)
-        for (int d = 0; d < 3; ++d) {
-          const Mat3 dF = Vec3::Unit(d) * r.g[j].transpose();
-          const double tr = r.g[j].dot(Finv.col(d));
-          const Mat3 dP = mu * dF + c * (FinvT * dF.transpose() * FinvT) + (lambda * tr) * FinvT;
-          for (int i = 0; i < 4; ++i) blocks[4 * i + j].col(d) = -r.W * (dP * r.g[i]);
-        }
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j)
-          if (!pinned[t[i]] && !pinned[t[j]])
-            pattern.add(t[i], slots[e][4 * i + j], blocks[4 * i + j], -h * h);
+      if (options.sim_form)
+        add_stiffness_as_sim(a, blocks[e], r, Finv, c, mu, lambda);
+      else
+        add_stiffness(a, blocks[e], r, FinvT, c, mu, lambda);
     }
-    for (int i = 0; i < n; ++i) {
-      const Vec3 bi = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
-      b.segment<3>(3 * i) = bi;
-      vel.segment<3>(3 * i) = v[i];
-    }
+    for (int i = 0; i < n; ++i)
+      b[i] = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
     const double assembly_ms = clock.lap_ms();
-    const CgResult cg = conjugate_gradient(pattern.matrix(), b, vel, cg_tol, cg_max);
-    for (int i = 0; i < n; ++i) {
-      v[i] = vel.segment<3>(3 * i);
-      x[i] += h * v[i];
-    }
-    log.frame(frame, assembly_ms, clock.lap_ms(), cg.iterations, cg.residual);
+    const CgResult result = cg.solve(a, b, v, cg_tol, cg_max);
+    for (int i = 0; i < n; ++i) x[i] += h * v[i];
+    log.frame(frame, assembly_ms, clock.lap_ms(), result.iterations, result.residual);
   }
   log.summary();
   return finish(options, x) ? 0 : 1;

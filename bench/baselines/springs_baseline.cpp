@@ -1,6 +1,8 @@
 // Hand-written Eigen version of examples/springs/springs.sim: implicit mass-spring system,
-// linearized backward Euler, unpreconditioned CG with the same stopping rule.
-// Usage: springs_baseline [--check] [--csv FILE] [MESH] [FRAMES]
+// linearized backward Euler, unpreconditioned CG with the same stopping rule. The matrix is a
+// block-CSR of 3x3 blocks holding only the blocks springs.sim writes: the diagonal, and the
+// pairs of points joined by a spring when neither is pinned.
+// Usage: springs_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [MESH] [FRAMES]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,7 +17,7 @@ namespace {
 
 const double stiffness = 1000.0, spring_mass = 0.001, h = 0.01;
 const double default_cg_tol = 1e-12;  // --cg-tol overrides
-const int default_cg_max = 50;  // --cg-max overrides
+const int default_cg_max = 50;        // --cg-max overrides
 const Vec3 gravity(0.0, -10.0, 0.0);
 
 }  // namespace
@@ -40,7 +42,7 @@ int main(int argc, char** argv) {
     lo = lo.cwiseMin(q);
     hi = hi.cwiseMax(q);
   }
-  std::vector<Vec3> x(n), v(n, Vec3::Zero());
+  Vec3s x(n), v(n, Vec3::Zero());
   std::vector<char> pinned(n);
   for (int i = 0; i < n; ++i) {
     const Vec3 q(mesh.points[i][0], mesh.points[i][1], mesh.points[i][2]);
@@ -48,65 +50,67 @@ int main(int argc, char** argv) {
     pinned[i] = x[i].z() < 0.1;
   }
 
+  // Precomputation: rest lengths, lumped masses, the pattern and each spring's block indices.
   Stopwatch setup;
   std::vector<double> l0(ns), m(n, 0.0);
-  std::vector<int> ends;
-  ends.reserve(2 * ns);
+  BlockPatternBuilder builder(n);
   for (int s = 0; s < ns; ++s) {
     const auto& e = mesh.edges[s];
     l0[s] = (x[e[1]] - x[e[0]]).norm();
     m[e[0]] += 0.5 * spring_mass;
     m[e[1]] += 0.5 * spring_mass;
-    ends.push_back(e[0]);
-    ends.push_back(e[1]);
+    if (!pinned[e[0]] && !pinned[e[1]]) {
+      builder.add(e[0], e[1]);
+      builder.add(e[1], e[0]);
+    }
   }
-  BlockPattern pattern(n, ends, 2);
-  std::vector<std::array<int, 4>> slots(ns);
-  for (int s = 0; s < ns; ++s)
-    for (int i = 0; i < 2; ++i)
-      for (int j = 0; j < 2; ++j) slots[s][2 * i + j] = pattern.slot(ends[2 * s + i], ends[2 * s + j]);
-  std::printf("%s: %d points, %d springs, %ld nonzeros, set-up %.3f ms\n",
-              options.input.c_str(), n, ns, static_cast<long>(pattern.matrix().nonZeros()),
-              setup.lap_ms());
+  BlockCsr a(std::move(builder));
+  // Blocks (a, a), (c, c), (a, c), (c, a) of spring (a, c); -1 where springs.sim writes none.
+  std::vector<std::array<int, 4>> blocks(ns);
+  for (int s = 0; s < ns; ++s) {
+    const int p = mesh.edges[s][0], q = mesh.edges[s][1];
+    const bool coupled = !pinned[p] && !pinned[q];
+    blocks[s] = {pinned[p] ? -1 : a.diagonal(p), pinned[q] ? -1 : a.diagonal(q),
+                 coupled ? a.find(p, q) : -1, coupled ? a.find(q, p) : -1};
+  }
+  std::printf(
+      "%s: %d points, %d springs, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms\n",
+      options.input.c_str(), n, ns, a.block_count(), a.cg_bytes_per_iteration(), setup.lap_ms());
 
-  std::vector<Vec3> f(n);
-  Eigen::VectorXd b(3 * n), vel(3 * n);
+  Vec3s f(n), b(n);
+  ConjugateGradient cg(n);
   FrameLog log{"assembly", "solve", {}};
   for (int frame = 1; frame <= options.frames; ++frame) {
     Stopwatch clock;
-    pattern.set_zero();
+    a.set_zero();
     std::fill(f.begin(), f.end(), Vec3::Zero());
-    for (int i = 0; i < n; ++i) pattern.add(i, pattern.diagonal_slot(i), m[i] * Mat3::Identity());
+    for (int i = 0; i < n; ++i) a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
     for (int s = 0; s < ns; ++s) {
-      const int a = ends[2 * s], c = ends[2 * s + 1];
-      const Vec3 d = x[c] - x[a];
+      const int p = mesh.edges[s][0], q = mesh.edges[s][1];
+      const Vec3 d = x[q] - x[p];
       const double l = d.norm();
       const Vec3 t = stiffness * (l - l0[s]) / l * d;
-      f[a] += t;
-      f[c] -= t;
+      f[p] += t;
+      f[q] -= t;
       // K = [-Ks Ks; Ks -Ks]; the transverse term is dropped under compression. Blocks
-      // coupling to a pinned point are dropped; a free end keeps its own block.
+      // coupling to a pinned point are not written; a free end keeps its own block.
+      const std::array<int, 4>& k = blocks[s];
+      if (k[0] < 0 && k[1] < 0) continue;
       const Vec3 u = d / l;
       const Mat3 uu = u * u.transpose();
       const Mat3 ks = stiffness * (uu + std::max(0.0, 1.0 - l0[s] / l) * (Mat3::Identity() - uu));
-      if (!pinned[a]) pattern.add(a, slots[s][0], ks, h * h);
-      if (!pinned[c]) pattern.add(c, slots[s][3], ks, h * h);
-      if (pinned[a] || pinned[c]) continue;
-      pattern.add(a, slots[s][1], ks, -h * h);
-      pattern.add(c, slots[s][2], ks, -h * h);
+      if (k[0] >= 0) a.block(k[0]) += (h * h) * ks;
+      if (k[1] >= 0) a.block(k[1]) += (h * h) * ks;
+      if (k[2] < 0) continue;
+      a.block(k[2]) -= (h * h) * ks;
+      a.block(k[3]) -= (h * h) * ks;
     }
-    for (int i = 0; i < n; ++i) {
-      const Vec3 bi = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
-      b.segment<3>(3 * i) = bi;
-      vel.segment<3>(3 * i) = v[i];
-    }
+    for (int i = 0; i < n; ++i)
+      b[i] = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
     const double assembly_ms = clock.lap_ms();
-    const CgResult cg = conjugate_gradient(pattern.matrix(), b, vel, cg_tol, cg_max);
-    for (int i = 0; i < n; ++i) {
-      v[i] = vel.segment<3>(3 * i);
-      x[i] += h * v[i];
-    }
-    log.frame(frame, assembly_ms, clock.lap_ms(), cg.iterations, cg.residual);
+    const CgResult result = cg.solve(a, b, v, cg_tol, cg_max);
+    for (int i = 0; i < n; ++i) x[i] += h * v[i];
+    log.frame(frame, assembly_ms, clock.lap_ms(), result.iterations, result.residual);
   }
   log.summary();
   return finish(options, x) ? 0 : 1;
