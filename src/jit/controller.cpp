@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <sstream>
 
 #include "interp/interpreter.h"
@@ -42,6 +43,12 @@ struct TraceController::LoopState {
 };
 
 namespace {
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
 
 // The lengths a system trace's sizes name, as the interpreter's values hold them now (-1
 // where a value is missing or of another kind).
@@ -181,7 +188,9 @@ bool TraceController::run_site(interp::SiteCall& call) {
   Entry* e = entry_for(call);
   if (!e || !e->kernel) return false;
   const auto start = std::chrono::steady_clock::now();
+  const double cpu = thread_cpu_ms();
   const bool done = run_kernel(*e, call);
+  e->stats.cpu_ms += thread_cpu_ms() - cpu;
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
@@ -318,6 +327,7 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
   LoopEntry* e = loop_entry_for(*loop, in);
   if (!e) return false;
   const auto start = std::chrono::steady_clock::now();
+  const double cpu = thread_cpu_ms();
   const SystemBinding& b = e->traced.binding;
   const SystemTrace& t = *e->traced.trace;
   for (const auto& [var, like] : b.created)
@@ -361,6 +371,7 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
       case Ty::Bool: in.variable(*b.scalars[i]) = Value::of_bool(scalars[i] != 0.0); break;
     }
   }
+  e->stats.cpu_ms += thread_cpu_ms() - cpu;
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
@@ -379,12 +390,12 @@ std::vector<TraceStats> TraceController::stats() const {
 void TraceController::print_stats(std::ostream& os) const {
   os << "jit traces:\n";
   char line[256];
-  std::snprintf(line, sizeof line, "  %-28s %10s %8s %10s %8s  %s\n", "site", "compile ms", "calls",
-                "run ms", "ir nodes", "status");
+  std::snprintf(line, sizeof line, "  %-28s %10s %8s %10s %10s %8s  %s\n", "site", "compile ms",
+                "calls", "run ms", "cpu ms", "ir nodes", "status");
   os << line;
   for (const TraceStats& s : stats()) {
-    std::snprintf(line, sizeof line, "  %-28s %10.1f %8ld %10.2f %8zu  ", s.site.c_str(),
-                  s.compile_ms, s.calls, s.run_ms, s.ir_nodes);
+    std::snprintf(line, sizeof line, "  %-28s %10.1f %8ld %10.2f %10.2f %8zu  ", s.site.c_str(),
+                  s.compile_ms, s.calls, s.run_ms, s.cpu_ms, s.ir_nodes);
     os << line << s.status << "\n      key: " << s.key << "\n";
   }
 }

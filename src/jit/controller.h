@@ -34,7 +34,8 @@ struct TraceStats {
   std::string status;  // "compiled", or why it runs interpreted
   double compile_ms = 0.0;
   long calls = 0;
-  double run_ms = 0.0;
+  double run_ms = 0.0;  // wall time in the kernels
+  double cpu_ms = 0.0;  // this thread's CPU time in them (steadier on a busy machine)
   size_t ir_nodes = 0;
 };
 

@@ -131,7 +131,10 @@ struct Trace {
   std::vector<ArraySlot> arrays;
   std::vector<Ty> scalars;  // the call's scalar arguments, by slot
   std::vector<Ty> locals;   // local slots, by number
-  std::vector<int> pairs;   // per matrix result (by result index): pairs per element, or 0
+  // Per local: whether it is set more than once (a variable assigned in a branch). The others
+  // are set exactly once, before every read, and become SSA values.
+  std::vector<bool> local_mutable;
+  std::vector<int> pairs;  // per matrix result (by result index): pairs per element, or 0
   std::vector<Stmt> body;
   std::vector<ErrorSite> errors;
   bool writes_fields = false;  // some Store (an apply with inout fields)

@@ -1260,6 +1260,7 @@ TracedSite Tracer::run() {
     return out;
   }
   out.scalar_sources = sources_;
+  trace_.local_mutable = mutable_;
   out.trace = std::move(trace_);
   return out;
 }

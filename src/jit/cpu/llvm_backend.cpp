@@ -140,6 +140,7 @@ class Emitter {
   IRBuilder<> b_;
   llvm::Function* fn_ = nullptr;
   std::vector<Value*> arrays_, scalars_, locals_, endpoints_;
+  std::vector<Value*> ssa_;  // values of the locals set once
   Value* element_ = nullptr;
   Value* failed_ = nullptr;
 };
@@ -197,7 +198,9 @@ Value* Emitter::expr(const Expr& e) {
       if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
       return v;
     }
-    case ExprKind::Local: return b_.CreateLoad(type(e.ty), locals_[e.slot]);
+    case ExprKind::Local:
+      if (!locals_[e.slot]) return ssa_[e.slot];
+      return b_.CreateLoad(type(e.ty), locals_[e.slot]);
     case ExprKind::Unary: {
       Value* x = expr(*e.ops[0]);
       switch (static_cast<UnOp>(e.op)) {
@@ -242,7 +245,13 @@ Value* Emitter::expr(const Expr& e) {
 
 void Emitter::stmt(const Stmt& s) {
   switch (s.kind) {
-    case StmtKind::SetLocal: b_.CreateStore(expr(*s.value), locals_[s.slot]); return;
+    case StmtKind::SetLocal:
+      if (!locals_[s.slot]) {
+        ssa_[s.slot] = expr(*s.value);
+        return;
+      }
+      b_.CreateStore(expr(*s.value), locals_[s.slot]);
+      return;
     case StmtKind::Store: {
       const ArraySlot& a = slots_[s.slot];
       Value* v = expr(*s.value);
@@ -323,7 +332,12 @@ llvm::Function* Emitter::run(const std::string& name) {
   for (size_t i = 0; i < t_->scalars.size(); ++i)
     scalars_.push_back(b_.CreateLoad(b_.getDoubleTy(),
                                      b_.CreateConstInBoundsGEP1_64(b_.getDoubleTy(), scalars, i)));
-  for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
+  // Locals set once are SSA values; the others (assigned in branches) live in stack slots.
+  ssa_.assign(local_types_.size(), nullptr);
+  for (size_t i = 0; i < local_types_.size(); ++i) {
+    const bool slot = i >= t_->local_mutable.size() || t_->local_mutable[i];
+    locals_.push_back(slot ? b_.CreateAlloca(type(local_types_[i])) : nullptr);
+  }
 
   auto* head = llvm::BasicBlock::Create(ctx_, "element", fn_);
   auto* body = llvm::BasicBlock::Create(ctx_, "body", fn_);
