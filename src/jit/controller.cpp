@@ -8,6 +8,7 @@
 
 #include "interp/interpreter.h"
 #include "interp/runtime_error.h"
+#include "jit/pruned_matrix.h"
 
 namespace simit::jit {
 
@@ -30,6 +31,10 @@ struct TraceController::SiteState {
 struct TraceController::LoopEntry {
   TracedSystem traced;
   std::unique_ptr<Kernel> kernel;
+  // Per matrix the loop multiplies (by the variable): its non-zero blocks, rebuilt per call.
+  std::map<const ast::Variable*, PrunedMatrix> pruned;
+  int64_t kept = 0, total = 0;  // blocks streamed and blocks in the patterns, over all calls
+  double prune_cpu_ms = 0.0;
   std::vector<int64_t> sizes;       // the lengths it was traced for
   std::vector<bool> writes_scalar;  // per scalar local
   TraceStats stats;
@@ -346,13 +351,19 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
           arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
                                           : const_cast<double*>(v.tensor().floats());
           break;
-        case Part::RowPtr:
-          arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data());
+        case Part::RowPtr: {
+          // The matrix is constant while the loop runs: its zero blocks are dropped once.
+          const double before = thread_cpu_ms();
+          PrunedMatrix& p = e->pruned[b.arrays[i].var];
+          p.assign(*v.matrix());
+          e->kept += p.kept;
+          e->total += p.total;
+          e->prune_cpu_ms += thread_cpu_ms() - before;
+          arrays[i] = p.row_ptr.data();
           break;
-        case Part::Cols:
-          arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().col_idx().data());
-          break;
-        case Part::Values: arrays[i] = v.matrix()->values(); break;
+        }
+        case Part::Cols: arrays[i] = e->pruned[b.arrays[i].var].cols.data(); break;
+        case Part::Values: arrays[i] = e->pruned[b.arrays[i].var].values.data(); break;
       }
     }
   std::vector<double> scalars(b.scalars.size(), 0.0);
@@ -375,6 +386,12 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
+  if (e->total > 0) {
+    char note[160];
+    std::snprintf(note, sizeof note, "; products stream %.1f%% of the blocks (zero blocks dropped in %.2f cpu ms)",
+                  100.0 * static_cast<double>(e->kept) / static_cast<double>(e->total), e->prune_cpu_ms);
+    e->stats.note = note;
+  }
   return true;
 }
 
@@ -396,7 +413,7 @@ void TraceController::print_stats(std::ostream& os) const {
   for (const TraceStats& s : stats()) {
     std::snprintf(line, sizeof line, "  %-28s %10.1f %8ld %10.2f %10.2f %8zu  ", s.site.c_str(),
                   s.compile_ms, s.calls, s.run_ms, s.cpu_ms, s.ir_nodes);
-    os << line << s.status << "\n      key: " << s.key << "\n";
+    os << line << s.status << "\n      key: " << s.key << s.note << "\n";
   }
 }
 

@@ -37,6 +37,7 @@ struct TraceStats {
   double run_ms = 0.0;  // wall time in the kernels
   double cpu_ms = 0.0;  // this thread's CPU time in them (steadier on a busy machine)
   size_t ir_nodes = 0;
+  std::string note;  // e.g. the fraction of matrix blocks a loop's products stream
 };
 
 class TraceController : public interp::SiteHook {

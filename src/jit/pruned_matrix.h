@@ -1,0 +1,23 @@
+// A compiled loop's view of a system matrix without its all-zero blocks: products over it
+// stream only the blocks that hold values. Dropping a zero block drops terms 0 * x, which
+// change no sum that starts at +0.0 while x is finite (docs/jit.md), so the loop's results
+// stay the interpreter's bit for bit for finite vectors.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "runtime/system_matrix.h"
+
+namespace simit::jit {
+
+struct PrunedMatrix {
+  std::vector<int32_t> row_ptr, cols;
+  std::vector<double> values;
+  int64_t kept = 0, total = 0;  // blocks
+
+  // Rebuilds the arrays from `m` (float components), reusing their storage.
+  void assign(const runtime::SystemMatrix& m);
+};
+
+}  // namespace simit::jit
