@@ -106,6 +106,9 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_flag("--jit-stats", o.jit_stats,
                   "jit: after the run, print each trace: site, key, compile ms, calls, ms spent, "
                   "or why it ran interpreted");
+  c.run->add_flag("--check-jit", o.check_jit,
+                  "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
+                  "the first result, field or variable that differs (bit for bit), naming it");
   c.run->add_option("--dump", o.dump, "jit: print each compiled trace: loop-ir, llvm (or both)")
       ->type_name("KIND")
       ->delimiter(',')
@@ -224,6 +227,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.jit_threshold = c.run_options.jit_threshold;
       so.jit_stats = c.run_options.jit_stats;
       so.dump = c.run_options.dump;
+      so.check_jit = c.run_options.check_jit;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       return run_scene(so, out, err);
     }

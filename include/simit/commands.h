@@ -29,6 +29,7 @@ struct RunOptions {
   std::string backend = "interpreter";
   long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
   bool jit_stats = false;         // jit: print each trace's figures after the run
+  bool check_jit = false;         // jit: each compiled call also run interpreted and compared
   std::vector<std::string> dump;  // jit: "loop-ir", "llvm": print each compiled trace
 };
 

@@ -78,6 +78,8 @@ void Engine::install_jit() {
   j.dump = options_.jit.dump;
   j.dump_loop_ir = options_.jit.dump_loop_ir;
   j.dump_llvm = options_.jit.dump_llvm;
+  j.check = options_.jit.check;
+  j.corrupt_for_test = options_.jit.corrupt_for_test;
   jit_ = std::make_unique<jit::TraceController>(j);
   executor_->set_site_hook(jit_.get());
 #else

@@ -40,6 +40,9 @@ struct JitSettings {
   std::ostream* dump = nullptr;  // where --dump prints compiled traces (null: nowhere)
   bool dump_loop_ir = false;
   bool dump_llvm = false;
+  bool check = false;  // --check-jit: every compiled call checked against the interpreter
+  // Tests of the check only: flips the lowest bit of a compiled map's first result value.
+  bool corrupt_for_test = false;
 };
 
 // Settings of one engine; passed down, never global.

@@ -81,6 +81,7 @@ int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream&
                                                options.dump, &out);
       !bad.empty())
     return usage(err, bad);
+  run_options.jit.check = options.check_jit;
   try {
     api::Engine engine(c, run_options);
     std::vector<interp::Value> results = engine.call(*f, std::move(args));

@@ -158,13 +158,12 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
     }
     --depth_;
     ++plan.runs;
-    if (options_.sites && !trap_->armed()) {
-      SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at};
-      if (options_.sites->run_site(call)) {
-        map_ = saved;
-        map_depth_ = saved_depth;
-        return;
-      }
+    const bool offer = options_.sites && !trap_->armed();
+    SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at};
+    if (offer && options_.sites->run_site(call)) {
+      map_ = saved;
+      map_depth_ = saved_depth;
+      return;
     }
     // After the first element only the element and its endpoint tuple change: nothing
     // between elements touches the frame's references (calls run one level deeper).
@@ -188,6 +187,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       ++depth_;
       execute_body(f);
     }
+    if (offer) options_.sites->site_done(call);
   } catch (...) {
     depth_ = base_depth;
     map_ = saved;

@@ -73,6 +73,12 @@ class SiteHook {
     (void)stmt, (void)in;
     return false;
   }
+  // The interpreter ran a site (or a statement) that run_site (run_statement) declined: a
+  // differential check compares its results with what the compiled code computed.
+  virtual void site_done(SiteCall& call) { (void)call; }
+  virtual void statement_done(const frontend::ast::Stmt& stmt, Interpreter& in) {
+    (void)stmt, (void)in;
+  }
 };
 
 }  // namespace simit::interp

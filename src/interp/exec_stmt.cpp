@@ -21,14 +21,16 @@ void Interpreter::exec(const ast::Stmt& s) {
   if (trap_->armed()) [[unlikely]]
     return exec_trapped(s);
 #endif
-  if (s.system_level && options_.sites && offer_statement(s)) [[unlikely]]
-    return;
+  if (s.system_level && options_.sites) [[unlikely]]
+    return exec_offered(s);
   exec_node(s);
 }
 
 // Out of line: only programs run with a compiled executor get here.
-[[gnu::noinline]] bool Interpreter::offer_statement(const ast::Stmt& s) {
-  return options_.sites->run_statement(s, *this);
+[[gnu::noinline]] void Interpreter::exec_offered(const ast::Stmt& s) {
+  if (options_.sites->run_statement(s, *this)) return;
+  exec_node(s);
+  options_.sites->statement_done(s, *this);
 }
 
 Value& Interpreter::variable(const ast::Variable& v) { return var(v); }

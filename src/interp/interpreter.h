@@ -188,7 +188,7 @@ class Interpreter {
   void exec_block(const frontend::ast::Block& b);
   void exec(const frontend::ast::Stmt& s);
   void exec_trapped(const frontend::ast::Stmt& s);  // the trap point's slow path
-  bool offer_statement(const frontend::ast::Stmt& s);  // the executor seam for statements
+  void exec_offered(const frontend::ast::Stmt& s);  // the executor seam for statements
   void exec_node(const frontend::ast::Stmt& s);
   void exec_var_decl(const frontend::ast::VarDecl& d);
   void exec_assign(const frontend::ast::Assign& a);

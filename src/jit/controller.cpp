@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <sstream>
 
@@ -45,6 +46,17 @@ struct TraceController::LoopState {
   int failures = 0;
   std::string gave_up;
   std::vector<std::unique_ptr<LoopEntry>> entries;
+};
+
+struct TraceController::Pending {
+  const void* at = nullptr;  // the site or statement
+  std::string name;          // the trace's site
+  // Site: per result its values, per written field (array slot) its bytes, as compiled.
+  std::vector<std::vector<double>> results;
+  std::vector<std::pair<int, std::vector<std::byte>>> fields;
+  const Trace* trace = nullptr;
+  // Loop: per written variable its value as compiled.
+  std::vector<std::pair<const ast::Variable*, Value>> variables;
 };
 
 namespace {
@@ -192,6 +204,7 @@ bool TraceController::run_site(interp::SiteCall& call) {
   if (call.plan.runs <= options_.threshold) return false;
   Entry* e = entry_for(call);
   if (!e || !e->kernel) return false;
+  if (options_.check) return check_site(*e, call);
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
   const bool done = run_kernel(*e, call);
@@ -331,6 +344,13 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
   if (++state->runs <= options_.threshold) return false;
   LoopEntry* e = loop_entry_for(*loop, in);
   if (!e) return false;
+  if (options_.check) return check_loop(*e, *loop, in);
+  run_loop_kernel(*e, in);
+  return true;
+}
+
+void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in) {
+  LoopEntry* e = &entry;
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
   const SystemBinding& b = e->traced.binding;
@@ -388,11 +408,187 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
   ++e->stats.calls;
   if (e->total > 0) {
     char note[160];
-    std::snprintf(note, sizeof note, "; products stream %.1f%% of the blocks (zero blocks dropped in %.2f cpu ms)",
-                  100.0 * static_cast<double>(e->kept) / static_cast<double>(e->total), e->prune_cpu_ms);
+    std::snprintf(note, sizeof note,
+                  "; products stream %.1f%% of the blocks (zero blocks dropped in %.2f cpu ms)",
+                  100.0 * static_cast<double>(e->kept) / static_cast<double>(e->total),
+                  e->prune_cpu_ms);
     e->stats.note = note;
   }
-  return true;
+}
+
+namespace {
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+std::string number(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// The element of a matrix result whose write made block `pos`: the first element whose
+// per-element table names it.
+int element_of_block(const runtime::MatrixPattern& p, int32_t pos) {
+  const runtime::AssemblyIndex& a = p.assembly();
+  for (size_t i = 0; i < a.table.size(); ++i)
+    if (a.table[i] == pos) return static_cast<int>(i / a.pairs());
+  return -1;
+}
+
+}  // namespace
+
+// --check-jit on a site: run the kernel, keep what it computed, put the fields back as they
+// were and let the interpreter run the site on the same inputs; site_done compares.
+bool TraceController::check_site(Entry& e, interp::SiteCall& call) {
+  const Trace& t = *e.traced.trace;
+  auto p = std::make_unique<Pending>();
+  p->at = call.plan.site;
+  p->name = e.stats.site;
+  p->trace = &t;
+  std::vector<std::pair<int, std::vector<std::byte>>> before;
+  for (size_t i = 0; i < t.arrays.size(); ++i) {
+    const ArraySlot& a = t.arrays[i];
+    if (a.kind != ArraySlot::Kind::Field || !a.written) continue;
+    const runtime::Field& f = runtime::member_set(call.target, a.member).field(a.index);
+    const size_t bytes = static_cast<size_t>(call.target.size()) * f.element_bytes();
+    before.emplace_back(static_cast<int>(i), std::vector<std::byte>(f.bytes(), f.bytes() + bytes));
+  }
+  if (!run_kernel(e, call)) return false;  // an error: the interpreter reports it
+  ++e.stats.calls;
+  if (options_.corrupt_for_test && !call.results.empty()) {
+    Value& r = call.results[0];
+    double* v = r.kind() == Value::Kind::Matrix ? r.matrix()->values()
+                : r.is_tensor()                 ? r.tensor().mutable_floats()
+                                                : nullptr;
+    if (v) {
+      uint64_t bits;
+      std::memcpy(&bits, v, sizeof bits);
+      bits ^= 1;
+      std::memcpy(v, &bits, sizeof bits);
+    }
+  }
+  for (const Value& r : call.results) {
+    if (r.kind() == Value::Kind::Matrix) {
+      const double* v = r.matrix()->values();
+      p->results.emplace_back(v, v + r.matrix()->value_count());
+    } else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float) {
+      p->results.emplace_back(r.tensor().floats(), r.tensor().floats() + r.tensor().size());
+    } else {
+      p->results.emplace_back();
+    }
+  }
+  for (auto& [slot, bytes] : before) {
+    const ArraySlot& a = t.arrays[slot];
+    runtime::Field& f =
+        const_cast<runtime::Set&>(runtime::member_set(call.target, a.member)).field(a.index);
+    p->fields.emplace_back(slot, std::vector<std::byte>(f.bytes(), f.bytes() + bytes.size()));
+    std::memcpy(f.bytes(), bytes.data(), bytes.size());
+  }
+  zero_results(call);
+  pending_ = std::move(p);
+  return false;
+}
+
+void TraceController::site_done(interp::SiteCall& call) {
+  if (!pending_ || pending_->at != call.plan.site) return;
+  const std::unique_ptr<Pending> p = std::move(pending_);
+  const ast::FuncDecl& f = *call.plan.func;
+  auto differ = [&](const std::string& what, int element, const runtime::Set& set, double interp,
+                    double jit) {
+    throw interp::RuntimeError(
+        call.at,
+        "--check-jit: the compiled " + p->name + " differs from the interpreter in " + what +
+            (element >= 0 ? " at element " + std::to_string(element) + " of " + set.describe()
+                          : "") +
+            ": interpreted " + number(interp) + ", compiled " + number(jit));
+  };
+  for (size_t r = 0; r < call.results.size() && r < p->results.size(); ++r) {
+    const Value& v = call.results[r];
+    const std::vector<double>& jit = p->results[r];
+    const double* in = v.kind() == Value::Kind::Matrix ? v.matrix()->values()
+                       : v.is_tensor()                 ? v.tensor().floats()
+                                                       : nullptr;
+    if (!in) continue;
+    for (size_t c = 0; c < jit.size(); ++c) {
+      if (same_bits(in[c], jit[c])) continue;
+      const std::string what = "result '" + f.results[r].name + "' component " + std::to_string(c);
+      if (v.kind() == Value::Kind::Matrix) {
+        const int32_t pos = static_cast<int32_t>(c / static_cast<size_t>(v.matrix()->block_size()));
+        differ(what + " (block " + std::to_string(pos) + ")",
+               element_of_block(v.matrix()->pattern(), pos), call.target, in[c], jit[c]);
+      }
+      const size_t block = v.tensor().shape().block_size();
+      differ(what + " (entry " + std::to_string(c / block) + " of the vector)", -1, call.target,
+             in[c], jit[c]);
+    }
+  }
+  for (const auto& [slot, bytes] : p->fields) {
+    const ArraySlot& a = p->trace->arrays[slot];
+    const runtime::Set& set = runtime::member_set(call.target, a.member);
+    const runtime::Field& fld = set.field(a.index);
+    if (std::memcmp(fld.bytes(), bytes.data(), bytes.size()) == 0) continue;
+    const size_t per = fld.element_bytes();
+    for (size_t at = 0; at < bytes.size(); ++at)
+      if (fld.bytes()[at] != bytes[at]) {
+        const int element = static_cast<int>(at / per);
+        double iv = 0.0, jv = 0.0;
+        if (a.ty == Ty::F64 && !a.single) {
+          const size_t c = at / sizeof(double);
+          std::memcpy(&iv, fld.bytes() + c * sizeof(double), sizeof iv);
+          std::memcpy(&jv, bytes.data() + c * sizeof(double), sizeof jv);
+        }
+        differ("field '" + fld.name() + "'", element, set, iv, jv);
+      }
+  }
+}
+
+// --check-jit on a loop: the same, with the variables the loop writes kept (as shared
+// copies: the kernel's writes copy them first) and put back for the interpreter.
+bool TraceController::check_loop(LoopEntry& e, const ast::While& loop, interp::Interpreter& in) {
+  const SystemBinding& b = e.traced.binding;
+  std::vector<std::pair<const ast::Variable*, Value>> before;
+  for (size_t i = 0; i < b.arrays.size(); ++i)
+    if (e.traced.trace->arrays[i].written)
+      before.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
+  for (size_t i = 0; i < b.scalars.size(); ++i)
+    if (e.writes_scalar[i]) before.emplace_back(b.scalars[i], in.variable(*b.scalars[i]));
+  run_loop_kernel(e, in);
+  auto p = std::make_unique<Pending>();
+  p->at = &loop;
+  p->name = e.stats.site;
+  for (auto& [var, value] : before) {
+    p->variables.emplace_back(var, in.variable(*var));
+    in.variable(*var) = std::move(value);
+  }
+  pending_ = std::move(p);
+  return false;
+}
+
+void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter& in) {
+  if (!pending_ || pending_->at != &stmt) return;
+  const std::unique_ptr<Pending> p = std::move(pending_);
+  for (const auto& [var, jit] : p->variables) {
+    const Value& got = in.variable(*var);
+    auto differ = [&](const std::string& where, double a, double b) {
+      throw interp::RuntimeError(stmt.span, "--check-jit: the compiled " + p->name +
+                                                " differs from the interpreter in '" + var->name +
+                                                "'" + where + ": interpreted " + number(a) +
+                                                ", compiled " + number(b));
+    };
+    if (got.is_tensor() && jit.is_tensor()) {
+      const runtime::Tensor &a = got.tensor(), &b = jit.tensor();
+      if (a.kind() != runtime::ComponentKind::Float || a.size() != b.size()) continue;
+      const size_t block = a.shape().block_size();
+      for (size_t c = 0; c < a.size(); ++c)
+        if (!same_bits(a.floats()[c], b.floats()[c]))
+          differ(" component " + std::to_string(c) + " (element " + std::to_string(c / block) + ")",
+                 a.floats()[c], b.floats()[c]);
+    } else if (got.kind() == Value::Kind::Float && jit.kind() == Value::Kind::Float) {
+      if (!same_bits(got.as_float(), jit.as_float())) differ("", got.as_float(), jit.as_float());
+    } else if (got.kind() == Value::Kind::Int && jit.kind() == Value::Kind::Int) {
+      if (got.as_int() != jit.as_int()) differ("", got.as_int(), jit.as_int());
+    }
+  }
 }
 
 std::vector<TraceStats> TraceController::stats() const {

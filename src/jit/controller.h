@@ -25,6 +25,12 @@ struct JitOptions {
   std::ostream* dump = nullptr;
   bool dump_loop_ir = false;
   bool dump_llvm = false;
+  // Differential mode (`--check-jit`): each compiled call also runs interpreted on the same
+  // inputs; the first result, field or variable that differs stops the run naming it.
+  bool check = false;
+  // For the tests of the check alone: the lowest bit of a compiled map's first matrix or
+  // vector value is flipped after the kernel runs.
+  bool corrupt_for_test = false;
 };
 
 // One trace's figures for `--jit-stats`.
@@ -48,6 +54,8 @@ class TraceController : public interp::SiteHook {
   bool run_site(interp::SiteCall& call) override;
   // A while loop of system-level statements (a CG loop), compiled as a whole.
   bool run_statement(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
+  void site_done(interp::SiteCall& call) override;
+  void statement_done(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
 
   std::vector<TraceStats> stats() const;
   // A table of stats(), one line per trace.
@@ -64,7 +72,13 @@ class TraceController : public interp::SiteHook {
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
 
+  struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit
+  bool check_site(Entry& e, interp::SiteCall& call);
+  bool check_loop(LoopEntry& e, const frontend::ast::While& loop, interp::Interpreter& in);
+  void run_loop_kernel(LoopEntry& e, interp::Interpreter& in);
+
   JitOptions options_;
+  std::unique_ptr<Pending> pending_;
   std::unique_ptr<Backend> backend_;
   std::string backend_error_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;

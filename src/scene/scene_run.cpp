@@ -88,6 +88,7 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.trap = trap_;
   // Checked by Scene::open: cannot fail here.
   api::configure_backend(eo, options_.backend, options_.jit_threshold, options_.dump, &out);
+  eo.jit.check = options_.check_jit;
   return eo;
 }
 
