@@ -401,7 +401,12 @@ Tensor project_spd(const Tensor& a, SpdProjection mode, double symmetry_toleranc
   const Square sym = symmetric_part(square_of(logical, n), symmetry_tolerance, what);
   EigParts p = eig_parts(sym);
   Square result = sym;
-  if (!(p.w[0] >= 0.0)) {  // NaN eigenvalues fall through to a NaN result
+  // Eigenvalues this close to zero are rounding noise, not evidence of indefiniteness: a
+  // singular positive semi-definite matrix comes back unchanged too.
+  double largest = 0.0;
+  for (double x : p.w) largest = std::max(largest, std::fabs(x));
+  const double noise = 4.0 * n * DBL_EPSILON * largest;
+  if (!(p.w[0] >= -noise)) {  // NaN eigenvalues fall through to a NaN result
     for (double& x : p.w) x = mode == SpdProjection::Clamp ? std::max(x, 0.0) : std::fabs(x);
     result = weighted_gram(p.q, p.w);
   }

@@ -33,8 +33,9 @@ PolarDecomposition polar_decomposition(const Tensor& f);
 
 // The nearest positive semi-definite matrix (Clamp: negative eigenvalues set to 0), or the
 // matrix with every eigenvalue replaced by its absolute value (Absolute). A matrix that is
-// already positive semi-definite comes back as its symmetric part (the same bits when it is
-// exactly symmetric). Blocked matrices are decomposed in their logical form.
+// already positive semi-definite (no eigenvalue below -4 n epsilon max |w|) comes back as its
+// symmetric part (the same bits when it is exactly symmetric). Blocked matrices are
+// decomposed in their logical form.
 enum class SpdProjection { Clamp, Absolute };
 Tensor project_spd(const Tensor& a, SpdProjection mode, double symmetry_tolerance);
 
