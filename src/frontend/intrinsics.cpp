@@ -79,8 +79,8 @@ Typing expect_arg(const Call& c, size_t i, const Type& expected) {
   const Type& got = *c.args[i];
   if (types_equal(expected, got)) return Typing::success(flt());
   return c.fail(SemanticKind::Type, "expected argument of type " + quoted(expected) +
-                                                  " but got an argument of type " + quoted(got) +
-                                                  " in call to function '" + c.name() + "'");
+                                        " but got an argument of type " + quoted(got) +
+                                        " in call to function '" + c.name() + "'");
 }
 
 // A call whose parameters all have fixed types.
@@ -207,6 +207,61 @@ Typing type_triangular_solve(Call& c) {
                          make_tensor({m}, flt()));
 }
 
+// The n of an argument `tensor[n,n](float)` with a fixed n (unblocked), or 0.
+int fixed_square(const Type& a) {
+  if (a.order() != 2 || !a.block || !a.block->is_scalar() || a.component() != F) return 0;
+  const IndexSet& r = a.dims[0];
+  if (r.kind != IndexSet::Kind::Fixed || r != a.dims[1]) return 0;
+  return r.size;
+}
+
+// The logical size of a square float matrix with fixed dimensions whose blocks (at every
+// level) are square too, or 0.
+int fixed_square_blocked(const Type& a) {
+  if (a.is_scalar()) return a.component() == F ? 1 : 0;
+  if (!a.is_tensor() || a.order() != 2 || !a.block) return 0;
+  const IndexSet& r = a.dims[0];
+  if (r.kind != IndexSet::Kind::Fixed || r != a.dims[1]) return 0;
+  const int inner = fixed_square_blocked(*a.block);
+  return inner ? r.size * inner : 0;
+}
+
+Typing wrong_matrix(const Call& c, const char* expected) {
+  return c.fail(SemanticKind::Type, "function '" + c.name() + "' takes " + expected +
+                                        " but got an argument of type " + quoted(*c.args[0]));
+}
+
+// svd(A : tensor[n,n](float)) -> (U : tensor[n,n](float), s : tensor[n](float),
+// V : tensor[n,n](float)) and polar(F) -> (R, S), n 2 or 3.
+Typing type_rotation_split(const Call& c) {
+  const int n = fixed_square(*c.args[0]);
+  if (n != 2 && n != 3)
+    return wrong_matrix(c,
+                        "a 2x2 or 3x3 matrix of float components ('tensor[2,2](float)' or "
+                        "'tensor[3,3](float)')");
+  if (c.id == Intrinsic::Svd)
+    return Typing::success(make_multi({dense({n, n}), dense({n}), dense({n, n})}));
+  return Typing::success(make_multi({dense({n, n}), dense({n, n})}));
+}
+
+// eig(A : tensor[n,n](float)) -> (w : tensor[n](float), Q : tensor[n,n](float)).
+Typing type_eig(const Call& c) {
+  const int n = fixed_square(*c.args[0]);
+  if (n < 1) return wrong_matrix(c, "a square matrix of float components with fixed dimensions");
+  return Typing::success(make_multi({dense({n}), dense({n, n})}));
+}
+
+// project_spd(A) and project_spd_abs(A): the argument's own type, square with fixed
+// dimensions, blocks (square ones) allowed.
+Typing type_project_spd(const Call& c) {
+  const Type& a = *c.args[0];
+  if (a.order() != 2 || fixed_square_blocked(a) < 1)
+    return wrong_matrix(c,
+                        "a square matrix of float components with fixed dimensions (square "
+                        "blocks allowed)");
+  return Typing::success(std::make_shared<const Type>(a));
+}
+
 std::vector<const char*> generic_params(Intrinsic id) {
   switch (id) {
     case Intrinsic::Lu:
@@ -287,6 +342,11 @@ Typing dispatch(Call& c) {
     case Intrinsic::LuFree:
     case Intrinsic::CholFree: return type_free(c);
     case Intrinsic::TriangularSolve: return type_triangular_solve(c);
+    case Intrinsic::Svd:
+    case Intrinsic::Polar: return type_rotation_split(c);
+    case Intrinsic::Eig: return type_eig(c);
+    case Intrinsic::ProjectSpd:
+    case Intrinsic::ProjectSpdAbs: return type_project_spd(c);
     case Intrinsic::None: break;
   }
   return c.fail(SemanticKind::None, "call of an unknown intrinsic");

@@ -1,4 +1,5 @@
-// The intrinsic functions of LANGUAGE.md §9: one X-macro list of ids and names.
+// The intrinsic functions of LANGUAGE.md §9 and docs/intrinsics.md: one X-macro list of ids
+// and names.
 #pragma once
 
 #include <optional>
@@ -6,6 +7,8 @@
 
 namespace simit::frontend {
 
+// Laid out by hand: clang-format cannot lay out this macro list stably.
+// clang-format off
 #define SIMIT_INTRINSICS(X)                                                          \
   X(Mod, "mod") X(Sin, "sin") X(Cos, "cos") X(Tan, "tan") X(Asin, "asin")            \
   X(Acos, "acos") X(Atan2, "atan2") X(Sqrt, "sqrt") X(Cbrt, "cbrt") X(Log, "log")    \
@@ -17,7 +20,10 @@ namespace simit::frontend {
   X(ComplexNorm, "complexNorm") X(ComplexConj, "complexConj") X(Lu, "lu")            \
   X(LuSolve, "lusolve") X(LuMatSolve, "lumatsolve") X(LuFree, "lufree")              \
   X(Chol, "chol") X(LltSolve, "lltsolve") X(LltMatSolve, "lltmatsolve")              \
-  X(CholFree, "cholfree") X(TriangularSolve, "triangularSolve")
+  X(CholFree, "cholfree") X(TriangularSolve, "triangularSolve")                      \
+  X(Svd, "svd") X(Eig, "eig") X(Polar, "polar") X(ProjectSpd, "project_spd")         \
+  X(ProjectSpdAbs, "project_spd_abs")
+// clang-format on
 
 enum class Intrinsic {
   None,

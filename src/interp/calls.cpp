@@ -43,7 +43,10 @@ std::vector<Value> Interpreter::eval_multi(const ast::Expr& e) {
   if (const auto* m = e.as<ast::Map>()) return eval_map(*m);
   const auto* c = e.as<ast::Call>();
   if (!c) fail(e.span, "expression does not produce several values");
-  if (c->intrinsic != frontend::Intrinsic::None) return {eval_call(*c)};
+  if (c->intrinsic != frontend::Intrinsic::None) {
+    if (e.type && e.type->kind == Type::Kind::Multi) return call_decomposition(*c);
+    return {eval_call(*c)};
+  }
   Frame& callee = run_call(*c);
   std::vector<Value> results;
   results.reserve(c->func->results.size());
@@ -64,7 +67,8 @@ Interpreter::Frame& Interpreter::run_call(const ast::Call& c) {
   for (size_t i = 0; i < c.args.size(); ++i) {
     if (f.params[i].inout) {
       push_inout_arg(*c.args[i], f.params[i].var->slot);
-    } else if (const auto* r = c.args[i]->as<ast::VarRef>(); r && by_reference && is_local(*r->var)) {
+    } else if (const auto* r = c.args[i]->as<ast::VarRef>();
+               r && by_reference && is_local(*r->var)) {
       // A read-only parameter sees the caller's variable itself: nothing can change that
       // variable while the callee runs (no inout parameter aliases it), so no copy is made.
       arg_stack_.push_back(Arg{Value(), &read_var(*r->var, *r)});

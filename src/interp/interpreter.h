@@ -110,7 +110,8 @@ class Interpreter {
   const Frame& frame() const { return *frames_[depth_]; }
   Value& var(const frontend::ast::Variable& v);
   Value& read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at);
-  [[noreturn]] void fail_unset(const frontend::ast::Variable& v, const frontend::ast::Expr& at) const;
+  [[noreturn]] void fail_unset(const frontend::ast::Variable& v,
+                               const frontend::ast::Expr& at) const;
   int dim_size(const frontend::IndexSet& d, const frontend::SourceSpan& at);
   Shape shape_of(const frontend::Type& t, const frontend::SourceSpan& at);
   Value zero_of(const frontend::Type& t, const frontend::SourceSpan& at);
@@ -153,6 +154,12 @@ class Interpreter {
   void push_inout_arg(const frontend::ast::Expr& arg, int slot);
   void write_back_inout(size_t inout_base, Frame& callee, const frontend::SourceSpan& at);
   Value call_intrinsic(const frontend::ast::Call& c);
+  // The intrinsics with several results (svd, eig, polar).
+  std::vector<Value> call_decomposition(const frontend::ast::Call& c);
+  Value call_project_spd(const frontend::ast::Call& c, const Value& a);
+  // How far the two triangles of an argument of eig or project_spd may differ, relative to
+  // its largest component (looser in float32, whose rounding is coarser).
+  double symmetry_tolerance() const;
 
   // hoisting.cpp: calls nested in an expression run first (§6.10)
   class HoistScope {
@@ -264,7 +271,7 @@ class Interpreter {
   // The trap point's switch: the host's (Options::trap) or our own, holding Options::hook.
   Trap own_trap_;
   Trap* trap_ = &own_trap_;
-  uint64_t activations_ = 0;  // numbers every call and mapped element (FrameView::activation)
+  uint64_t activations_ = 0;   // numbers every call and mapped element (FrameView::activation)
   bool post_process_ = false;  // float32 or check_finite: results need a second look
   std::vector<Value> globals_;
   std::vector<std::unique_ptr<Frame>> frames_;  // reused by depth; index 0 is a base frame

@@ -1,11 +1,12 @@
-// Calls of the intrinsic functions of LANGUAGE.md §9.1-9.4 (the sparse solvers of §9.5
-// need system matrices and come with sets).
+// Calls of the intrinsic functions of LANGUAGE.md §9.1-9.4 and of the decompositions of
+// docs/intrinsics.md (the sparse solvers of §9.5 need system matrices and come with sets).
 #include <chrono>
 #include <cmath>
 #include <limits>
 
 #include "interp/frame.h"
 #include "interp/interpreter.h"
+#include "runtime/decompositions.h"
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
 
@@ -148,9 +149,57 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
       std::vector<Value> args{a0, a1};
       return solver_intrinsic(c, args);
     }
+    case Intrinsic::ProjectSpd:
+    case Intrinsic::ProjectSpdAbs: return call_project_spd(c, a0);
+    case Intrinsic::Svd:
+    case Intrinsic::Eig:
+    case Intrinsic::Polar: fail(c.span, "function '" + c.callee + "' returns several values");
     case Intrinsic::None: break;
   }
   unsupported(c.span, "sparse solver intrinsics");
+}
+
+double Interpreter::symmetry_tolerance() const { return options_.float32 ? 1e-4 : 1e-8; }
+
+Value Interpreter::call_project_spd(const ast::Call& c, const Value& a) {
+  const auto mode = c.intrinsic == Intrinsic::ProjectSpd ? runtime::SpdProjection::Clamp
+                                                         : runtime::SpdProjection::Absolute;
+  try {
+    return Value::of_tensor(runtime::project_spd(a.tensor(), mode, symmetry_tolerance()));
+  } catch (const runtime::Fault& f) {
+    fail(c.span, f.what());
+  }
+}
+
+std::vector<Value> Interpreter::call_decomposition(const ast::Call& c) {
+  Value scratch;
+  const Tensor& a = operand(*c.args[0], scratch).tensor();
+  std::vector<Value> out;
+  try {
+    switch (c.intrinsic) {
+      case Intrinsic::Svd: {
+        runtime::RotationSvd d = runtime::rotation_svd(a);
+        out = {Value::of_tensor(std::move(d.u)), Value::of_tensor(std::move(d.s)),
+               Value::of_tensor(std::move(d.v))};
+        break;
+      }
+      case Intrinsic::Eig: {
+        runtime::SymmetricEig d = runtime::symmetric_eig(a, symmetry_tolerance());
+        out = {Value::of_tensor(std::move(d.w)), Value::of_tensor(std::move(d.q))};
+        break;
+      }
+      case Intrinsic::Polar: {
+        runtime::PolarDecomposition d = runtime::polar_decomposition(a);
+        out = {Value::of_tensor(std::move(d.r)), Value::of_tensor(std::move(d.s))};
+        break;
+      }
+      default: fail(c.span, "function '" + c.callee + "' returns one value");
+    }
+  } catch (const runtime::Fault& f) {
+    fail(c.span, f.what());
+  }
+  for (Value& v : out) finish(v, c);
+  return out;
 }
 
 }  // namespace simit::interp

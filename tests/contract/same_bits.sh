@@ -66,7 +66,7 @@ scene fem_bar2k "$root/tests/scene/fem_bar2k.toml" 2
 scene fem_bunny "$root/examples/fem/bunny.toml" 1
 scene springs_bunny "$root/examples/springs/bunny.toml" 3
 scene cloth_square "$root/examples/cloth/square.toml" 1
-for f in products inverses complexes; do
+for f in products inverses complexes decompositions; do
   program "dense_$f" "$root/tests/contract/dense.sim" "$f" 0.7
 done
 program neohookean_stress "$root/tests/interp/programs/neohookean.sim" neohookean_stress \
