@@ -73,12 +73,40 @@ def scene_run(executor_flags):
     return argv
 
 
-# Executors of simit, in table order: name -> (argv builder, availability check). A JIT is
-# added here once `simit run` can select it, e.g.
-#   "cpu-jit": (scene_run(["--backend", "cpu"]), lambda simit: help_mentions(simit, "--backend")),
+# Executors of simit, in table order: name -> (argv builder, availability check). The JIT
+# also prints its traces (--jit-stats), whose compile times go into the notes.
 EXECUTORS = {
     "interpreter": (scene_run([]), lambda simit: True),
+    "jit": (scene_run(["--backend", "jit", "--jit-stats"]), lambda simit: jit_available(simit)),
 }
+
+
+def jit_available(simit):
+    """Whether this simit has the JIT (built with LLVM): a tiny program runs with it."""
+    if not help_mentions(simit, "--backend"):
+        return False
+    with tempfile.NamedTemporaryFile("w", suffix=".sim", delete=False) as f:
+        f.write("export func one() -> (x : float)\n  x = 1.0;\nend\n")
+    try:
+        out = subprocess.run([simit, "run", "--backend", "jit", f.name, "--call", "one"],
+                             capture_output=True, text=True)
+        return out.returncode == 0
+    finally:
+        os.unlink(f.name)
+
+
+def jit_traces(log_path):
+    """The `--jit-stats` lines of a run's log: one per trace, without the keys."""
+    try:
+        with open(log_path) as f:
+            text = f.read()
+    except OSError:
+        return []
+    at = text.find("jit traces:")
+    if at < 0:
+        return []
+    return [line.strip() for line in text[at:].splitlines()[2:]
+            if line.strip() and not line.strip().startswith("key:")]
 
 
 def help_mentions(simit, flag):
@@ -318,6 +346,8 @@ def measure(case, args, workdir, notes):
             notes.append("%s %s exited with %d after %.0f s (log %s.log)"
                          % (case.name, name, code, wall, outdir))
         row = row_of(case, name, frames, code, peak, data, count_loc(case.program))
+        for trace in jit_traces(outdir + ".log"):
+            notes.append("%s %s trace: %s" % (case.name, name, trace))
         if base_row["ms"] > 0:
             row["ratio"] = row["ms"] / base_row["ms"]
         if reference is None and code == 0:

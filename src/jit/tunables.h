@@ -17,7 +17,10 @@ inline constexpr size_t kMaxTraceStatements = 200000;
 inline constexpr int kMaxInlineDepth = 32;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
-// LLVM's optimisation level for kernels (2 or 3).
+// LLVM's optimisation level for kernels (2 or 3), and for traces of more loop-IR nodes than
+// kLargeTrace (fully unrolled stiffness matrices), whose O2 compile exceeds 100 ms.
 inline constexpr int kOptLevel = 2;
+inline constexpr size_t kLargeTrace = 4000;
+inline constexpr int kLargeTraceOptLevel = 1;
 
 }  // namespace simit::jit

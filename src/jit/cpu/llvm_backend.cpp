@@ -499,7 +499,7 @@ llvm::Function* Emitter::run_system(const std::string& name) {
   return fn_;
 }
 
-void optimise(llvm::Module& m, llvm::TargetMachine& tm) {
+void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
   llvm::LoopAnalysisManager lam;
   llvm::FunctionAnalysisManager fam;
   llvm::CGSCCAnalysisManager cgam;
@@ -510,8 +510,9 @@ void optimise(llvm::Module& m, llvm::TargetMachine& tm) {
   pb.registerFunctionAnalyses(fam);
   pb.registerLoopAnalyses(lam);
   pb.crossRegisterProxies(lam, fam, cgam, mam);
-  const llvm::OptimizationLevel level =
-      kOptLevel >= 3 ? llvm::OptimizationLevel::O3 : llvm::OptimizationLevel::O2;
+  const llvm::OptimizationLevel level = level_number >= 3   ? llvm::OptimizationLevel::O3
+                                        : level_number == 2 ? llvm::OptimizationLevel::O2
+                                                            : llvm::OptimizationLevel::O1;
   llvm::ModulePassManager mpm = pb.buildPerModuleDefaultPipeline(level);
   mpm.run(m, mam);
 }
@@ -521,7 +522,8 @@ class CpuBackend : public Backend {
   explicit CpuBackend(Session& s) : s_(s) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
-    auto k = build(keep_ir, error, [&](llvm::Module& m, const std::string& name) {
+    const int level = node_count(trace) > kLargeTrace ? kLargeTraceOptLevel : kOptLevel;
+    auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
       return Emitter(trace, m).run(name);
     });
     if (k) k->fn = reinterpret_cast<KernelFn>(k->address);
@@ -529,7 +531,7 @@ class CpuBackend : public Backend {
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
                                   std::string& error) override {
-    auto k = build(keep_ir, error, [&](llvm::Module& m, const std::string& name) {
+    auto k = build(kOptLevel, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
       return Emitter(trace, m).run_system(name);
     });
     if (k) k->system = reinterpret_cast<SystemFn>(k->address);
@@ -539,7 +541,7 @@ class CpuBackend : public Backend {
  private:
   // Emits a function into a new module, optimises it for the host and links it.
   std::unique_ptr<CpuKernel> build(
-      bool keep_ir, std::string& error,
+      int level, bool keep_ir, std::string& error,
       const std::function<llvm::Function*(llvm::Module&, const std::string&)>& emit) {
     const auto start = std::chrono::steady_clock::now();
     static std::atomic<int> serial{0};
@@ -557,7 +559,7 @@ class CpuBackend : public Backend {
       error = "LLVM rejected the generated code: " + bs.str();
       return nullptr;
     }
-    optimise(*mod, s_.target());
+    optimise(*mod, s_.target(), level);
     std::string ir;
     if (keep_ir) {
       llvm::raw_string_ostream os(ir);
