@@ -69,6 +69,7 @@ struct FieldSpec {
   std::string name;
   Kind kind = Kind::Float;
   Shape shape;
+  bool single = false;  // binary32 storage (a float field)
 };
 
 // A global tensor: a vector over verts or edges, or a matrix over verts x verts, with float
@@ -106,6 +107,9 @@ struct Generated {
   std::string text;
   SetData sets;
   double g_s = 0.0;
+  bool float32 = false;    // the engines' float32 mode
+  uint64_t host_seed = 0;  // drives the host's changes between calls
+  bool topology_change = false;
 };
 
 // ---------------------------------------------------------------------------
@@ -117,7 +121,8 @@ struct Fn {
   std::string elem;   // the element parameter, "" if none
   bool edge = false;  // whether the element is an edge
   bool elem_inout = false;
-  std::string tuple;                                    // the endpoint tuple, "" if none
+  std::string tuple;  // the endpoint tuple, "" if none
+  bool tuple_inout = false;
   std::vector<std::pair<std::string, Global>> results;  // assembly results
   std::vector<std::pair<std::string, Global>> vectors;  // global vector parameters
   std::ostringstream body;
@@ -188,8 +193,8 @@ class ProgramGen {
   void make_sets();
   void make_well_conditioned();
   void make_helper();
-  std::string make_mapped(bool edge, const std::vector<Global>& results, int scalars,
-                          const std::vector<Global>& vectors, bool reduce);
+  std::string make_mapped(bool edge, bool endpoints, const std::vector<Global>& results,
+                          int scalars, const std::vector<Global>& vectors, bool reduce);
   std::pair<std::string, int> make_apply(bool edge);
   using Pool = std::vector<std::pair<std::string, Global>>;
   struct Step {
@@ -657,9 +662,9 @@ void ProgramGen::result_write(Fn& f, const std::pair<std::string, Global>& r) {
 }
 
 void ProgramGen::field_write(Fn& f) {
-  const FieldSpec& fd = one_of(elem_fields(f));
-  std::string target = f.elem + "." + fd.name;
-  // Rarely an endpoint's field, which the tuple makes writable only when it is inout.
+  const bool endpoint_field = f.tuple_inout && coin(0.4);
+  const FieldSpec& fd = one_of(endpoint_field ? sets_.vfields : elem_fields(f));
+  const std::string target = (endpoint_field ? endpoint(f) : f.elem) + "." + fd.name;
   if (fd.kind == Kind::Int) return line(f, target + " = " + iexpr(f, 2) + ";");
   if (fd.kind == Kind::Bool) return line(f, target + " = " + cond(f, 1) + ";");
   if (fd.shape.vector() && coin(0.3))
@@ -705,6 +710,10 @@ void ProgramGen::make_fields() {
   };
   make(sets_.vfields, "a");
   make(sets_.efields, "b");
+  // Some programs keep some float fields in binary32.
+  if (coin(0.2))
+    for (auto* fs : {&sets_.vfields, &sets_.efields})
+      for (FieldSpec& fd : *fs) fd.single = fd.kind == Kind::Float && coin(0.5);
   // A vector field of the main block, so that CG finds a right-hand side.
   if (main_block_) sets_.vfields.push_back({"ax", Kind::Float, {main_block_, 0}});
 }
@@ -787,8 +796,8 @@ void ProgramGen::make_helper() {
   helpers_.push_back(std::move(h));
 }
 
-std::string ProgramGen::make_mapped(bool edge, const std::vector<Global>& results, int scalars,
-                                    const std::vector<Global>& vectors, bool reduce) {
+std::string ProgramGen::make_mapped(bool edge, bool endpoints, const std::vector<Global>& results,
+                                    int scalars, const std::vector<Global>& vectors, bool reduce) {
   Fn f;
   const std::string name = fresh("fm");
   std::string sig;
@@ -805,8 +814,14 @@ std::string ProgramGen::make_mapped(bool edge, const std::vector<Global>& result
   }
   f.elem = edge ? "e" : "p";
   f.edge = edge;
-  sig += edge ? "e : E, v : (V * " + std::to_string(sets_.arity) + ")" : "p : V";
-  if (edge) f.tuple = "v";
+  // Rarely the element is inout: the function updates fields as it assembles.
+  f.elem_inout = coin(0.15);
+  sig += f.elem_inout ? "inout " : "";
+  sig += edge ? "e : E" : "p : V";
+  if (edge && endpoints) {
+    sig += ", v : (V * " + std::to_string(sets_.arity) + ")";
+    f.tuple = "v";
+  }
   std::string res;
   for (const Global& g : results) {
     f.results.emplace_back(fresh("R"), g);
@@ -835,7 +850,10 @@ std::pair<std::string, int> ProgramGen::make_apply(bool edge) {
   f.elem = edge ? "e" : "p";
   f.edge = edge;
   f.elem_inout = true;
-  sig += edge ? "inout e : E, v : (V * " + std::to_string(sets_.arity) + ")" : "inout p : V";
+  f.tuple_inout = edge && coin(0.15);
+  sig += edge ? "inout e : E, " + std::string(f.tuple_inout ? "inout " : "") + "v : (V * " +
+                    std::to_string(sets_.arity) + ")"
+              : "inout p : V";
   if (edge) f.tuple = "v";
   stmts(f, pick(1, 4), 2);
   field_write(f);
@@ -853,7 +871,12 @@ std::string ProgramGen::call_args(Step& st, int scalars, const std::vector<std::
 void ProgramGen::map_site(Step& st, bool edge, const Pool& vectors) {
   std::vector<Global> rs;
   const int n = pick(1, 2);
-  for (int i = 0; i < n; ++i) rs.push_back(random_global(edge));
+  // Rarely an edge function without the endpoints: it can only write vectors over edges.
+  const bool endpoints = !edge || coin(0.9);
+  for (int i = 0; i < n; ++i) {
+    rs.push_back(random_global(edge));
+    if (!endpoints) rs.back().of = Global::Of::Edges;
+  }
   const bool reduce = coin(0.7);
   const int partials = pick(0, 2);
   std::vector<Global> types;
@@ -862,7 +885,7 @@ void ProgramGen::map_site(Step& st, bool edge, const Pool& vectors) {
     types.push_back(g);
     names.push_back(name);
   }
-  const std::string fm = make_mapped(edge, rs, partials, types, reduce);
+  const std::string fm = make_mapped(edge, endpoints, rs, partials, types, reduce);
   std::string lhs;
   for (const Global& g : rs) {
     const std::string r = fresh("M");
@@ -870,8 +893,17 @@ void ProgramGen::map_site(Step& st, bool edge, const Pool& vectors) {
     st.pool.push_back({r, g});
     st.made.push_back({r, g});
   }
-  st.s << "  " << lhs << " = map " << fm << call_args(st, partials, names) << " to "
-       << (edge ? "edges" : "verts") << (reduce ? " reduce +" : "") << ";\n";
+  const std::string tail =
+      std::string(" to ") + (edge ? "edges" : "verts") + (reduce ? " reduce +" : "");
+  if (rs.size() > 1 || !coin(0.2)) {
+    st.s << "  " << lhs << " = map " << fm << call_args(st, partials, names) << tail << ";\n";
+    return;
+  }
+  // A site that runs twice in one call, after another site of the same function.
+  const std::string k = fresh("k");
+  st.s << "  var " << lhs << " = map " << fm << call_args(st, partials, names) << tail << ";\n"
+       << "  for " << k << " in 0:2\n    " << lhs << " = " << lhs << " + (map " << fm
+       << call_args(st, partials, names) << tail << ");\n  end\n";
 }
 
 // Statements over global vectors and matrices: products, linear combinations, inner products.
@@ -934,11 +966,21 @@ void ProgramGen::cg_stage(Step& st) {
   std::ostringstream s;
   const std::string x = fresh("cx"), r = fresh("cr"), p = fresh("cp"), rs = fresh("crs"),
                     it = fresh("cit"), Ap = fresh("cAp"), alpha = fresh("calpha"),
-                    rn = fresh("crn"), q = fresh("cq"), acc = fresh("cacc");
+                    rn = fresh("crn"), q = fresh("cq"), acc = fresh("cacc"), flag = fresh("cflag"),
+                    cnt = fresh("ccnt");
   const std::string Am = own_function ? "A" : A, bv = own_function ? "b" : b;
   const std::string in = own_function ? "  " : "  ";
   const int iterations = pick(1, 8);
-  const bool extra_vector = coin(0.4), extra_scalar = coin(0.4);
+  const bool extra_vector = coin(0.4), extra_scalar = coin(0.4), extra_flag = coin(0.25),
+             extra_int = coin(0.25);
+  // Another vector of the same type, read in the loop (a field view stays interpreted).
+  std::vector<std::string> others;
+  const bool views = coin(0.2);
+  for (const auto& [v, gv] : st.pool) {
+    const bool view = v.find('.') != std::string::npos;
+    if (gv == vt && (view ? views : !own_function)) others.push_back(v);
+  }
+  const std::string other = others.empty() || !coin(0.5) ? Ap : one_of(others);
   s << in << "var " << x << " = " << (coin(0.5) ? "0.0 * " + bv : bv) << ";\n";
   s << in << "var " << r << " = " << bv << " - " << Am << " * " << x << ";\n";
   s << in << "var " << p << " = " << r << ";\n";
@@ -947,10 +989,18 @@ void ProgramGen::cg_stage(Step& st) {
   if (!own_function) s << in << "var " << it << " = 0;\n";
   if (extra_vector) s << in << "var " << q << " = " << x << ";\n";
   if (extra_scalar) s << in << "var " << acc << " = 0.0;\n";
+  if (extra_flag) s << in << "var " << flag << " = true;\n";
+  if (extra_int) s << in << "var " << cnt << " = 1;\n";
   const std::string bound = std::to_string(iterations);
-  switch (pick(0, 2)) {
-    case 0: s << in << "while " << it << " < " << bound << "\n"; break;
-    case 1:
+  switch (extra_flag ? 100 : pick(0, 9)) {
+    case 0:
+    case 1: s << in << "while " << it << " < " << bound << "\n"; break;
+    case 100: s << in << "while (" << it << " < " << bound << ") and " << flag << "\n"; break;
+    case 4:
+      s << in << "while (" << it << " < " << bound << ") and (norm(" << r << ") > 1.0e-12)\n";
+      break;
+    case 5:
+    case 2:
       s << in << "while (" << rs << " > 1.0e-20) and (" << it << " < " << bound << ")\n";
       break;
     default: s << in << "while (" << it << " < " << bound << ") and (" << rs << " > 1.0e-24)\n";
@@ -961,13 +1011,22 @@ void ProgramGen::cg_stage(Step& st) {
     << (coin(0.5) ? "dot(" + p + ", " + Ap + ")" : "(" + p + "' * " + Ap + ")") << ";\n";
   s << i2 << x << " = " << x << " + " << alpha << " * " << p << ";\n";
   s << i2 << r << " = " << r << " - " << alpha << " * " << Ap << ";\n";
-  if (extra_vector) s << i2 << q << " = 0.5 * " << q << " - " << alpha << " * " << Ap << ";\n";
+  if (extra_vector) s << i2 << q << " = 0.5 * " << q << " - " << alpha << " * " << other << ";\n";
   switch (pick(0, 2)) {
     case 0: s << i2 << rn << " = " << r << "' * " << r << ";\n"; break;
     case 1: s << i2 << rn << " = dot(" << r << ", " << r << ");\n"; break;
     default: s << i2 << rn << " = norm(" << r << ") * norm(" << r << ");\n";
   }
-  if (extra_scalar) s << i2 << acc << " = " << acc << " + max(" << alpha << ", 0.0);\n";
+  if (extra_scalar) {
+    switch (pick(0, 3)) {
+      case 0: s << i2 << acc << " = " << acc << " + max(" << alpha << ", 0.0);\n"; break;
+      case 1: s << i2 << acc << " = " << acc << " + g_s * " << alpha << ";\n"; break;
+      case 2: s << i2 << acc << " = " << acc << " * k_s + " << rn << ";\n"; break;
+      default: s << i2 << acc << " = " << acc << " + sqrt(abs(" << alpha << "));\n";
+    }
+  }
+  if (extra_flag) s << i2 << flag << " = " << rn << " < " << rs << ";\n";
+  if (extra_int) s << i2 << cnt << " = " << cnt << " * 2 - " << it << ";\n";
   s << i2 << p << " = " << r << " + (" << rn << " / " << rs << ") * " << p << ";\n";
   s << i2 << rs << " = " << rn << ";\n";
   s << i2 << it << " = " << it << " + 1;\n";
@@ -983,6 +1042,10 @@ void ProgramGen::cg_stage(Step& st) {
     st.s << s.str();
     if (extra_scalar) st.scalars.push_back(acc);
     if (extra_vector) st.made.push_back({q, vt});
+    if (extra_flag) st.outs.push_back({fresh("o"), "bool"});
+    if (extra_flag) st.s << "  " << st.outs.back().first << " = " << flag << ";\n";
+    if (extra_int) st.outs.push_back({fresh("o"), "int"});
+    if (extra_int) st.s << "  " << st.outs.back().first << " = " << cnt << ";\n";
   }
   st.pool.push_back({x, vt});
   st.made.push_back({x, vt});
@@ -993,14 +1056,17 @@ void ProgramGen::cg_stage(Step& st) {
 
 // Fields updated from system vectors, so that the next call starts elsewhere.
 void ProgramGen::field_updates(Step& st) {
-  for (const FieldSpec& fd : sets_.vfields) {
-    if (fd.kind != Kind::Float || fd.shape.matrix() || !coin(0.4)) continue;
-    std::vector<std::string> c;
-    for (const auto& [v, g] : st.pool)
-      if (g.of == Global::Of::Verts && g.block == fd.shape.rows) c.push_back(v);
-    if (c.empty()) continue;
-    st.s << "  verts." << fd.name << " = verts." << fd.name << " + 0.0625 * " << one_of(c) << ";\n";
-  }
+  for (const bool edge : {false, true})
+    for (const FieldSpec& fd : edge ? sets_.efields : sets_.vfields) {
+      if (fd.kind != Kind::Float || fd.shape.matrix() || !coin(0.4)) continue;
+      const Global::Of of = edge ? Global::Of::Edges : Global::Of::Verts;
+      std::vector<std::string> c;
+      for (const auto& [v, g] : st.pool)
+        if (g.of == of && g.block == fd.shape.rows) c.push_back(v);
+      if (c.empty()) continue;
+      const std::string f = (edge ? "edges." : "verts.") + fd.name;
+      st.s << "  " << f << " = " << f << " + 0.0625 * " << one_of(c) << ";\n";
+    }
 }
 
 // The exported step: applies, maps, system-level statements over their results, maybe a CG
@@ -1018,6 +1084,9 @@ std::string ProgramGen::step() {
   for (const FieldSpec& fd : sets_.vfields)
     if (fd.kind == Kind::Float && !fd.shape.matrix())
       st.pool.push_back({"verts." + fd.name, {Global::Of::Verts, fd.shape.rows}});
+  for (const FieldSpec& fd : sets_.efields)
+    if (fd.kind == Kind::Float && !fd.shape.matrix() && coin(0.5))
+      st.pool.push_back({"edges." + fd.name, {Global::Of::Edges, fd.shape.rows}});
   const int edge_maps = pick(1, 2);
   for (int i = 0; i < edge_maps; ++i) map_site(st, true, {});
   if (coin(0.6)) map_site(st, false, {});
@@ -1028,6 +1097,8 @@ std::string ProgramGen::step() {
   if (!vectors.empty() && coin(0.5)) map_site(st, coin(0.5), {one_of(vectors)});
   cg_stage(st);
   field_updates(st);
+  // The program writes the extern: the next call's sites must read the new value.
+  if (coin(0.3)) st.s << "  g_s = 0.5 * g_s + " << number() << ";\n";
   for (const auto& [name, g] : st.made) {
     st.outs.push_back({fresh("o"), g.type()});
     st.s << "  " << st.outs.back().first << " = " << name << ";\n";
@@ -1079,6 +1150,9 @@ Generated ProgramGen::generate() {
   g.text = decls.str() + funcs_.str() + st;
   g.sets = sets_;
   g.g_s = real(-1.0, 1.0);
+  g.float32 = coin(0.15);
+  g.host_seed = rng_();
+  g.topology_change = coin(0.3);
   return g;
 }
 
@@ -1091,6 +1165,7 @@ runtime::FieldType field_type(const FieldSpec& fd) {
   t.kind = fd.kind == Kind::Float ? ComponentKind::Float
            : fd.kind == Kind::Int ? ComponentKind::Int
                                   : ComponentKind::Bool;
+  t.single = fd.single;
   if (fd.shape.rows) t.dims.push_back(fd.shape.rows);
   if (fd.shape.cols) t.dims.push_back(fd.shape.cols);
   return t;
@@ -1103,7 +1178,12 @@ void fill_fields(runtime::Set& set, const std::vector<FieldSpec>& fs,
     const std::vector<double>& v = values[i];
     for (size_t k = 0; k < v.size(); ++k) {
       switch (fs[i].kind) {
-        case Kind::Float: set.field(f).data<double>()[k] = v[k]; break;
+        case Kind::Float:
+          if (fs[i].single)
+            set.field(f).data<float>()[k] = static_cast<float>(v[k]);
+          else
+            set.field(f).data<double>()[k] = v[k];
+          break;
         case Kind::Int: set.field(f).data<int32_t>()[k] = static_cast<int32_t>(v[k]); break;
         case Kind::Bool: set.field(f).data<bool>()[k] = v[k] != 0.0; break;
       }
@@ -1125,6 +1205,47 @@ struct World {
   }
 };
 
+// What the host does between calls, the same to both worlds: it rewrites some field
+// components (flipping pins among them) before the second call and, in some programs, adds
+// vertices and edges before the third.
+void host_changes(World& w, const Generated& g, int call) {
+  std::mt19937_64 rng(g.host_seed + static_cast<uint64_t>(call));
+  auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto rewrite = [&](runtime::Set& set, int element) {
+    if (set.field_count() == 0) return;
+    runtime::Field& f = set.field(pick(0, set.field_count() - 1));
+    const size_t k = static_cast<size_t>(element) * f.components() +
+                     static_cast<size_t>(pick(0, static_cast<int>(f.components()) - 1));
+    const double v = std::uniform_real_distribution<double>(-2.0, 2.0)(rng);
+    switch (f.type().kind) {
+      case runtime::ComponentKind::Float:
+        if (f.type().single)
+          f.data<float>()[k] = static_cast<float>(v);
+        else
+          f.data<double>()[k] = v;
+        break;
+      case runtime::ComponentKind::Int: f.data<int32_t>()[k] = pick(-3, 3); break;
+      case runtime::ComponentKind::Bool: f.data<bool>()[k] = !f.data<bool>()[k]; break;
+      default: break;
+    }
+  };
+  if (call == 1) {
+    for (int i = 0; i < 4; ++i) {
+      rewrite(w.verts, pick(0, w.verts.size() - 1));
+      rewrite(*w.edges, pick(0, w.edges->size() - 1));
+    }
+  }
+  if (call == 2 && g.topology_change) {
+    const int added = pick(1, 3);
+    for (int i = 0; i < added; ++i) rewrite(w.verts, w.verts.add());
+    for (int i = 0; i < added; ++i) {
+      std::vector<int32_t> ends;
+      for (int k = 0; k < g.sets.arity; ++k) ends.push_back(pick(0, w.verts.size() - 1));
+      rewrite(*w.edges, w.edges->add(ends));
+    }
+  }
+}
+
 struct Runner {
   World world;
   std::unique_ptr<Engine> engine;
@@ -1134,6 +1255,7 @@ struct Runner {
     EngineOptions o;
     o.executor = kind;
     o.jit.threshold = 0;
+    o.float32 = g.float32;
     engine = std::make_unique<Engine>(program, o);
     engine->bind_set(*program->find_extern("verts"), world.verts);
     engine->bind_set(*program->find_extern("edges"), *world.edges);
@@ -1186,6 +1308,7 @@ std::string differ(const Value& a, const Value& b, const std::string& what, int*
       return a.as_int() == b.as_int() ? ""
                                       : what + ": interpreter " + std::to_string(a.as_int()) +
                                             ", jit " + std::to_string(b.as_int());
+    case Value::Kind::Bool: return a.as_bool() == b.as_bool() ? "" : what + ": booleans differ";
     case Value::Kind::Matrix: {
       const runtime::SystemMatrix& x = *a.matrix();
       const runtime::SystemMatrix& y = *b.matrix();
@@ -1218,7 +1341,13 @@ std::string differ(const runtime::Set& a, const runtime::Set& b, int* nans) {
     std::string d;
     switch (x.type().kind) {
       case runtime::ComponentKind::Float:
-        d = differ(x.data<double>(), y.data<double>(), n, what, nans);
+        if (x.type().single) {
+          const std::vector<double> a(x.data<float>(), x.data<float>() + n),
+              b(y.data<float>(), y.data<float>() + n);
+          d = differ(a.data(), b.data(), n, what, nans);
+        } else {
+          d = differ(x.data<double>(), y.data<double>(), n, what, nans);
+        }
         break;
       case runtime::ComponentKind::Int:
         d = differ_exact(x.data<int32_t>(), y.data<int32_t>(), n, what);
@@ -1284,6 +1413,8 @@ std::string check_program(uint64_t seed, Tally& tally) {
   std::string diff;
   for (int call = 0; call < 3 && diff.empty(); ++call) {
     std::string in_error, jit_error;
+    host_changes(in.world, g, call);
+    host_changes(jit.world, g, call);
     const std::vector<Value> a = in.call("step", in_error), b = jit.call("step", jit_error);
     const std::string at = "call " + std::to_string(call + 1) + ": ";
     if (in_error != jit_error) {
