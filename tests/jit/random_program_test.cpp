@@ -72,17 +72,22 @@ struct FieldSpec {
   bool single = false;  // binary32 storage (a float field)
 };
 
-// A global tensor: a vector over verts or edges, or a matrix over verts x verts, with float
-// components (block 0) or vector[block] / matrix[block, block] blocks.
+// A global tensor: a vector over verts or edges, or a matrix over verts x verts or edges x
+// verts, with float components (block 0) or vector[block] / matrix[block, cblock] blocks.
 struct Global {
-  enum class Of { Verts, Edges, Matrix } of = Of::Verts;
+  enum class Of { Verts, Edges, Matrix, EdgeMatrix } of = Of::Verts;
   int block = 0;
+  int cblock = 0;  // a matrix's blocks' columns
   bool operator==(const Global&) const = default;
+  bool matrix() const { return of == Of::Matrix || of == Of::EdgeMatrix; }
+  bool square() const { return of == Of::Matrix && block == cblock; }
+  Global rows() const { return {of == Of::Matrix ? Of::Verts : Of::Edges, block, 0}; }
+  Global cols() const { return {Of::Verts, cblock, 0}; }
   std::string type() const {
     const std::string b = std::to_string(block);
-    if (of == Of::Matrix)
-      return block ? "matrix[verts,verts](matrix[" + b + "," + b + "](float))"
-                   : "matrix[verts,verts](float)";
+    if (matrix())
+      return std::string(of == Of::Matrix ? "matrix[verts,verts](" : "matrix[edges,verts](") +
+             (block ? "matrix[" + b + "," + std::to_string(cblock) + "](float))" : "float)");
     const std::string set = of == Of::Verts ? "verts" : "edges";
     return block ? "vector[" + set + "](vector[" + b + "](float))" : "vector[" + set + "](float)";
   }
@@ -91,7 +96,9 @@ struct Global {
 struct Helper {
   std::string name;
   std::vector<Shape> params;
-  bool takes_vertex = false;  // a last parameter of type V
+  // A last parameter: nothing, a vertex, the endpoint tuple, or an inout vertex (then the
+  // helper has no results and updates the vertex's fields).
+  enum class Takes { Nothing, Vertex, Tuple, InoutVertex } takes = Takes::Nothing;
   std::vector<Shape> results;
 };
 
@@ -170,6 +177,8 @@ class ProgramGen {
   std::string fvector(Fn& f, Shape s, int depth);
   std::string fmatrix(Fn& f, Shape s, int depth);
   std::string denominator(Fn& f, int depth);
+  bool helper_tail(Fn& f, const Helper& h, std::string& arg);
+  std::string helper_args(Fn& f, const Helper& h, int depth, bool& ok);
   std::string helper_call(Fn& f, Shape s, int depth);
   std::string ileaf(Fn& f);
   std::string iexpr(Fn& f, int depth);
@@ -253,6 +262,10 @@ Global ProgramGen::random_global(bool edge_map) {
   const int k = pick(0, 9);
   g.of = k < 5 ? Global::Of::Verts : k < 9 || !edge_map ? Global::Of::Matrix : Global::Of::Edges;
   g.block = coin(0.7) ? main_block_ : one_of(std::vector<int>{0, 2, 3, 4});
+  if (g.matrix()) {
+    g.cblock = g.block && coin(0.15) ? pick(2, 4) : g.block;
+    if (edge_map && coin(0.15)) g.of = Global::Of::EdgeMatrix;
+  }
   return g;
 }
 
@@ -281,7 +294,7 @@ std::string ProgramGen::endpoint(const Fn& f) {
 // An element of the function that indexes a global of this kind ("" if none).
 std::string ProgramGen::member_for(const Fn& f, const Global& g) {
   if (f.elem.empty()) return "";
-  if (g.of == Global::Of::Edges) return f.edge ? f.elem : "";
+  if (g.of == Global::Of::Edges || g.of == Global::Of::EdgeMatrix) return f.edge ? f.elem : "";
   if (!f.edge) return f.elem;
   return f.tuple.empty() ? "" : endpoint(f);
 }
@@ -346,22 +359,39 @@ std::string ProgramGen::denominator(Fn& f, int depth) {
   }
 }
 
+// The helper's last argument, if the function has one to give ("" and false otherwise).
+bool ProgramGen::helper_tail(Fn& f, const Helper& h, std::string& arg) {
+  using T = Helper::Takes;
+  arg.clear();
+  switch (h.takes) {
+    case T::Nothing: return true;
+    case T::Vertex: arg = !f.edge ? f.elem : f.tuple.empty() ? "" : endpoint(f); break;
+    case T::Tuple: arg = f.tuple; break;
+    case T::InoutVertex:
+      arg = !f.edge && f.elem_inout ? f.elem : f.tuple_inout ? endpoint(f) : "";
+      break;
+  }
+  return !arg.empty();
+}
+
+std::string ProgramGen::helper_args(Fn& f, const Helper& h, int depth, bool& ok) {
+  std::string tail, out;
+  ok = helper_tail(f, h, tail);
+  for (size_t i = 0; i < h.params.size(); ++i)
+    out += (i ? ", " : "") + fexpr(f, h.params[i], depth);
+  if (!tail.empty()) out += (h.params.empty() ? "" : ", ") + tail;
+  return out;
+}
+
 std::string ProgramGen::helper_call(Fn& f, Shape s, int depth) {
   std::vector<const Helper*> c;
   for (const Helper& h : helpers_)
-    if (h.results.size() == 1 && h.results[0] == s && (!h.takes_vertex || !f.elem.empty()))
-      c.push_back(&h);
+    if (h.results.size() == 1 && h.results[0] == s) c.push_back(&h);
   if (c.empty()) return "";
   const Helper& h = *one_of(c);
-  std::string out = h.name + "(";
-  for (size_t i = 0; i < h.params.size(); ++i)
-    out += (i ? ", " : "") + fexpr(f, h.params[i], depth);
-  if (h.takes_vertex) {
-    const std::string v = !f.edge ? f.elem : f.tuple.empty() ? "" : endpoint(f);
-    if (v.empty()) return "";
-    out += (h.params.empty() ? "" : ", ") + v;
-  }
-  return out + ")";
+  bool ok = false;
+  const std::string args = helper_args(f, h, depth, ok);
+  return ok ? h.name + "(" + args + ")" : "";
 }
 
 std::string ProgramGen::fscalar(Fn& f, int d) {
@@ -644,18 +674,18 @@ void ProgramGen::for_stmt(Fn& f, int depth) {
 void ProgramGen::result_write(Fn& f, const std::pair<std::string, Global>& r) {
   const auto& [name, g] = r;
   std::string at;
-  if (g.of == Global::Of::Matrix) {
-    const std::string a = member_for(f, g), b = member_for(f, g);
+  if (g.matrix()) {
+    const std::string a = member_for(f, g), b = member_for(f, g.cols());
     at = name + "(" + a + ", " + b + ")";
   } else {
     at = name + "(" + member_for(f, g) + ")";
   }
-  const Shape block = g.block == 0                 ? Shape{}
-                      : g.of == Global::Of::Matrix ? Shape{g.block, g.block}
-                                                   : Shape{g.block, 0};
+  const Shape block = g.block == 0 ? Shape{}
+                      : g.matrix() ? Shape{g.block, g.cblock}
+                                   : Shape{g.block, 0};
   if (g.block && coin(0.25)) {
     std::string ix = "(" + index_below(f, g.block);
-    if (block.matrix()) ix += ", " + index_below(f, g.block);
+    if (block.matrix()) ix += ", " + index_below(f, g.cblock);
     return line(f, at + ix + ") = " + fexpr(f, {}, 2) + ";");
   }
   line(f, at + " = " + fexpr(f, block, 3) + ";");
@@ -667,6 +697,9 @@ void ProgramGen::field_write(Fn& f) {
   const std::string target = (endpoint_field ? endpoint(f) : f.elem) + "." + fd.name;
   if (fd.kind == Kind::Int) return line(f, target + " = " + iexpr(f, 2) + ";");
   if (fd.kind == Kind::Bool) return line(f, target + " = " + cond(f, 1) + ";");
+  if (fd.shape.matrix() && coin(0.3))
+    return line(f, target + "(" + index_below(f, fd.shape.rows) + ", " +
+                       index_below(f, fd.shape.cols) + ") = " + fexpr(f, {}, 2) + ";");
   if (fd.shape.vector() && coin(0.3))
     return line(f, target + "(" + index_below(f, fd.shape.rows) + ") = " + fexpr(f, {}, 2) + ";");
   line(f, target + " = " + fexpr(f, fd.shape, 3) + ";");
@@ -676,24 +709,33 @@ void ProgramGen::field_write(Fn& f) {
 void ProgramGen::multi_call(Fn& f) {
   std::vector<const Helper*> c;
   for (const Helper& h : helpers_)
-    if (h.results.size() == 2 && (!h.takes_vertex || !f.elem.empty())) c.push_back(&h);
+    if (h.results.size() != 1) c.push_back(&h);
   if (c.empty()) return decl_stmt(f);
   const Helper& h = *one_of(c);
-  std::string args;
-  for (size_t i = 0; i < h.params.size(); ++i) args += (i ? ", " : "") + fexpr(f, h.params[i], 2);
-  if (h.takes_vertex) {
-    const std::string v = !f.edge ? f.elem : f.tuple.empty() ? "" : endpoint(f);
-    if (v.empty()) return decl_stmt(f);
-    args += (h.params.empty() ? "" : ", ") + v;
+  bool ok = false;
+  const std::string args = helper_args(f, h, 2, ok);
+  if (!ok) return decl_stmt(f);
+  if (h.results.empty()) return line(f, h.name + "(" + args + ");");
+  // Into new names, or into writable variables of the right shapes.
+  std::vector<std::string> targets;
+  for (const Shape& r : h.results) {
+    std::vector<std::string> vars;
+    for (const Var& v : visible(f))
+      if (v.writable && v.kind == Kind::Float && v.shape == r) vars.push_back(v.name);
+    if (!vars.empty() && coin(0.4) &&
+        (targets.empty() || targets.back() != vars.front() || vars.size() > 1)) {
+      std::string t = one_of(vars);
+      while (!targets.empty() && t == targets.back()) t = one_of(vars);
+      targets.push_back(t);
+      continue;
+    }
+    Var v;
+    v.name = fresh("t");
+    v.shape = r;
+    targets.push_back(v.name);
+    declare(f, v);
   }
-  Var a, b;
-  a.name = fresh("t");
-  b.name = fresh("t");
-  a.shape = h.results[0];
-  b.shape = h.results[1];
-  line(f, a.name + ", " + b.name + " = " + h.name + "(" + args + ");");
-  declare(f, a);
-  declare(f, b);
+  line(f, targets[0] + ", " + targets[1] + " = " + h.name + "(" + args + ");");
 }
 
 // ---------------------------------------------------------------------------
@@ -753,6 +795,7 @@ void ProgramGen::make_well_conditioned() {
 }
 
 void ProgramGen::make_helper() {
+  using T = Helper::Takes;
   Helper h;
   h.name = fresh("h");
   Fn f;
@@ -766,12 +809,18 @@ void ProgramGen::make_helper() {
     sig += (i ? ", " : "") + p.name + " : " + p.shape.type();
     declare(f, p);
   }
-  if (coin(0.3)) {
-    h.takes_vertex = true;
+  const int k = pick(0, 9);
+  h.takes = k < 5 ? T::Nothing : k < 7 ? T::Vertex : k < 9 ? T::Tuple : T::InoutVertex;
+  if (h.takes == T::Vertex || h.takes == T::InoutVertex) {
     f.elem = "q";
-    sig += ", q : V";
+    f.elem_inout = h.takes == T::InoutVertex;
+    sig += f.elem_inout ? ", inout q : V" : ", q : V";
   }
-  const int results = coin(0.7) ? 1 : 2;
+  if (h.takes == T::Tuple) {
+    f.tuple = "w";
+    sig += ", w : (V * " + std::to_string(sets_.arity) + ")";
+  }
+  const int results = h.takes == T::InoutVertex ? 0 : coin(0.7) ? 1 : 2;
   std::vector<Var> rs;
   for (int i = 0; i < results; ++i) {
     Var r;
@@ -782,15 +831,28 @@ void ProgramGen::make_helper() {
     rs.push_back(r);
   }
   stmts(f, pick(1, 4), 2);
+  if (f.elem_inout) field_write(f);
   for (const Var& r : rs) {
-    line(f, r.name + " = " + fexpr(f, r.shape, 3) + ";");
+    // Results start at zero: some are written only when a condition holds.
+    if (coin(0.25)) {
+      line(f, "if " + cond(f, 1));
+      ++f.indent;
+      line(f, r.name + " = " + fexpr(f, r.shape, 3) + ";");
+      --f.indent;
+      line(f, "end");
+    } else {
+      line(f, r.name + " = " + fexpr(f, r.shape, 3) + ";");
+    }
     declare(f, r);
   }
   if (coin(0.4)) assign_stmt(f);
   std::string res;
   for (size_t i = 0; i < rs.size(); ++i)
     res += (i ? ", " : "") + rs[i].name + " : " + rs[i].shape.type();
-  funcs_ << "func " << h.name << "(" << sig << ") -> " << (rs.size() > 1 ? "(" + res + ")" : res)
+  funcs_ << "func " << h.name << "(" << sig << ")"
+         << (rs.empty()      ? ""
+             : rs.size() > 1 ? " -> (" + res + ")"
+                             : " -> " + res)
          << "\n"
          << f.body.str() << "end\n\n";
   helpers_.push_back(std::move(h));
@@ -875,7 +937,7 @@ void ProgramGen::map_site(Step& st, bool edge, const Pool& vectors) {
   const bool endpoints = !edge || coin(0.9);
   for (int i = 0; i < n; ++i) {
     rs.push_back(random_global(edge));
-    if (!endpoints) rs.back().of = Global::Of::Edges;
+    if (!endpoints) rs.back() = {Global::Of::Edges, rs.back().block, 0};
   }
   const bool reduce = coin(0.7);
   const int partials = pick(0, 2);
@@ -911,22 +973,24 @@ void ProgramGen::system_stage(Step& st) {
   const int n = pick(1, 5);
   for (int i = 0; i < n; ++i) {
     const auto [a, ga] = one_of(st.pool);
-    Pool same, vectors;
+    Pool same, products;  // products: `a * x` or `a' * x`, with the type of the product
     for (const auto& p : st.pool) {
       if (p.second == ga) same.push_back(p);
-      if (ga.of == Global::Of::Matrix && p.second.of == Global::Of::Verts &&
-          p.second.block == ga.block)
-        vectors.push_back(p);
+      if (ga.matrix() && p.second == ga.cols())
+        products.push_back({a + " * " + p.first, ga.rows()});
+      if (ga.matrix() && p.second == ga.rows())
+        products.push_back({a + "' * " + p.first, ga.cols()});
     }
     const std::string b = one_of(same).first;
     const std::string c = scalar_arg(st);
     const std::string name = fresh("y");
     Global out = ga;
     std::string e;
-    if (ga.of == Global::Of::Matrix && !vectors.empty() && coin(0.6)) {
-      out = vectors[0].second;
-      e = a + (coin(0.3) ? "' * " : " * ") + one_of(vectors).first;
-    } else if (ga.of != Global::Of::Matrix && coin(0.35)) {
+    if (!products.empty() && coin(0.6)) {
+      const auto& [product, type] = one_of(products);
+      e = product;
+      out = type;
+    } else if (!ga.matrix() && coin(0.35)) {
       const int k = pick(0, 2);
       e = k == 0 ? "dot(" + a + ", " + b + ")" : k == 1 ? a + "' * " + b : "norm(" + a + ")";
       st.s << "  " << name << " = " << e << ";\n";
@@ -938,7 +1002,7 @@ void ProgramGen::system_stage(Step& st) {
         case 1: e = a + " - " + c + " * " + b; break;
         case 2: e = "-" + a; break;
         case 3: e = a + " / 1.5"; break;
-        default: e = ga.of == Global::Of::Matrix ? a + " + " + b : a + " .* " + b; break;
+        default: e = ga.matrix() ? a + " + " + b : a + " .* " + b; break;
       }
     }
     st.s << "  " << name << " = " << e << ";\n";
@@ -954,14 +1018,14 @@ void ProgramGen::cg_stage(Step& st) {
   std::vector<std::pair<std::string, std::string>> pairs;  // matrix, right-hand side
   Global vt;
   for (const auto& [m, gm] : st.pool)
-    if (gm.of == Global::Of::Matrix)
+    if (gm.square())
       for (const auto& [v, gv] : st.pool)
-        if (gv.of == Global::Of::Verts && gv.block == gm.block) pairs.push_back({m, v});
+        if (gv == gm.cols()) pairs.push_back({m, v});
   if (pairs.empty()) return;
   const auto [A, b] = one_of(pairs);
   for (const auto& [v, gv] : st.pool)
     if (v == b) vt = gv;
-  const Global mt{Global::Of::Matrix, vt.block};
+  const Global mt{Global::Of::Matrix, vt.block, vt.block};
   const bool own_function = coin(0.3);
   std::ostringstream s;
   const std::string x = fresh("cx"), r = fresh("cr"), p = fresh("cp"), rs = fresh("crs"),
