@@ -1,6 +1,7 @@
 // Random Simit programs, generated from a seed, run through the interpreter and the tracing JIT
 // (threshold 0) and compared bit for bit: every result of the exported function and every
-// field of every set, after each of several calls. SIMIT_RANDOM_PROGRAMS=N runs N programs.
+// field of every set, after each of several calls. SIMIT_RANDOM_PROGRAMS=N runs N programs,
+// from SIMIT_RANDOM_SEED (default 1); SIMIT_RANDOM_PRINT=1 prints each program and its traces.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -30,7 +31,7 @@ using api::ExecutorKind;
 using interp::Value;
 
 // Programs per run unless SIMIT_RANDOM_PROGRAMS says otherwise: a few hundred fit in CI.
-constexpr long kDefaultPrograms = 200;
+constexpr long kDefaultPrograms = 400;
 
 // ---------------------------------------------------------------------------
 // Types the generator reasons about
@@ -137,6 +138,8 @@ struct Fn {
   int statements = 0;
 };
 
+struct Cg;
+
 class ProgramGen {
  public:
   explicit ProgramGen(uint64_t seed) : rng_(seed) {}
@@ -203,7 +206,8 @@ class ProgramGen {
   void make_well_conditioned();
   void make_helper();
   std::string make_mapped(bool edge, bool endpoints, const std::vector<Global>& results,
-                          int scalars, const std::vector<Global>& vectors, bool reduce);
+                          const std::vector<Var>& partials, const std::vector<Global>& vectors,
+                          bool reduce);
   std::pair<std::string, int> make_apply(bool edge);
   using Pool = std::vector<std::pair<std::string, Global>>;
   struct Step {
@@ -213,9 +217,11 @@ class ProgramGen {
     std::vector<std::pair<std::string, std::string>> outs;  // name, type
   };
   std::string scalar_arg(Step& st) { return coin(0.5) ? number() : one_of(st.scalars); }
-  std::string call_args(Step& st, int scalars, const std::vector<std::string>& vectors);
+  std::string call_args(Step& st, const std::vector<Var>& partials,
+                        const std::vector<std::string>& vectors);
   void map_site(Step& st, bool edge, const Pool& vectors);
   void system_stage(Step& st);
+  std::string cg_text(const Cg& c);
   void cg_stage(Step& st);
   void field_updates(Step& st);
   std::string step();
@@ -859,14 +865,14 @@ void ProgramGen::make_helper() {
 }
 
 std::string ProgramGen::make_mapped(bool edge, bool endpoints, const std::vector<Global>& results,
-                                    int scalars, const std::vector<Global>& vectors, bool reduce) {
+                                    const std::vector<Var>& partials,
+                                    const std::vector<Global>& vectors, bool reduce) {
   Fn f;
   const std::string name = fresh("fm");
   std::string sig;
-  for (int i = 0; i < scalars; ++i) {
-    Var p;
+  for (Var p : partials) {
     p.name = fresh("s");
-    sig += p.name + " : float, ";
+    sig += p.name + " : " + type_of(p.kind, p.shape) + ", ";
     declare(f, p);
   }
   for (const Global& g : vectors) {
@@ -923,9 +929,16 @@ std::pair<std::string, int> ProgramGen::make_apply(bool edge) {
   return {name, partials};
 }
 
-std::string ProgramGen::call_args(Step& st, int scalars, const std::vector<std::string>& vectors) {
+std::string ProgramGen::call_args(Step& st, const std::vector<Var>& partials,
+                                  const std::vector<std::string>& vectors) {
   std::string a;
-  for (int i = 0; i < scalars; ++i) a += (i ? ", " : "") + scalar_arg(st);
+  for (const Var& p : partials) {
+    std::string v = p.kind == Kind::Int                   ? "(" + std::to_string(pick(-2, 4)) + ")"
+                    : p.shape.scalar()                    ? scalar_arg(st)
+                    : p.shape == Shape{3, 0} && coin(0.3) ? "k_v3"
+                                                          : literal(p.shape);
+    a += (a.empty() ? "" : ", ") + v;
+  }
   for (const std::string& v : vectors) a += (a.empty() ? "" : ", ") + v;
   return a.empty() ? "" : "(" + a + ")";
 }
@@ -940,7 +953,13 @@ void ProgramGen::map_site(Step& st, bool edge, const Pool& vectors) {
     if (!endpoints) rs.back() = {Global::Of::Edges, rs.back().block, 0};
   }
   const bool reduce = coin(0.7);
-  const int partials = pick(0, 2);
+  // Partial arguments: mostly float scalars, also ints and small tensors.
+  std::vector<Var> partials(static_cast<size_t>(pick(0, 2)));
+  for (Var& p : partials) {
+    const int k = pick(0, 9);
+    if (k < 2) p.kind = Kind::Int;
+    if (k >= 8) p.shape = random_shape();
+  }
   std::vector<Global> types;
   std::vector<std::string> names;
   for (const auto& [name, g] : vectors) {
@@ -1011,6 +1030,66 @@ void ProgramGen::system_stage(Step& st) {
   }
 }
 
+// The names and variations of one CG-like loop.
+struct Cg {
+  std::string A, b;  // the operands as the loop names them
+  std::string x, r, p, rs, it, Ap, alpha, rn, q, acc, flag, cnt;
+  std::string other;  // a vector of x's type that the loop reads
+  int iterations = 1;
+  bool own_function = false, extra_vector = false, extra_scalar = false, extra_flag = false,
+       extra_int = false;
+};
+
+// The loop and the declarations before it.
+std::string ProgramGen::cg_text(const Cg& c) {
+  std::ostringstream s;
+  const std::string in = "  ", i2 = "    ", bound = std::to_string(c.iterations);
+  s << in << "var " << c.x << " = " << (coin(0.5) ? "0.0 * " + c.b : c.b) << ";\n";
+  s << in << "var " << c.r << " = " << c.b << " - " << c.A << " * " << c.x << ";\n";
+  s << in << "var " << c.p << " = " << c.r << ";\n";
+  s << in << "var " << c.rs << " = "
+    << (coin(0.5) ? "dot(" + c.r + ", " + c.r + ")" : c.r + "' * " + c.r) << ";\n";
+  if (!c.own_function) s << in << "var " << c.it << " = 0;\n";
+  if (c.extra_vector) s << in << "var " << c.q << " = " << c.x << ";\n";
+  if (c.extra_scalar) s << in << "var " << c.acc << " = 0.0;\n";
+  if (c.extra_flag) s << in << "var " << c.flag << " = true;\n";
+  if (c.extra_int) s << in << "var " << c.cnt << " = 1;\n";
+  const int form = c.extra_flag ? 0 : pick(1, 10);
+  s << in << "while (" << c.it << " < " << bound << ")";
+  if (form == 0) s << " and " << c.flag;
+  if (form == 1) s << " and (norm(" << c.r << ") > 1.0e-12)";  // over vectors: interpreted
+  if (form >= 2 && form <= 6) s << " and (" << c.rs << " > 1.0e-20)";
+  s << "\n";
+  s << i2 << c.Ap << " = " << c.A << " * " << c.p << ";\n";
+  s << i2 << c.alpha << " = " << c.rs << " / "
+    << (coin(0.5) ? "dot(" + c.p + ", " + c.Ap + ")" : "(" + c.p + "' * " + c.Ap + ")") << ";\n";
+  s << i2 << c.x << " = " << c.x << " + " << c.alpha << " * " << c.p << ";\n";
+  s << i2 << c.r << " = " << c.r << " - " << c.alpha << " * " << c.Ap << ";\n";
+  if (c.extra_vector)
+    s << i2 << c.q << " = 0.5 * " << c.q << " - " << c.alpha << " * " << c.other << ";\n";
+  switch (pick(0, 2)) {
+    case 0: s << i2 << c.rn << " = " << c.r << "' * " << c.r << ";\n"; break;
+    case 1: s << i2 << c.rn << " = dot(" << c.r << ", " << c.r << ");\n"; break;
+    default: s << i2 << c.rn << " = norm(" << c.r << ") * norm(" << c.r << ");\n";
+  }
+  if (c.extra_scalar) {
+    const std::string acc = i2 + c.acc + " = " + c.acc;
+    switch (pick(0, 3)) {
+      case 0: s << acc << " + max(" << c.alpha << ", 0.0);\n"; break;
+      case 1: s << acc << " + g_s * " << c.alpha << ";\n"; break;
+      case 2: s << acc << " * k_s + " << c.rn << ";\n"; break;
+      default: s << acc << " + sqrt(abs(" << c.alpha << "));\n";
+    }
+  }
+  if (c.extra_flag) s << i2 << c.flag << " = " << c.rn << " < " << c.rs << ";\n";
+  if (c.extra_int) s << i2 << c.cnt << " = " << c.cnt << " * 2 - " << c.it << ";\n";
+  s << i2 << c.p << " = " << c.r << " + (" << c.rn << " / " << c.rs << ") * " << c.p << ";\n";
+  s << i2 << c.rs << " = " << c.rn << ";\n";
+  s << i2 << c.it << " = " << c.it << " + 1;\n";
+  s << in << "end\n";
+  return s.str();
+}
+
 // A conjugate-gradient-like loop over a matrix and a vector of the same blocks, in the step
 // itself or in a function of its own.
 void ProgramGen::cg_stage(Step& st) {
@@ -1025,97 +1104,61 @@ void ProgramGen::cg_stage(Step& st) {
   const auto [A, b] = one_of(pairs);
   for (const auto& [v, gv] : st.pool)
     if (v == b) vt = gv;
-  const Global mt{Global::Of::Matrix, vt.block, vt.block};
-  const bool own_function = coin(0.3);
-  std::ostringstream s;
-  const std::string x = fresh("cx"), r = fresh("cr"), p = fresh("cp"), rs = fresh("crs"),
-                    it = fresh("cit"), Ap = fresh("cAp"), alpha = fresh("calpha"),
-                    rn = fresh("crn"), q = fresh("cq"), acc = fresh("cacc"), flag = fresh("cflag"),
-                    cnt = fresh("ccnt");
-  const std::string Am = own_function ? "A" : A, bv = own_function ? "b" : b;
-  const std::string in = own_function ? "  " : "  ";
-  const int iterations = pick(1, 8);
-  const bool extra_vector = coin(0.4), extra_scalar = coin(0.4), extra_flag = coin(0.25),
-             extra_int = coin(0.25);
+  Cg c;
+  c.own_function = coin(0.3);
+  c.A = c.own_function ? "A" : A;
+  c.b = c.own_function ? "b" : b;
+  for (auto [name, prefix] : {std::pair{&c.x, "cx"},
+                              {&c.r, "cr"},
+                              {&c.p, "cp"},
+                              {&c.rs, "crs"},
+                              {&c.it, "cit"},
+                              {&c.Ap, "cAp"},
+                              {&c.alpha, "calpha"},
+                              {&c.rn, "crn"},
+                              {&c.q, "cq"},
+                              {&c.acc, "cacc"},
+                              {&c.flag, "cflag"},
+                              {&c.cnt, "ccnt"}})
+    *name = fresh(prefix);
+  c.iterations = pick(1, 8);
+  c.extra_vector = coin(0.4);
+  c.extra_scalar = coin(0.4);
+  c.extra_flag = coin(0.25);
+  c.extra_int = coin(0.25);
   // Another vector of the same type, read in the loop (a field view stays interpreted).
   std::vector<std::string> others;
   const bool views = coin(0.2);
   for (const auto& [v, gv] : st.pool) {
     const bool view = v.find('.') != std::string::npos;
-    if (gv == vt && (view ? views : !own_function)) others.push_back(v);
+    if (gv == vt && (view ? views : !c.own_function)) others.push_back(v);
   }
-  const std::string other = others.empty() || !coin(0.5) ? Ap : one_of(others);
-  s << in << "var " << x << " = " << (coin(0.5) ? "0.0 * " + bv : bv) << ";\n";
-  s << in << "var " << r << " = " << bv << " - " << Am << " * " << x << ";\n";
-  s << in << "var " << p << " = " << r << ";\n";
-  s << in << "var " << rs << " = " << (coin(0.5) ? "dot(" + r + ", " + r + ")" : r + "' * " + r)
-    << ";\n";
-  if (!own_function) s << in << "var " << it << " = 0;\n";
-  if (extra_vector) s << in << "var " << q << " = " << x << ";\n";
-  if (extra_scalar) s << in << "var " << acc << " = 0.0;\n";
-  if (extra_flag) s << in << "var " << flag << " = true;\n";
-  if (extra_int) s << in << "var " << cnt << " = 1;\n";
-  const std::string bound = std::to_string(iterations);
-  switch (extra_flag ? 100 : pick(0, 9)) {
-    case 0:
-    case 1: s << in << "while " << it << " < " << bound << "\n"; break;
-    case 100: s << in << "while (" << it << " < " << bound << ") and " << flag << "\n"; break;
-    case 4:
-      s << in << "while (" << it << " < " << bound << ") and (norm(" << r << ") > 1.0e-12)\n";
-      break;
-    case 5:
-    case 2:
-      s << in << "while (" << rs << " > 1.0e-20) and (" << it << " < " << bound << ")\n";
-      break;
-    default: s << in << "while (" << it << " < " << bound << ") and (" << rs << " > 1.0e-24)\n";
-  }
-  const std::string i2 = in + "  ";
-  s << i2 << Ap << " = " << Am << " * " << p << ";\n";
-  s << i2 << alpha << " = " << rs << " / "
-    << (coin(0.5) ? "dot(" + p + ", " + Ap + ")" : "(" + p + "' * " + Ap + ")") << ";\n";
-  s << i2 << x << " = " << x << " + " << alpha << " * " << p << ";\n";
-  s << i2 << r << " = " << r << " - " << alpha << " * " << Ap << ";\n";
-  if (extra_vector) s << i2 << q << " = 0.5 * " << q << " - " << alpha << " * " << other << ";\n";
-  switch (pick(0, 2)) {
-    case 0: s << i2 << rn << " = " << r << "' * " << r << ";\n"; break;
-    case 1: s << i2 << rn << " = dot(" << r << ", " << r << ");\n"; break;
-    default: s << i2 << rn << " = norm(" << r << ") * norm(" << r << ");\n";
-  }
-  if (extra_scalar) {
-    switch (pick(0, 3)) {
-      case 0: s << i2 << acc << " = " << acc << " + max(" << alpha << ", 0.0);\n"; break;
-      case 1: s << i2 << acc << " = " << acc << " + g_s * " << alpha << ";\n"; break;
-      case 2: s << i2 << acc << " = " << acc << " * k_s + " << rn << ";\n"; break;
-      default: s << i2 << acc << " = " << acc << " + sqrt(abs(" << alpha << "));\n";
-    }
-  }
-  if (extra_flag) s << i2 << flag << " = " << rn << " < " << rs << ";\n";
-  if (extra_int) s << i2 << cnt << " = " << cnt << " * 2 - " << it << ";\n";
-  s << i2 << p << " = " << r << " + (" << rn << " / " << rs << ") * " << p << ";\n";
-  s << i2 << rs << " = " << rn << ";\n";
-  s << i2 << it << " = " << it << " + 1;\n";
-  s << in << "end\n";
-  if (own_function) {
+  c.other = others.empty() || !coin(0.5) ? c.Ap : one_of(others);
+  const std::string loop = cg_text(c);
+  auto out = [&](const std::string& type, const std::string& value) {
+    st.outs.push_back({fresh("o"), type});
+    st.s << "  " << st.outs.back().first << " = " << value << ";\n";
+  };
+  if (c.own_function) {
     const std::string fn = fresh("cg");
-    funcs_ << "func " << fn << "(A : " << mt.type() << ", b : " << vt.type() << ")\n    -> (" << x
-           << "out : " << vt.type() << ", " << it << " : int, " << rs << "out : float)\n"
-           << s.str() << "  " << x << "out = " << x << ";\n  " << rs << "out = " << rs
+    funcs_ << "func " << fn << "(A : " << Global{Global::Of::Matrix, vt.block, vt.block}.type()
+           << ", b : " << vt.type() << ")\n    -> (" << c.x << "out : " << vt.type() << ", " << c.it
+           << " : int, " << c.rs << "out : float)\n"
+           << loop << "  " << c.x << "out = " << c.x << ";\n  " << c.rs << "out = " << c.rs
            << ";\nend\n\n";
-    st.s << "  " << x << ", " << it << ", " << rs << " = " << fn << "(" << A << ", " << b << ");\n";
+    st.s << "  " << c.x << ", " << c.it << ", " << c.rs << " = " << fn << "(" << A << ", " << b
+         << ");\n";
   } else {
-    st.s << s.str();
-    if (extra_scalar) st.scalars.push_back(acc);
-    if (extra_vector) st.made.push_back({q, vt});
-    if (extra_flag) st.outs.push_back({fresh("o"), "bool"});
-    if (extra_flag) st.s << "  " << st.outs.back().first << " = " << flag << ";\n";
-    if (extra_int) st.outs.push_back({fresh("o"), "int"});
-    if (extra_int) st.s << "  " << st.outs.back().first << " = " << cnt << ";\n";
+    st.s << loop;
+    if (c.extra_scalar) st.scalars.push_back(c.acc);
+    if (c.extra_vector) st.made.push_back({c.q, vt});
+    if (c.extra_flag) out("bool", c.flag);
+    if (c.extra_int) out("int", c.cnt);
   }
-  st.pool.push_back({x, vt});
-  st.made.push_back({x, vt});
-  st.scalars.push_back(rs);
-  st.outs.push_back({fresh("o"), "int"});
-  st.s << "  " << st.outs.back().first << " = " << it << ";\n";
+  st.pool.push_back({c.x, vt});
+  st.made.push_back({c.x, vt});
+  st.scalars.push_back(c.rs);
+  out("int", c.it);
 }
 
 // Fields updated from system vectors, so that the next call starts elsewhere.
@@ -1139,11 +1182,11 @@ std::string ProgramGen::step() {
   Step st;
   if (coin(0.6)) {
     const auto [ap, partials] = make_apply(false);
-    st.s << "  apply " << ap << call_args(st, partials, {}) << " to verts;\n";
+    st.s << "  apply " << ap << call_args(st, std::vector<Var>(partials), {}) << " to verts;\n";
   }
   if (coin(0.4)) {
     const auto [ap, partials] = make_apply(true);
-    st.s << "  apply " << ap << call_args(st, partials, {}) << " to edges;\n";
+    st.s << "  apply " << ap << call_args(st, std::vector<Var>(partials), {}) << " to edges;\n";
   }
   for (const FieldSpec& fd : sets_.vfields)
     if (fd.kind == Kind::Float && !fd.shape.matrix())
@@ -1533,8 +1576,9 @@ TEST(RandomPrograms, TheJitComputesTheInterpretersBits) {
   std::sort(reasons.rbegin(), reasons.rend());
   for (const auto& [n, why] : reasons) std::printf("  %5d  %s\n", n, why.c_str());
   // Not vacuous: most sites and loops ran compiled.
+  if (tally.programs < 50) return;  // a few seeds replayed: too few to judge the mix
   EXPECT_GT(tally.sites_compiled, 2 * tally.sites_interpreted);
-  EXPECT_GT(tally.loops_compiled, tally.loops_interpreted);
+  EXPECT_GT(tally.loops_compiled, 2 * tally.loops_interpreted);
   EXPECT_LT(tally.runtime_errors, tally.programs / 10 + 1);
 }
 }  // namespace
