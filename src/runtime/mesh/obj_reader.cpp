@@ -118,7 +118,8 @@ void ObjValidator::check_index(std::string_view part, size_t i, long long seen, 
   long long value = 0;
   auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
   bool parsed = ec == std::errc() && end == part.data() + part.size() && !part.empty();
-  if (parsed && value != 0 && value <= total && -value <= seen) return;
+  // Compared without negating `value`: -LLONG_MIN overflows.
+  if (parsed && (value > 0 ? value <= total : value < 0 && value >= -seen)) return;
   std::string n = noun;
   if (total == 0) in_.fail_token(i, "no " + n + " index (the file defines no " + n + "s)");
   std::string range = "in 1.." + std::to_string(total);
