@@ -31,7 +31,7 @@ bool convert_args(const ast::FuncDecl& f, const RunOptions& options,
   for (size_t i = 0; i < f.params.size(); ++i) {
     LiteralResult parsed = parse_literal(options.args[i]);
     if (!parsed.literal) {
-      error = "argument " + std::to_string(i + 1) + " ('" + options.args[i] + "'): " + parsed.error;
+      error = "argument " + std::to_string(i + 1) + ": " + parsed.error;  // it quotes the text
       return false;
     }
     const Type& want = *f.params[i].var->type;

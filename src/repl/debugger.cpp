@@ -9,6 +9,7 @@
 
 #include "debug_values.h"
 #include "debugger_breakpoint.h"
+#include "frontend/diagnostics.h"
 #include "interp/interpreter.h"
 
 namespace simit::repl {
@@ -541,7 +542,7 @@ void Debugger::cmd_list(const std::string& arg) {
     return error("Line number " + std::to_string(map_.place(first).line) + " out of range.");
   int last = std::min(file->line_count(), first + 9);
   for (int l = first; l <= last; ++l)
-    out_ << map_.place(l).line << "\t" << file->line_text(l) << "\n";
+    out_ << map_.place(l).line << "\t" << frontend::printable(file->line_text(l)) << "\n";
   list_next_ = last + 1;
 }
 

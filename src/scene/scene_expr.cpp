@@ -93,17 +93,19 @@ class Parser {
         (std::isalnum(static_cast<unsigned char>(s_[i_ + tok.size()])) ||
          s_[i_ + tok.size()] == '_'))
       return false;
+    last_ = i_;
     i_ += tok.size();
     return true;
   }
   // Counts one level of nesting (parentheses, a call, a prefix operator, `^`) for the
-  // duration of a scope.
+  // duration of a scope; the error names the column of the operator at offset `at`.
   class Nest {
    public:
-    explicit Nest(Parser& p) : p_(p) {
-      if (++p_.depth_ > kMaxExprDepth)
-        p_.fail("the expression is nested more than " + std::to_string(kMaxExprDepth) +
-                " levels deep");
+    Nest(Parser& p, size_t at) : p_(p) {
+      if (++p_.depth_ <= kMaxExprDepth) return;
+      p_.i_ = at;
+      p_.fail("the expression is nested more than " + std::to_string(kMaxExprDepth) +
+              " levels deep");
     }
     ~Nest() { --p_.depth_; }
     Nest(const Nest&) = delete;
@@ -127,7 +129,7 @@ class Parser {
     skip();
     if (i_ + 1 < s_.size() && s_[i_] == '!' && s_[i_ + 1] == '=') return parse_cmp();
     if (accept("!") || accept("not")) {
-      Nest nest(*this);
+      Nest nest(*this, last_);
       std::vector<NodePtr> args;
       args.push_back(parse_not());
       return make(Op::Not, std::move(args));
@@ -166,18 +168,18 @@ class Parser {
   }
   NodePtr parse_unary() {
     if (accept("-")) {
-      Nest nest(*this);
+      Nest nest(*this, last_);
       std::vector<NodePtr> args;
       args.push_back(parse_unary());
       return make(Op::Neg, std::move(args));
     }
     if (accept("+")) {
-      Nest nest(*this);
+      Nest nest(*this, last_);
       return parse_unary();
     }
     NodePtr a = parse_primary();
     if (accept("^")) {
-      Nest nest(*this);
+      Nest nest(*this, last_);
       return make2(Op::Pow, std::move(a), parse_unary());
     }
     return a;
@@ -187,7 +189,7 @@ class Parser {
     if (i_ >= s_.size()) fail("expected a number, x, y, z, a function or '('");
     char c = s_[i_];
     if (c == '(') {
-      Nest nest(*this);
+      Nest nest(*this, i_);
       ++i_;
       NodePtr n = parse_or();
       if (!accept(")")) fail("expected ')'");
@@ -224,7 +226,7 @@ class Parser {
       for (const FuncInfo& f : kFuncs) {
         if (name != f.name) continue;
         if (!accept("(")) fail("expected '(' after '" + name + "'");
-        Nest nest(*this);
+        Nest nest(*this, last_);
         NodePtr n = make(Op::Call);
         n->func = name;
         for (int k = 0; k < f.arity; ++k) {
@@ -243,6 +245,7 @@ class Parser {
 
   const std::string& s_;
   size_t i_ = 0;
+  size_t last_ = 0;  // where the token accept() took last begins
   int depth_ = 0;
 };
 

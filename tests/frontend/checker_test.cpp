@@ -479,5 +479,28 @@ TEST(CheckerTest, NoCascades) {
   EXPECT_EQ(c->diagnostics.size(), 1u) << c->diagnostics.render_all();
 }
 
+// A dense tensor's component count is bounded at type check: the product of its integer
+// dimensions over all blocking levels would otherwise wrap around.
+TEST(CheckerTest, TensorTypesTooLargeAreRejected) {
+  auto c = compile_source("t.sim",
+                          "func f()\n"
+                          "  var a : tensor[65536,65536,65536,65536](float);\n"
+                          "  var b : matrix[65536,65536](matrix[2,2](float));\n"
+                          "  var c : vector[2147483647](float);\n"
+                          "  var d : matrix[46341,46341](float);\n"
+                          "end\n");
+  const auto& items = c->diagnostics.items();
+  ASSERT_EQ(items.size(), 3u) << c->diagnostics.render_all();
+  const std::string message =
+      "tensor type has more than 2147483647 components (2^31 - 1, the limit for a dense tensor)";
+  const std::pair<int, int> places[] = {{2, 11}, {3, 11}, {5, 11}};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(items[i].message, message);
+    EXPECT_EQ(items[i].span.start().line, places[i].first);
+    EXPECT_EQ(items[i].span.start().column, places[i].second);
+    EXPECT_STREQ(category_name(items[i]), "dimension");
+  }
+}
+
 }  // namespace
 }  // namespace simit::frontend
