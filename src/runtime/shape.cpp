@@ -30,9 +30,10 @@ void check_size(const Shape& s) {
   constexpr size_t kLimit = size_t{1} << 48;
   size_t n = 1;
   for (int i = 0; i < s.rank(); ++i) {
-    n *= static_cast<size_t>(s.dim(i));
-    if (n > kLimit)
+    const auto d = static_cast<size_t>(s.dim(i));
+    if (d != 0 && n > kLimit / d)
       throw Fault("a tensor with dimensions of sizes " + dims_text(s) + " is too large");
+    n *= d;
   }
 }
 

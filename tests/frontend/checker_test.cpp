@@ -502,5 +502,21 @@ TEST(CheckerTest, TensorTypesTooLargeAreRejected) {
   }
 }
 
+// Control characters of the source are escaped where a diagnostic echoes it (a terminal
+// would obey them), and the caret still lines up under the escaped text.
+TEST(CheckerTest, DiagnosticsEscapeControlCharacters) {
+  auto lexical = compile_source("t.sim", "func f()\n  var x = 1\x07;\nend\n");
+  EXPECT_EQ(lexical->diagnostics.render_all(),
+            "t.sim:2:12: error: unexpected symbol '\\x07'\n"
+            "    var x = 1\\x07;\n"
+            "             ^~~~\n");
+  auto typed = compile_source("t.sim", "func f()\n  var s = \"a\x1b[31m\" + 1;\nend\n");
+  EXPECT_EQ(typed->diagnostics.render_all(),
+            "t.sim:2:11: error: expected left operand of element-wise operation to be a numeric "
+            "tensor but got a value of type 'string'\n"
+            "    var s = \"a\\x1b[31m\" + 1;\n"
+            "            ^~~~~~~~~~~~~~~\n");
+}
+
 }  // namespace
 }  // namespace simit::frontend

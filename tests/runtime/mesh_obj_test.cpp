@@ -113,6 +113,13 @@ TEST(MeshObj, MalformedInputNamesFileAndLine) {
   }
 }
 
+TEST(MeshObj, DegenerateElementsInTheFilesNumbering) {
+  ScratchDir dir;
+  std::string path = dir.write("d.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 3\n");
+  EXPECT_EQ(mesh_error([&] { check_mesh(read_obj(path), path); }),
+            path + ": triangle 2 (vertices 1 3 3) has zero area (relative size 0)");
+}
+
 TEST(MeshObj, UnknownExtensionAndMissingFile) {
   ScratchDir dir;
   std::string path = dir.write("m.ply", "ply\n");

@@ -167,6 +167,8 @@ Mesh load_with_tinyobj(const std::string& path, const std::string& text) {
   const auto& v = attrib.vertices;
   for (size_t i = 0; i + 2 < v.size(); i += 3) mesh.points.push_back({v[i], v[i + 1], v[i + 2]});
   for (const tinyobj::shape_t& shape : shapes) append_shape(shape, mesh);
+  // OBJ counts from 1 (triangles counted after polygons are split, lines by segment).
+  mesh.point_numbers.first = mesh.triangle_numbers.first = mesh.edge_numbers.first = 1;
   return mesh;
 }
 
