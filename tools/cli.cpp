@@ -2,6 +2,8 @@
 #include "cli.h"
 
 #include <CLI/CLI.hpp>
+#include <charconv>
+#include <limits>
 #include <string>
 
 #include <unistd.h>
@@ -84,11 +86,26 @@ void add_test(CLI::App& app, Commands& c) {
       "otherwise, 2 on a usage error.\n");
 }
 
+// A whole number of frames. CLI::NonNegativeNumber printed its bound, the largest double,
+// in 309 digits.
+CLI::Validator frame_count() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        int n = 0;
+        auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), n);
+        if (ec == std::errc() && end == s.data() + s.size() && n >= 0) return "";
+        return "expected a whole number of frames from 0 to " +
+               std::to_string(std::numeric_limits<int>::max()) + ", got '" + s + "'";
+      },
+      "FRAMES");
+}
+
 void add_run(CLI::App& app, Commands& c) {
   RunOptions& o = c.run_options;
   SceneOptions& so = c.scene_options;
   c.run = app.add_subcommand(
-      "run", "Run a scene (FILE.toml), or an exported function that needs no sets (FILE.sim --call)");
+      "run",
+      "Run a scene (FILE.toml), or an exported function that needs no sets (FILE.sim --call)");
   c.run->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
   c.run->add_option("--call", o.func, "Name of the exported function (.sim files; required there)");
   // The arguments are taken raw (CLI11 would split `[1, 2]` at its comma).
@@ -114,7 +131,7 @@ void add_run(CLI::App& app, Commands& c) {
       ->delimiter(',')
       ->check(CLI::IsMember({"loop-ir", "llvm"}));
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
-      ->check(CLI::NonNegativeNumber);
+      ->check(frame_count());
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
   c.run->add_option("--final-csv", so.final_csv,
                     "Scenes: write the last frame's positions to this CSV file (x,y,z lines)");
@@ -145,7 +162,8 @@ void add_repl(CLI::App& app, Commands& c) {
 
 void add_debug(CLI::App& app, Commands& c) {
   DebugOptions& o = c.debug_options;
-  c.debug = app.add_subcommand("debug", "Step-debug a scene (FILE.toml) or a Simit program (FILE.sim)");
+  c.debug =
+      app.add_subcommand("debug", "Step-debug a scene (FILE.toml) or a Simit program (FILE.sim)");
   c.debug->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
   c.debug->add_flag("--echo", o.echo,
                     "Print each command read after the prompt (for transcripts; without a terminal "
@@ -166,7 +184,8 @@ void add_debug(CLI::App& app, Commands& c) {
 #endif
 
 bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 int usage_error(const CLI::App& app, const std::string& message, std::ostream& err) {

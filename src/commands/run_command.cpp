@@ -1,6 +1,8 @@
 // `simit run`: one exported function, arguments from the command line.
 #include "commands/run_command.h"
 
+#include <new>
+
 #include "api/engine.h"
 #include "interp/operators.h"
 #include "interp/printing.h"
@@ -31,7 +33,7 @@ bool convert_args(const ast::FuncDecl& f, const RunOptions& options,
   for (size_t i = 0; i < f.params.size(); ++i) {
     LiteralResult parsed = parse_literal(options.args[i]);
     if (!parsed.literal) {
-      error = "argument " + std::to_string(i + 1) + " ('" + options.args[i] + "'): " + parsed.error;
+      error = "argument " + std::to_string(i + 1) + ": " + parsed.error;  // it quotes the text
       return false;
     }
     const Type& want = *f.params[i].var->type;
@@ -92,6 +94,10 @@ int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream&
   } catch (const interp::RuntimeError& e) {
     out.flush();
     err << e.render();
+    return 1;
+  } catch (const std::bad_alloc&) {
+    out.flush();
+    err << "simit run: out of memory while running '" << f->name << "'\n";
     return 1;
   } catch (const std::exception& e) {  // never a user mistake: say so plainly
     err << "simit run: internal error: " << e.what() << "\n";

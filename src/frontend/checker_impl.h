@@ -2,6 +2,7 @@
 // bookkeeping) and the type helpers shared by the checker_*.cpp files.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -54,6 +55,9 @@ std::string index_set_name(const IndexSet& d);
 bool is_set_var(const ast::Variable* v);
 // A dimension indexed by `int`s: a fixed size or a ranged generic parameter `0:N`.
 bool is_int_dim(const IndexSet& d);
+// A dense tensor's components are counted in 32-bit ints by its users: at most 2^31 - 1.
+inline constexpr uint64_t kMaxTensorComponents = 0x7fffffff;
+uint64_t fixed_components(const Type& t);
 
 // What the checker remembers about a function once its header (and body) are checked.
 struct FuncInfo {

@@ -1,4 +1,5 @@
 // Type checker: types as written (§5) and the type helpers the other checker files use.
+#include <algorithm>
 #include <unordered_set>
 
 #include "frontend/checker_impl.h"
@@ -127,6 +128,18 @@ bool is_set_var(const Variable* v) {
 bool is_int_dim(const IndexSet& d) {
   return d.kind == IndexSet::Kind::Fixed ||
          (d.kind == IndexSet::Kind::Generic && d.var && d.var->ranged);
+}
+
+// The product of the integer dimensions over all blocking levels (a set or generic
+// dimension counts 1), saturated just above the limit so that it cannot wrap.
+uint64_t fixed_components(const Type& t) {
+  uint64_t n = 1;
+  for (const Type* level = &t; level && level->kind == Type::Kind::Tensor;
+       level = level->block.get())
+    for (const IndexSet& d : level->dims)
+      if (d.kind == IndexSet::Kind::Fixed && d.size > 0)
+        n = std::min<uint64_t>(n * static_cast<uint64_t>(d.size), kMaxTensorComponents + 1);
+  return n;
 }
 
 std::string index_set_name(const IndexSet& d) {
@@ -340,7 +353,14 @@ TypeRef Checker::resolve_tensor_type(ast::TensorTypeExpr& t) {
     error(SemanticKind::Type, t.span, "transposed type must be a vector");
     return nullptr;
   }
-  return make_tensor(std::move(dims), block, t.transposed);
+  TypeRef tensor = make_tensor(std::move(dims), block, t.transposed);
+  if (fixed_components(*tensor) > kMaxTensorComponents) {
+    error(SemanticKind::Dimension, t.span,
+          "tensor type has more than " + std::to_string(kMaxTensorComponents) +
+              " components (2^31 - 1, the limit for a dense tensor)");
+    return nullptr;
+  }
+  return tensor;
 }
 
 TypeRef Checker::resolve_set_type(ast::SetTypeExpr& t) {

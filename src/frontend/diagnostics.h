@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "frontend/source.h"
@@ -37,6 +38,10 @@ const char* category_name(const Diagnostic& d);
 // True when `%@ error <name>` accepts this diagnostic.
 bool category_matches(const Diagnostic& d, const std::string& name);
 
+// `text` with its control characters other than tab written as \xNN: source text echoed to
+// a terminal must not drive it.
+std::string printable(std::string_view text);
+
 // Collects diagnostics; passes report and go on (they never throw for user errors).
 class Diagnostics {
  public:
@@ -50,6 +55,8 @@ class Diagnostics {
 
   // `file:line:col: error: message`, the source line, and a caret/underline under the span.
   static std::string render(const Diagnostic& d);
+  // The same with `where` in place of `file:line:col` (a REPL input's own line numbers).
+  static std::string render(const Diagnostic& d, const std::string& where);
   std::string render_all() const;
 
  private:
@@ -62,12 +69,11 @@ class InternalError : public std::logic_error {
   using std::logic_error::logic_error;
 };
 
-#define SIMIT_ASSERT(cond, msg)                                                  \
-  do {                                                                           \
-    if (!(cond))                                                                 \
-      throw ::simit::frontend::InternalError(std::string("internal error: ") +   \
-                                             (msg) + " (" __FILE__ ":" +         \
-                                             std::to_string(__LINE__) + ")");    \
+#define SIMIT_ASSERT(cond, msg)                                                                   \
+  do {                                                                                            \
+    if (!(cond))                                                                                  \
+      throw ::simit::frontend::InternalError(std::string("internal error: ") + (msg) +            \
+                                             " (" __FILE__ ":" + std::to_string(__LINE__) + ")"); \
   } while (0)
 
 }  // namespace simit::frontend

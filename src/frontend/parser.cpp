@@ -27,14 +27,17 @@ DepthGuard::DepthGuard(Parser& p, int amount) : p_(p), amount_(amount) {
   if (p_.depth_ > kMaxDepth) {
     p_.depth_ -= amount_;
     amount_ = 0;
-    p_.fail("program is nested too deeply");
+    p_.fail("nested too deeply: more than " + std::to_string(kMaxDepth) +
+            " levels of blocks, parentheses, calls or prefix operators");
   }
 }
 
 void DepthGuard::deepen() {
-  ++p_.depth_;
-  ++amount_;
-  if (p_.depth_ > kMaxDepth) p_.fail("expression is nested too deeply");
+  ++p_.links_;
+  ++links_;
+  if (p_.depth_ + p_.links_ > kMaxTreeDepth)
+    p_.fail("expression is too long: more than " + std::to_string(kMaxTreeDepth) +
+            " levels of chained operators and nesting");
 }
 
 Parser::Parser(const std::vector<Token>& tokens, Diagnostics& diags)

@@ -27,7 +27,6 @@ ComponentKind component_of(ScalarKind k) {
   return ComponentKind::Float;
 }
 
-
 Interpreter::Interpreter(const ast::Program& program, Options options)
     : program_(program), options_(options) {
   post_process_ = options_.float32 || options_.check_finite;
@@ -119,7 +118,8 @@ const Value* Interpreter::local(const ast::Variable& v) const {
 
 Interpreter::Frame& Interpreter::next_frame(const ast::FuncDecl& f, const SourceSpan& call_site,
                                             MapContext* map) {
-  if (frames_.size() <= static_cast<size_t>(depth_ + 1)) frames_.push_back(std::make_unique<Frame>());
+  if (frames_.size() <= static_cast<size_t>(depth_ + 1))
+    frames_.push_back(std::make_unique<Frame>());
   Frame& callee = *frames_[depth_ + 1];
   callee.func = &f;
   callee.call_site = call_site;
@@ -186,13 +186,16 @@ Shape Interpreter::shape_of(const Type& t, const SourceSpan& at) {
 Value Interpreter::zero_of(const Type& t, const SourceSpan& at) {
   auto set_dim = [&](const IndexSet& d) {
     if (d.kind == IndexSet::Kind::Set) return true;
-    return d.kind == IndexSet::Kind::Generic && frame().refs[d.var->slot]->kind() == Value::Kind::Set;
+    return d.kind == IndexSet::Kind::Generic &&
+           frame().refs[d.var->slot]->kind() == Value::Kind::Set;
   };
-  if (t.kind == Type::Kind::Tensor && t.dims.size() == 2 && set_dim(t.dims[0]) && set_dim(t.dims[1])) {
+  if (t.kind == Type::Kind::Tensor && t.dims.size() == 2 && set_dim(t.dims[0]) &&
+      set_dim(t.dims[1])) {
     // A system matrix nothing was assembled into: an empty pattern (every component zero).
     const int rows = dim_size(t.dims[0], at), cols = dim_size(t.dims[1], at);
     Shape block = t.block ? shape_of(*t.block, at) : Shape();
-    auto pattern = runtime::MatrixPattern::from_csr(rows, cols, std::vector<int32_t>(rows + 1, 0), {});
+    auto pattern =
+        runtime::MatrixPattern::from_csr(rows, cols, std::vector<int32_t>(rows + 1, 0), {});
     try {
       const runtime::BlockDims bd = runtime::block_dims(block);
       return Value::of_matrix(std::make_shared<runtime::SystemMatrix>(pattern, bd.rows, bd.cols,
@@ -201,10 +204,15 @@ Value Interpreter::zero_of(const Type& t, const SourceSpan& at) {
       fail(at, f.what());
     }
   }
-  if (t.kind == Type::Kind::Opaque || t.kind == Type::Kind::Element || t.kind == Type::Kind::Tuple ||
-      t.kind == Type::Kind::Set)
+  if (t.kind == Type::Kind::Opaque || t.kind == Type::Kind::Element ||
+      t.kind == Type::Kind::Tuple || t.kind == Type::Kind::Set)
     return {};
-  return Value::zero(component_of(t.component()), shape_of(t, at));
+  Shape shape = shape_of(t, at);
+  try {
+    return Value::zero(component_of(t.component()), shape);
+  } catch (const runtime::Fault& f) {  // out of memory
+    fail(at, f.what());
+  }
 }
 
 void Interpreter::fail(const SourceSpan& at, std::string message) const {

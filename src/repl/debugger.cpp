@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cctype>
-#include <regex>
+#include <cstring>
+#include <optional>
 #include <sstream>
 
 #include "debug_values.h"
 #include "debugger_breakpoint.h"
+#include "frontend/diagnostics.h"
 #include "interp/interpreter.h"
 
 namespace simit::repl {
@@ -47,6 +49,61 @@ std::string command_name(const std::string& word) {
   }
   if (found.find(' ') != std::string::npos) return "?" + found;
   return found;
+}
+
+// The commands' arguments are scanned by hand: they are user input of any length, and
+// std::regex recurses once per character.
+bool is_blank(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
+bool is_word_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// `LOC if COND` (or `if COND`, at the stop) split into LOC and COND; nullopt without `if`.
+std::optional<std::pair<std::string, std::string>> split_condition(const std::string& arg) {
+  size_t loc_end = 0;
+  if (!(arg.starts_with("if") && arg.size() > 2 && is_blank(arg[2]))) {
+    loc_end = arg.find_first_of(" \t\r\n\v\f");
+    if (loc_end == std::string::npos) return std::nullopt;
+  }
+  size_t i = arg.find_first_not_of(" \t\r\n\v\f", loc_end);
+  if (i == std::string::npos || arg.compare(i, 2, "if") != 0) return std::nullopt;
+  i += 2;
+  if (i >= arg.size() || !is_blank(arg[i])) return std::nullopt;
+  std::string condition = trim(arg.substr(i));
+  if (condition.empty()) return std::nullopt;
+  return std::make_pair(arg.substr(0, loc_end), condition);
+}
+
+struct WatchSpec {
+  std::string set, field, index;
+};
+
+// SET.FIELD[i] (or SET.FIELD(i)), blanks allowed around the index.
+std::optional<WatchSpec> parse_watch_spec(const std::string& arg) {
+  size_t i = 0;
+  auto word = [&](std::string& out) {
+    size_t start = i;
+    while (i < arg.size() && is_word_char(arg[i])) ++i;
+    out = arg.substr(start, i - start);
+    return !out.empty();
+  };
+  auto blanks = [&] {
+    while (i < arg.size() && is_blank(arg[i])) ++i;
+  };
+  auto one_of = [&](const char* chars) {
+    if (i >= arg.size() || arg[i] == '\0' || !std::strchr(chars, arg[i])) return false;
+    ++i;
+    return true;
+  };
+  WatchSpec w;
+  if (!word(w.set) || !one_of(".") || !word(w.field)) return std::nullopt;
+  blanks();
+  if (!one_of("[(")) return std::nullopt;
+  blanks();
+  size_t start = i;
+  while (i < arg.size() && std::isdigit(static_cast<unsigned char>(arg[i]))) ++i;
+  w.index = arg.substr(start, i - start);
+  blanks();
+  if (w.index.empty() || !one_of("])") || i != arg.size()) return std::nullopt;
+  return w;
 }
 
 bool positive_int(const std::string& s, int& n) {
@@ -132,6 +189,13 @@ bool Debugger::end_run() {
   stopped_ = false;
   attached_ = nullptr;
   at_stmt_.clear();
+  // The run's program and sets may be freed now; the next run resolves everything again.
+  for (const auto& b : breakpoints_) {
+    b->stmt = nullptr;
+    b->func = nullptr;
+    b->cond.reset();
+    b->set = nullptr;
+  }
   trap_.install(nullptr);
   bool killed = killed_;
   killed_ = false;
@@ -291,10 +355,9 @@ void Debugger::cmd_break(const std::string& arg, bool temporary) {
     return;
   }
   std::string spec = arg;
-  static const std::regex with_if(R"(^(\S*)\s+if\s+(.+)$)");
-  if (std::smatch m; std::regex_match(arg, m, with_if)) {
-    spec = m[1];
-    b->condition = trim(m[2]);
+  if (std::optional<std::pair<std::string, std::string>> split = split_condition(arg)) {
+    spec = split->first;
+    b->condition = split->second;
   }
   std::string why;
   if (spec.empty()) {
@@ -330,10 +393,13 @@ void Debugger::cmd_break(const std::string& arg, bool temporary) {
 }
 
 void Debugger::cmd_watch(const std::string& arg) {
-  static const std::regex spec(R"(^(\w+)\.(\w+)\s*[\[(]\s*(\d+)\s*[\])]$)");
-  std::smatch m;
-  if (!std::regex_match(arg, m, spec)) {
+  std::optional<WatchSpec> spec = parse_watch_spec(arg);
+  if (!spec) {
     error("watch needs SET.FIELD[i], e.g. watch verts.x[3]");
+    return;
+  }
+  if (spec->index.size() > 9) {
+    error("watch: there is no element " + spec->index + " (the index is too large)");
     return;
   }
   if (!program_) {
@@ -342,9 +408,9 @@ void Debugger::cmd_watch(const std::string& arg) {
   }
   auto b = std::make_unique<Breakpoint>();
   b->kind = Breakpoint::Kind::Watch;
-  b->set_name = m[1];
-  b->field_name = m[2];
-  b->index = std::stoi(m[3]);
+  b->set_name = spec->set;
+  b->field_name = spec->field;
+  b->index = std::stoi(spec->index);
   std::string why;
   if (!resolve(*b, stopped_ ? event_.in->program() : *program_, why) ||
       (stopped_ && !resolve_watch(*b, *event_.in, why))) {
@@ -404,8 +470,7 @@ void Debugger::cmd_info(const std::string& arg) {
       switch (b.kind) {
         case Breakpoint::Kind::Line:
         case Breakpoint::Kind::Function:
-          out_ << (b.temporary ? "tbreak      " : "breakpoint  ") << (b.func ? b.func->name : "?")
-               << " at " << where_text(b.stmt ? b.stmt->span.start().line : b.line) << "\n";
+          out_ << (b.temporary ? "tbreak      " : "breakpoint  ") << b.resolved_at << "\n";
           break;
         case Breakpoint::Kind::Watch:
           out_ << "watchpoint  " << b.set_name << "." << b.field_name << "[" << b.index << "]\n";
@@ -477,7 +542,7 @@ void Debugger::cmd_list(const std::string& arg) {
     return error("Line number " + std::to_string(map_.place(first).line) + " out of range.");
   int last = std::min(file->line_count(), first + 9);
   for (int l = first; l <= last; ++l)
-    out_ << map_.place(l).line << "\t" << file->line_text(l) << "\n";
+    out_ << map_.place(l).line << "\t" << frontend::printable(file->line_text(l)) << "\n";
   list_next_ = last + 1;
 }
 

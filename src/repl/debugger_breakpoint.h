@@ -21,7 +21,10 @@ struct Debugger::Breakpoint {
   std::string condition;   // the text after `if`; empty for none
   int hits = 0;
 
-  // Resolved against the running program (against the set program outside runs).
+  // Resolved against the running program (against the set program outside runs). The
+  // pointers are cleared when a run ends (its program may go with it); `resolved_at`
+  // ("FUNC at FILE:LINE", from the last resolution) is what `info breakpoints` shows.
+  std::string resolved_at;
   const frontend::ast::Stmt* stmt = nullptr;
   const frontend::ast::FuncDecl* func = nullptr;
   std::shared_ptr<frontend::DebugExpression> cond;

@@ -90,6 +90,9 @@ bool Debugger::resolve(Breakpoint& b, const ast::Program& program, std::string& 
     }
     return true;
   }
+  b.stmt = nullptr;
+  b.func = nullptr;
+  b.cond.reset();
   Location loc;
   if (b.kind == Kind::Line) {
     loc = statement_at_line(program, b.line);
@@ -111,7 +114,7 @@ bool Debugger::resolve(Breakpoint& b, const ast::Program& program, std::string& 
   }
   b.stmt = loc.stmt;
   b.func = loc.func;
-  b.cond.reset();
+  b.resolved_at = loc.func->name + " at " + where_text(loc.stmt->span.start().line);
   if (b.condition.empty()) return true;
   std::shared_ptr<frontend::DebugExpression> cond;
   try {
@@ -193,6 +196,10 @@ std::optional<int> Debugger::parse_line_spec(const std::string& spec, std::strin
   if (file.empty()) {
     // The file of the selected frame, as gdb does; else the program's first file.
     file = stopped_ ? map_.place(frame_compiled_line(selected_)).file : map_.default_file();
+  }
+  if (number.size() > 9) {  // more lines than any file has
+    why = "no line " + number + " in a file named '" + file + "' in the program";
+    return std::nullopt;
   }
   int line = std::stoi(number);
   std::optional<int> compiled = map_.compiled_line(file, line);

@@ -5,6 +5,7 @@
 #include "debug_values.h"
 #include "debugger.h"
 #include "debugger_breakpoint.h"
+#include "frontend/diagnostics.h"
 #include "interp/interpreter.h"
 
 namespace simit::repl {
@@ -272,7 +273,8 @@ uint32_t Debugger::frame_offset(int level) const {
 void Debugger::show_source_line(int compiled_line) const {
   const frontend::SourceFile* file = source();
   if (!file || compiled_line < 1 || compiled_line > file->line_count()) return;
-  out_ << map_.place(compiled_line).line << "\t" << file->line_text(compiled_line) << "\n";
+  out_ << map_.place(compiled_line).line << "\t"
+       << frontend::printable(file->line_text(compiled_line)) << "\n";
 }
 
 const frontend::SourceFile* Debugger::source() const {

@@ -98,7 +98,8 @@ std::unique_ptr<frontend::Compilation> Session::compile(const std::string& prefi
 // Where the lines of a compiled text come from: each loaded file, the declarations typed
 // at the prompt (`<declarations>`), and the current input (`<repl>`). The wrapper around
 // the input has no line of its own: it counts as the input's first line.
-std::vector<LineSegment> Session::segments(const frontend::SourceFile& file, int input_offset) const {
+std::vector<LineSegment> Session::segments(const frontend::SourceFile& file,
+                                           int input_offset) const {
   auto line_of = [&](size_t offset) { return file.locate(static_cast<uint32_t>(offset)).line; };
   std::vector<LineSegment> out;
   size_t begin = 0;
@@ -126,21 +127,11 @@ std::string Session::location(const frontend::SourceSpan& span, int input_offset
 
 // Diagnostics inside the input are shown with the input's own line numbers.
 void Session::report(const frontend::Compilation& c, int input_offset) {
-  const frontend::SourceFile* file = c.source.get();
   for (const auto& d : c.diagnostics.items()) {
-    if (!d.span.valid() || d.span.begin < static_cast<uint32_t>(input_offset)) {
+    if (!d.span.valid() || d.span.begin < static_cast<uint32_t>(input_offset))
       err_ << frontend::Diagnostics::render(d);
-      continue;
-    }
-    frontend::LineCol lc = d.span.start();
-    std::string line(file->line_text(lc.line));
-    err_ << location(d.span, input_offset) << ": error: " << d.message << "\n  " << line << "\n  ";
-    for (int i = 0; i + 1 < lc.column && i < static_cast<int>(line.size()); ++i)
-      err_ << (line[i] == '\t' ? '\t' : ' ');
-    size_t first = static_cast<size_t>(lc.column - 1);
-    size_t width = d.span.end > d.span.begin ? d.span.end - d.span.begin : 1;
-    width = std::max<size_t>(1, std::min(width, line.size() > first ? line.size() - first : 1));
-    err_ << '^' << std::string(width - 1, '~') << "\n";
+    else
+      err_ << frontend::Diagnostics::render(d, location(d.span, input_offset));
   }
 }
 

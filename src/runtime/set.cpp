@@ -1,9 +1,10 @@
 // Sets: element storage, struct-of-arrays fields, endpoints and grid lattices.
 #include "runtime/set.h"
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <cstring>
+#include <new>
 
 namespace simit::runtime {
 
@@ -71,7 +72,12 @@ void Field::check_storage(Tag requested) const {
 void Field::reallocate(size_t capacity) {
   std::shared_ptr<std::byte[]> fresh;
   if (capacity) {
-    fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity]);
+    try {
+      fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity]);
+    } catch (const std::bad_alloc&) {
+      throw Fault("out of memory while allocating " + std::to_string(capacity) +
+                  " bytes for field '" + name_ + "'");
+    }
     const size_t keep = std::min(bytes_, capacity);
     if (keep) std::memcpy(fresh.get(), buffer_.get(), keep);
     std::memset(fresh.get() + keep, 0, capacity - keep);

@@ -14,8 +14,27 @@ void check_rank(size_t rank, size_t levels) {
                 std::to_string(Shape::kMaxLevels) + " blocking levels are not supported");
 }
 
+std::string dims_text(const Shape& s) {
+  std::string text;
+  for (int i = 0; i < s.rank(); ++i) text += (i ? "x" : "") + std::to_string(s.dim(i));
+  return text;
+}
+
 void check_dim(int d) {
   if (d < 0) throw Fault("negative tensor dimension " + std::to_string(d));
+}
+
+// A backstop for shapes built at run time (the type checker bounds those written in a
+// program): the component count must not wrap around size_t.
+void check_size(const Shape& s) {
+  constexpr size_t kLimit = size_t{1} << 48;
+  size_t n = 1;
+  for (int i = 0; i < s.rank(); ++i) {
+    const auto d = static_cast<size_t>(s.dim(i));
+    if (d != 0 && n > kLimit / d)
+      throw Fault("a tensor with dimensions of sizes " + dims_text(s) + " is too large");
+    n *= d;
+  }
 }
 
 }  // namespace
@@ -35,6 +54,7 @@ Shape Shape::blocked(const int* outer, int count, const Shape& block) {
     s.dims_[s.rank_++] = outer[i];
   }
   for (int i = 0; i < block.rank_; ++i) s.dims_[s.rank_++] = block.dims_[i];
+  check_size(s);
   s.level_order_[0] = static_cast<uint8_t>(count);
   for (int l = 0; l < block.levels_; ++l) s.level_order_[l + 1] = block.level_order_[l];
   s.levels_ = static_cast<uint8_t>(block.levels_ + 1);
@@ -69,8 +89,6 @@ Shape Shape::logical() const {
     for (int i = 0; i < order(); ++i) dims[i] *= dims_[base + i];
   return of(dims);
 }
-
-
 
 size_t Shape::outer_count() const {
   size_t n = 1;

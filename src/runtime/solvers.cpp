@@ -219,8 +219,14 @@ struct LuFactor::Impl {
     lu.factorize(m);
     if (lu.info() != Eigen::Success) {
       analysed.reset();
-      throw Fault("LU factorisation failed: the matrix is singular (" + lu.lastErrorMessage() +
-                  ")");
+      // Eigen says "STRUCTURALLY SINGULAR ... ZERO COLUMN AT k" for numerically singular
+      // matrices too, k counting columns in its own ordering: no use to the user.
+      if (lu.lastErrorMessage().starts_with("THE MATRIX IS STRUCTURALLY SINGULAR"))
+        throw Fault(
+            "LU factorisation failed: the matrix is singular (elimination found no nonzero "
+            "pivot for one of its columns)");
+      throw Fault("LU factorisation failed: out of memory while factorising a " +
+                  std::to_string(n) + "x" + std::to_string(n) + " matrix");
     }
   }
 };

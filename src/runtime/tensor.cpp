@@ -2,6 +2,7 @@
 #include "runtime/tensor.h"
 
 #include <algorithm>
+#include <new>
 
 #include "runtime/fault.h"
 
@@ -76,10 +77,17 @@ std::byte* Storage::mutable_heap() {
 // ---------------------------------------------------------------------------
 // Tensor
 
-Tensor::Tensor(ComponentKind kind, const Shape& shape)
+Tensor::Tensor(ComponentKind kind, const Shape& shape) try
     : kind_(kind), shape_(shape), storage_(component_bytes(kind) * shape.size()) {
   if (kind == ComponentKind::String)
     strings_ = std::make_shared<std::vector<std::string>>(shape.size());
+} catch (const std::bad_alloc&) {
+  out_of_memory(kind, shape);
+}
+
+void Tensor::out_of_memory(ComponentKind kind, const Shape& shape) {
+  throw Fault("out of memory while allocating a " + shape.str() + " " + component_name(kind) +
+              " tensor (" + std::to_string(component_bytes(kind) * shape.size()) + " bytes)");
 }
 
 Tensor::Tensor(ComponentKind kind, const Shape& shape, std::shared_ptr<std::byte[]> heap)

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -121,7 +122,11 @@ class Tensor {
     kind_ = kind;
     shape_ = shape;
     if (strings_) strings_.reset();
-    storage_.reset_uninit(component_bytes(kind) * shape.size());
+    try {
+      storage_.reset_uninit(component_bytes(kind) * shape.size());
+    } catch (const std::bad_alloc&) {
+      out_of_memory(kind, shape);
+    }
   }
   // Drops shared storage (heap block, strings) so the object can be recycled cheaply.
   void release_shared() {
@@ -134,6 +139,8 @@ class Tensor {
 
  private:
   [[noreturn]] static void string_uninit();
+  // Throws the Fault that names the tensor that could not be allocated.
+  [[noreturn]] static void out_of_memory(ComponentKind kind, const Shape& shape);
   ComponentKind kind_ = ComponentKind::Float;
   Shape shape_;
   Storage storage_;

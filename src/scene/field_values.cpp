@@ -36,16 +36,24 @@ void position(const SceneSet& s, const runtime::Mesh& m, int e, double p[3]) {
   for (int d = 0; d < 3; ++d) p[d] /= s.arity;
 }
 
+// An expression quoted in a message: a long one by its start only.
+std::string clipped(const std::string& text) {
+  constexpr size_t kShown = 60;
+  return text.size() <= kShown ? text : text.substr(0, kShown) + "...";
+}
+
 Source scalar_source(const SceneFile& file, const toml::node& v, const std::string& key,
                      const ast::FieldDecl& decl, const FieldType& ft) {
   Source out;
-  if (v.is_boolean()) out.constant = *v.value<bool>() ? 1.0 : 0.0;
-  else if (v.is_number()) out.constant = *v.value<double>();
+  if (v.is_boolean())
+    out.constant = *v.value<bool>() ? 1.0 : 0.0;
+  else if (v.is_number())
+    out.constant = *v.value<double>();
   else if (v.is_string()) {
     try {
       out.expr = std::make_shared<PositionExpr>(*v.value<std::string>());
     } catch (const std::invalid_argument& e) {
-      file.fail(&v, key + ": in \"" + *v.value<std::string>() + "\": " + e.what());
+      file.fail(&v, key + ": in \"" + clipped(*v.value<std::string>()) + "\": " + e.what());
     }
   } else {
     file.fail(&v, key + ": expected a number, a boolean, an expression string or an array of them");
@@ -87,8 +95,10 @@ std::vector<Source> sources(const SceneFile& file, const toml::node& value, cons
 void store(runtime::Field& field, const FieldType& ft, int e, size_t k, double v) {
   switch (ft.kind) {
     case ComponentKind::Float:
-      if (ft.single) field.at<float>(e)[k] = static_cast<float>(v);
-      else field.at<double>(e)[k] = v;
+      if (ft.single)
+        field.at<float>(e)[k] = static_cast<float>(v);
+      else
+        field.at<double>(e)[k] = v;
       break;
     case ComponentKind::Int: field.at<int32_t>(e)[k] = static_cast<int32_t>(std::llround(v)); break;
     case ComponentKind::Bool: field.at<bool>(e)[k] = v != 0.0; break;
@@ -119,7 +129,9 @@ void fill_field(const SceneFile& file, SceneSet& s, const runtime::Mesh& m,
     for (size_t k = 0; k < src.size(); ++k) {
       const Source& c = src[k];
       store(field, ft, e, k,
-            c.coordinate >= 0 ? p[c.coordinate] : c.expr ? c.expr->eval(p, lo, hi) : c.constant);
+            c.coordinate >= 0 ? p[c.coordinate]
+            : c.expr          ? c.expr->eval(p, lo, hi)
+                              : c.constant);
     }
   }
 }

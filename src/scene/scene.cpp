@@ -2,6 +2,8 @@
 // reported the way `simit run` prints them.
 #include "simit/scene.h"
 
+#include <new>
+
 #include "runtime/mesh/mesh.h"
 #include "scene/scene_run.h"
 #include "scene/scene_sets.h"
@@ -71,6 +73,10 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
     out.flush();
     err << o.file << ": error: writing output: " << e.what() << "\n";
     return 1;
+  } catch (const std::bad_alloc&) {  // what was being allocated is not known here
+    out.flush();
+    err << o.file << ": error: out of memory while building or running the scene\n";
+    return 1;
   } catch (const std::exception& e) {
     out.flush();
     err << "simit run: internal error: " << e.what() << "\n";
@@ -118,8 +124,9 @@ std::optional<SceneSets> load_scene_sets(const std::string& path, bool float32, 
   std::shared_ptr<Scene> scene = Scene::open(options, err);
   if (!scene) return std::nullopt;
   std::optional<SceneSets> sets = SceneAccess::build(*scene, err);
-  if (sets) sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
-                  scene, sets->owner);
+  if (sets)
+    sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
+        scene, sets->owner);
   return sets;
 }
 

@@ -10,13 +10,15 @@
 namespace simit::scene {
 
 struct PositionExpr::Node {
-  enum class Op { Num, Var, Neg, Not, Add, Sub, Mul, Div, Pow, Lt, Le, Gt, Ge, Eq, Ne, And,
-                  Or, Call };
+  // Sum, Product, And and Or hold a whole flat chain (a + b - c is one Sum), so that the
+  // tree is only as deep as the expression's nesting.
+  enum class Op { Num, Var, Neg, Not, Sum, Product, Pow, Lt, Le, Gt, Ge, Eq, Ne, And, Or, Call };
   Op op = Op::Num;
   double value = 0.0;
   int var = 0;  // Var: 0..2 position, 3..5 lower corner, 6..8 upper corner
   std::string func;
   std::vector<std::unique_ptr<Node>> args;
+  std::vector<bool> inverse;  // Sum: subtract args[k]; Product: divide by args[k]
 };
 
 namespace {
@@ -39,19 +41,37 @@ NodePtr make2(Op op, NodePtr a, NodePtr b) {
   return make(op, std::move(args));
 }
 
+// Appends `b` to the chain `a` of kind `op`, starting the chain when `a` is something else.
+NodePtr chain(Op op, NodePtr a, NodePtr b, bool inverse = false) {
+  if (a->op != op) {
+    NodePtr c = make(op);
+    c->args.push_back(std::move(a));
+    c->inverse.push_back(false);
+    a = std::move(c);
+  }
+  a->args.push_back(std::move(b));
+  a->inverse.push_back(inverse);
+  return a;
+}
+
 struct FuncInfo {
   const char* name;
   int arity;
 };
-constexpr FuncInfo kFuncs[] = {{"sqrt", 1}, {"abs", 1},   {"sin", 1}, {"cos", 1},
-                               {"tan", 1},  {"exp", 1},   {"log", 1}, {"floor", 1},
-                               {"ceil", 1}, {"min", 2},   {"max", 2}};
+constexpr FuncInfo kFuncs[] = {{"sqrt", 1}, {"abs", 1}, {"sin", 1}, {"cos", 1},
+                               {"tan", 1},  {"exp", 1}, {"log", 1}, {"floor", 1},
+                               {"ceil", 1}, {"min", 2}, {"max", 2}};
 
 class Parser {
  public:
   explicit Parser(const std::string& s) : s_(s) {}
 
   NodePtr parse() {
+    if (s_.size() > kMaxExprLength) {
+      throw std::invalid_argument("the expression is " + std::to_string(s_.size()) +
+                                  " characters long; at most " + std::to_string(kMaxExprLength) +
+                                  " are allowed");
+    }
     NodePtr n = parse_or();
     skip();
     if (i_ < s_.size()) fail("unexpected '" + std::string(1, s_[i_]) + "'");
@@ -70,25 +90,46 @@ class Parser {
     if (s_.compare(i_, tok.size(), tok) != 0) return false;
     // A word must not run on into a longer name ("order" is not "or").
     if (std::isalpha(static_cast<unsigned char>(tok[0])) && i_ + tok.size() < s_.size() &&
-        (std::isalnum(static_cast<unsigned char>(s_[i_ + tok.size()])) || s_[i_ + tok.size()] == '_'))
+        (std::isalnum(static_cast<unsigned char>(s_[i_ + tok.size()])) ||
+         s_[i_ + tok.size()] == '_'))
       return false;
+    last_ = i_;
     i_ += tok.size();
     return true;
   }
+  // Counts one level of nesting (parentheses, a call, a prefix operator, `^`) for the
+  // duration of a scope; the error names the column of the operator at offset `at`.
+  class Nest {
+   public:
+    Nest(Parser& p, size_t at) : p_(p) {
+      if (++p_.depth_ <= kMaxExprDepth) return;
+      p_.i_ = at;
+      p_.fail("the expression is nested more than " + std::to_string(kMaxExprDepth) +
+              " levels deep");
+    }
+    ~Nest() { --p_.depth_; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+
+   private:
+    Parser& p_;
+  };
+
   NodePtr parse_or() {
     NodePtr a = parse_and();
-    while (accept("||") || accept("or")) a = make2(Op::Or, std::move(a), parse_and());
+    while (accept("||") || accept("or")) a = chain(Op::Or, std::move(a), parse_and());
     return a;
   }
   NodePtr parse_and() {
     NodePtr a = parse_not();
-    while (accept("&&") || accept("and")) a = make2(Op::And, std::move(a), parse_not());
+    while (accept("&&") || accept("and")) a = chain(Op::And, std::move(a), parse_not());
     return a;
   }
   NodePtr parse_not() {
     skip();
     if (i_ + 1 < s_.size() && s_[i_] == '!' && s_[i_ + 1] == '=') return parse_cmp();
     if (accept("!") || accept("not")) {
+      Nest nest(*this, last_);
       std::vector<NodePtr> args;
       args.push_back(parse_not());
       return make(Op::Not, std::move(args));
@@ -97,9 +138,8 @@ class Parser {
   }
   NodePtr parse_cmp() {
     NodePtr a = parse_add();
-    static const std::pair<const char*, Op> ops[] = {{"<=", Op::Le}, {">=", Op::Ge},
-                                                     {"==", Op::Eq}, {"!=", Op::Ne},
-                                                     {"<", Op::Lt},  {">", Op::Gt}};
+    static const std::pair<const char*, Op> ops[] = {{"<=", Op::Le}, {">=", Op::Ge}, {"==", Op::Eq},
+                                                     {"!=", Op::Ne}, {"<", Op::Lt},  {">", Op::Gt}};
     for (const auto& [tok, op] : ops)
       if (accept(tok)) return make2(op, std::move(a), parse_add());
     return a;
@@ -107,28 +147,41 @@ class Parser {
   NodePtr parse_add() {
     NodePtr a = parse_mul();
     for (;;) {
-      if (accept("+")) a = make2(Op::Add, std::move(a), parse_mul());
-      else if (accept("-")) a = make2(Op::Sub, std::move(a), parse_mul());
-      else return a;
+      if (accept("+"))
+        a = chain(Op::Sum, std::move(a), parse_mul());
+      else if (accept("-"))
+        a = chain(Op::Sum, std::move(a), parse_mul(), true);
+      else
+        return a;
     }
   }
   NodePtr parse_mul() {
     NodePtr a = parse_unary();
     for (;;) {
-      if (accept("*")) a = make2(Op::Mul, std::move(a), parse_unary());
-      else if (accept("/")) a = make2(Op::Div, std::move(a), parse_unary());
-      else return a;
+      if (accept("*"))
+        a = chain(Op::Product, std::move(a), parse_unary());
+      else if (accept("/"))
+        a = chain(Op::Product, std::move(a), parse_unary(), true);
+      else
+        return a;
     }
   }
   NodePtr parse_unary() {
     if (accept("-")) {
+      Nest nest(*this, last_);
       std::vector<NodePtr> args;
       args.push_back(parse_unary());
       return make(Op::Neg, std::move(args));
     }
-    if (accept("+")) return parse_unary();
+    if (accept("+")) {
+      Nest nest(*this, last_);
+      return parse_unary();
+    }
     NodePtr a = parse_primary();
-    if (accept("^")) return make2(Op::Pow, std::move(a), parse_unary());
+    if (accept("^")) {
+      Nest nest(*this, last_);
+      return make2(Op::Pow, std::move(a), parse_unary());
+    }
     return a;
   }
   NodePtr parse_primary() {
@@ -136,6 +189,7 @@ class Parser {
     if (i_ >= s_.size()) fail("expected a number, x, y, z, a function or '('");
     char c = s_[i_];
     if (c == '(') {
+      Nest nest(*this, i_);
       ++i_;
       NodePtr n = parse_or();
       if (!accept(")")) fail("expected ')'");
@@ -172,10 +226,12 @@ class Parser {
       for (const FuncInfo& f : kFuncs) {
         if (name != f.name) continue;
         if (!accept("(")) fail("expected '(' after '" + name + "'");
+        Nest nest(*this, last_);
         NodePtr n = make(Op::Call);
         n->func = name;
         for (int k = 0; k < f.arity; ++k) {
-          if (k > 0 && !accept(",")) fail("'" + name + "' takes " + std::to_string(f.arity) + " arguments");
+          if (k > 0 && !accept(","))
+            fail("'" + name + "' takes " + std::to_string(f.arity) + " arguments");
           n->args.push_back(parse_or());
         }
         if (!accept(")")) fail("expected ')' to close '" + name + "('");
@@ -189,6 +245,8 @@ class Parser {
 
   const std::string& s_;
   size_t i_ = 0;
+  size_t last_ = 0;  // where the token accept() took last begins
+  int depth_ = 0;
 };
 
 double eval_node(const Node& n, const double* const v[3]) {
@@ -198,10 +256,20 @@ double eval_node(const Node& n, const double* const v[3]) {
     case Op::Var: return v[n.var / 3][n.var % 3];
     case Op::Neg: return -arg(0);
     case Op::Not: return arg(0) == 0.0 ? 1.0 : 0.0;
-    case Op::Add: return arg(0) + arg(1);
-    case Op::Sub: return arg(0) - arg(1);
-    case Op::Mul: return arg(0) * arg(1);
-    case Op::Div: return arg(0) / arg(1);
+    case Op::Sum: {
+      double sum = arg(0);
+      for (size_t k = 1; k < n.args.size(); ++k)
+        sum = n.inverse[k] ? sum - eval_node(*n.args[k], v) : sum + eval_node(*n.args[k], v);
+      return sum;
+    }
+    case Op::Product: {
+      double product = arg(0);
+      for (size_t k = 1; k < n.args.size(); ++k) {
+        double factor = eval_node(*n.args[k], v);
+        product = n.inverse[k] ? product / factor : product * factor;
+      }
+      return product;
+    }
     case Op::Pow: return std::pow(arg(0), arg(1));
     case Op::Lt: return arg(0) < arg(1);
     case Op::Le: return arg(0) <= arg(1);
@@ -209,8 +277,17 @@ double eval_node(const Node& n, const double* const v[3]) {
     case Op::Ge: return arg(0) >= arg(1);
     case Op::Eq: return arg(0) == arg(1);
     case Op::Ne: return arg(0) != arg(1);
-    case Op::And: return (arg(0) != 0.0 && arg(1) != 0.0) ? 1.0 : 0.0;
-    case Op::Or: return (arg(0) != 0.0 || arg(1) != 0.0) ? 1.0 : 0.0;
+    case Op::And:
+    case Op::Or: {
+      // Every operand is evaluated, as the binary form did.
+      bool all = true, any = false;
+      for (const auto& a : n.args) {
+        bool nonzero = eval_node(*a, v) != 0.0;
+        all = all && nonzero;
+        any = any || nonzero;
+      }
+      return (n.op == Op::And ? all : any) ? 1.0 : 0.0;
+    }
     case Op::Call: {
       const std::string& f = n.func;
       if (f == "min") return std::min(arg(0), arg(1));

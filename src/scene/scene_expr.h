@@ -2,6 +2,7 @@
 // position x, y, z (a vertex's coordinates, or an element's centroid), e.g. "y < 1e-4".
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -9,8 +10,14 @@ namespace simit::scene {
 
 // Grammar (loosest first): `or` (also ||), `and` (&&), `not` (!), one comparison
 // (< <= > >= == !=), + -, * /, unary -, ^ (right-associative), then numbers, x, y, z, pi,
-// xmin xmax ymin ymax zmin zmax (the mesh's bounding box), parentheses and the functions sqrt abs sin cos tan exp log floor ceil min max.
-// Comparisons and logic give 1 or 0.
+// xmin xmax ymin ymax zmin zmax (the mesh's bounding box), parentheses and the functions sqrt abs
+// sin cos tan exp log floor ceil min max. Comparisons and logic give 1 or 0. Limits that keep a
+// hostile expression from exhausting the stack or the memory: its length in characters, and its
+// nesting (parentheses, calls, prefix operators and `^` each count a level; a flat chain such as a
+// + b + ... + z does not).
+inline constexpr size_t kMaxExprLength = 65536;
+inline constexpr int kMaxExprDepth = 256;
+
 class PositionExpr {
  public:
   struct Node;

@@ -31,7 +31,8 @@ class Reader {
     }
     Literal lit = body();
     if (signs > 0 && (lit.kind == ScalarKind::Bool || lit.kind == ScalarKind::String))
-      fail(std::string("a sign cannot be applied to a ") + frontend::to_string(lit.kind) + " literal");
+      fail(std::string("a sign cannot be applied to a ") + frontend::to_string(lit.kind) +
+           " literal");
     if (negate) negate_all(lit);
     for (skip_space(); peek() == '\''; skip_space()) {
       ++pos_;
@@ -166,9 +167,13 @@ class Reader {
   // dense_literal = "[" ( dense_literal { [","] dense_literal } | dense_rows ) "]"
   Literal dense() {
     expect('[');
+    if (++depth_ > kMaxLiteralDepth)
+      fail("a dense literal is nested more than " + std::to_string(kMaxLiteralDepth) +
+           " levels deep");
     skip_space();
     Literal lit = peek() == '[' ? nested() : rows();
     expect(']');
+    --depth_;
     return lit;
   }
 
@@ -272,7 +277,14 @@ class Reader {
 
   std::string_view text_;
   size_t pos_ = 0;
+  int depth_ = 0;  // open '['
 };
+
+// A literal quoted in a message: a long one by its start only.
+std::string clipped(std::string_view text) {
+  constexpr size_t kShown = 60;
+  return text.size() <= kShown ? std::string(text) : std::string(text.substr(0, kShown)) + "...";
+}
 
 }  // namespace
 
@@ -288,7 +300,7 @@ LiteralResult parse_literal(std::string_view text) {
     lit.text = std::string(text);
     return {std::move(lit), ""};
   } catch (const LiteralError& e) {
-    return {std::nullopt, "bad literal '" + std::string(text) + "': " + e.what()};
+    return {std::nullopt, "bad literal '" + clipped(text) + "': " + e.what()};
   }
 }
 

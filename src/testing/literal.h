@@ -34,6 +34,10 @@ struct LiteralResult {
   std::string error;  // set when `literal` is empty
 };
 
+// A literal's tensors have at most Shape::kMaxRank dimensions; the reader stops well before
+// a nesting deep enough to exhaust the stack.
+inline constexpr int kMaxLiteralDepth = 64;
+
 // Parses one whole literal; anything left over is an error.
 LiteralResult parse_literal(std::string_view text);
 

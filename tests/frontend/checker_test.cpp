@@ -479,5 +479,44 @@ TEST(CheckerTest, NoCascades) {
   EXPECT_EQ(c->diagnostics.size(), 1u) << c->diagnostics.render_all();
 }
 
+// A dense tensor's component count is bounded at type check: the product of its integer
+// dimensions over all blocking levels would otherwise wrap around.
+TEST(CheckerTest, TensorTypesTooLargeAreRejected) {
+  auto c = compile_source("t.sim",
+                          "func f()\n"
+                          "  var a : tensor[65536,65536,65536,65536](float);\n"
+                          "  var b : matrix[65536,65536](matrix[2,2](float));\n"
+                          "  var c : vector[2147483647](float);\n"
+                          "  var d : matrix[46341,46341](float);\n"
+                          "end\n");
+  const auto& items = c->diagnostics.items();
+  ASSERT_EQ(items.size(), 3u) << c->diagnostics.render_all();
+  const std::string message =
+      "tensor type has more than 2147483647 components (2^31 - 1, the limit for a dense tensor)";
+  const std::pair<int, int> places[] = {{2, 11}, {3, 11}, {5, 11}};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(items[i].message, message);
+    EXPECT_EQ(items[i].span.start().line, places[i].first);
+    EXPECT_EQ(items[i].span.start().column, places[i].second);
+    EXPECT_STREQ(category_name(items[i]), "dimension");
+  }
+}
+
+// Control characters of the source are escaped where a diagnostic echoes it (a terminal
+// would obey them), and the caret still lines up under the escaped text.
+TEST(CheckerTest, DiagnosticsEscapeControlCharacters) {
+  auto lexical = compile_source("t.sim", "func f()\n  var x = 1\x07;\nend\n");
+  EXPECT_EQ(lexical->diagnostics.render_all(),
+            "t.sim:2:12: error: unexpected symbol '\\x07'\n"
+            "    var x = 1\\x07;\n"
+            "             ^~~~\n");
+  auto typed = compile_source("t.sim", "func f()\n  var s = \"a\x1b[31m\" + 1;\nend\n");
+  EXPECT_EQ(typed->diagnostics.render_all(),
+            "t.sim:2:11: error: expected left operand of element-wise operation to be a numeric "
+            "tensor but got a value of type 'string'\n"
+            "    var s = \"a\\x1b[31m\" + 1;\n"
+            "            ^~~~~~~~~~~~~~~\n");
+}
+
 }  // namespace
 }  // namespace simit::frontend

@@ -35,6 +35,28 @@ TEST(Interpreter, GenericParametersTakeTheArgumentSizes) {
   EXPECT_EQ(r[0], Value::of_int(1));
 }
 
+// A flat chain is not nesting: sums of 300 and 1000 terms (beyond the 256 levels of nesting)
+// compile and run, left to right; a chain of 1100 is refused by the parser's tree limit.
+TEST(Interpreter, LongFlatChainsRun) {
+  auto chain = [](int terms, const char* op) {
+    std::string s = "a";
+    for (int i = 1; i < terms; ++i) s += std::string(" ") + op + " a";
+    return "func f(a : float) -> r : float\n  r = " + s + ";\nend\n";
+  };
+  for (int terms : {300, 1000}) {
+    auto c = compile(chain(terms, "+"));
+    Interpreter in(*c->program);
+    EXPECT_EQ(in.call(func(*c, "f"), {Value::of_float(0.5)})[0], Value::of_float(0.5 * terms));
+  }
+  auto c = compile(chain(1000, "-"));
+  Interpreter in(*c->program);
+  EXPECT_EQ(in.call(func(*c, "f"), {Value::of_float(0.5)})[0], Value::of_float(0.5 - 999 * 0.5));
+  auto too_long = frontend::compile_source("long.sim", chain(1100, "*"));
+  ASSERT_FALSE(too_long->ok());
+  EXPECT_EQ(too_long->diagnostics.items().front().message,
+            "expression is too long: more than 1024 levels of chained operators and nesting");
+}
+
 TEST(Interpreter, ArgumentsOfTheWrongCountAreARuntimeError) {
   auto c = compile("func f(a : int) -> r : int\n  r = a;\nend\n");
   Interpreter in(*c->program);

@@ -5,10 +5,10 @@
 
 #include <gtest/gtest.h>
 
-#include <deque>
-#include <thread>
 #include <chrono>
+#include <deque>
 #include <sstream>
+#include <thread>
 
 #include "frontend/frontend.h"
 #include "interp/interpreter.h"
@@ -164,6 +164,83 @@ TEST(Debugger, KnowsItsCommands) {
   EXPECT_FALSE(
       Debugger::is_command("d"
                            "x"));
+}
+
+// The arguments of break and watch are scanned by hand: a condition of 30,000 characters
+// gets the frontend's own error (std::regex recursed once per character and overflowed the
+// stack), and the forms the commands accept are unchanged.
+TEST(Debugger, BreakAndWatchArgumentsOfAnyLength) {
+  std::string deep = std::string(15000, '(') + "x > 1.0" + std::string(15000, ')');
+  DebugRun s({"break sq if " + deep, "break sq   if   x > 1.0", "break if x > 1.0", "break sq if",
+              "watch verts.x[3]", "watch verts.x ( 3 )", "watch verts.x[3", "watch verts.[3]",
+              "watch verts.x[99999999999]", "break 99999999999", "info breakpoints"});
+  s.run_until_done();
+  std::string got = s.output();
+  got.replace(got.find(deep), deep.size(), "DEEP");
+  const std::string want =
+      "> break sq if DEEP\n"
+      "Cannot set the breakpoint: in the condition: nested too deeply: more than 256 levels of "
+      "blocks, parentheses, calls or prefix operators.\n"
+      "> break sq   if   x > 1.0\n"
+      "Breakpoint 1 at sq, a.sim:2\n"
+      "> break if x > 1.0\n"
+      "break needs a location: LINE, FILE:LINE or FUNC.\n"
+      "> break sq if\n"
+      "Cannot set the breakpoint: no function 'sq if' in the program.\n"
+      "> watch verts.x[3]\n"
+      "Cannot watch verts.x[3]: no set named 'verts' in the program.\n"
+      "> watch verts.x ( 3 )\n"
+      "Cannot watch verts.x ( 3 ): no set named 'verts' in the program.\n"
+      "> watch verts.x[3\n"
+      "watch needs SET.FIELD[i], e.g. watch verts.x[3]\n"
+      "> watch verts.[3]\n"
+      "watch needs SET.FIELD[i], e.g. watch verts.x[3]\n"
+      "> watch verts.x[99999999999]\n"
+      "watch: there is no element 99999999999 (the index is too large)\n"
+      "> break 99999999999\n"
+      "no line 99999999999 in a file named 'a.sim' in the program\n"
+      "> info breakpoints\n"
+      "Num  Type        What\n"
+      "1    breakpoint  sq at a.sim:2\n"
+      "        stop only if x > 1.0\n";
+  EXPECT_EQ(got, want);
+}
+
+// Breakpoints outlive the program of a run (the REPL compiles one per input and frees it
+// after the run): `info breakpoints` afterwards reads nothing of it. Under AddressSanitizer
+// this read freed memory while breakpoints kept their pointers after the run.
+TEST(Debugger, InfoAfterTheRunsProgramIsFreed) {
+  const std::string text = std::string(kFileA) + kFileB;
+  const std::vector<LineSegment> files = {{1, "a.sim", 1}, {5, "b.sim", 1}};
+  auto kept = frontend::compile_source("<repl>", text);
+  ASSERT_TRUE(kept->ok()) << kept->diagnostics.render_all();
+  std::ostringstream out;
+  Debugger d(out, out, [](const std::string&) { return std::optional<std::string>("continue"); });
+  d.set_program(kept->program.get(), files);
+  std::string args;
+  d.command("break sq if x > 100.0", args);
+  d.command("tbreak b.sim:5", args);
+  {
+    auto run = frontend::compile_source("<repl>", text);
+    ASSERT_TRUE(run->ok());
+    d.set_program(run->program.get(), files);
+    interp::Options o;
+    o.trap = &d.trap();
+    auto in = std::make_unique<interp::Interpreter>(*run->program, o);
+    d.begin_run();
+    // The run stops at b.sim:5 (the tbreak, deleted then) and continues.
+    in->call(*run->program->find_func("main"), {interp::Value::of_float(3.0)});
+    d.end_run();
+    in.reset();
+    run.reset();  // the run's program is gone, as after a REPL input
+  }
+  d.set_program(kept->program.get(), files);
+  out.str("");
+  d.command("info breakpoints", args);
+  EXPECT_EQ(out.str(),
+            "Num  Type        What\n"
+            "1    breakpoint  sq at a.sim:2\n"
+            "        stop only if x > 100.0\n");
 }
 
 // Ctrl-C in `simit debug` (request_pause, from another thread here) stops an endless loop

@@ -93,6 +93,10 @@ TEST(MeshObj, MalformedInputNamesFileAndLine) {
       {"relative beyond", "v 0 0 0\nv 1 0 0\nf 1 2 -3\nv 0 1 0\n",
        "3: expected a vertex index in 1..3 or -1..-2, got '-3'"},
       {"not an index", v3 + "f 1 2 c\n", "4: expected a vertex index in 1..3 or -1..-3, got 'c'"},
+      {"most negative index", v3 + "f 1 2 -9223372036854775808\n",
+       "4: expected a vertex index in 1..3 or -1..-3, got '-9223372036854775808'"},
+      {"index past long long", v3 + "f 1 2 9223372036854775808\n",
+       "4: expected a vertex index in 1..3 or -1..-3, got '9223372036854775808'"},
       {"no texture coordinates", v3 + "f 1/1 2/1 3/1\n",
        "4: expected no texture-coordinate index (the file defines no texture-coordinates), got "
        "'1/1'"},
@@ -107,6 +111,13 @@ TEST(MeshObj, MalformedInputNamesFileAndLine) {
     std::string path = dir.write("b.obj", c.text);
     EXPECT_EQ(mesh_error([&] { read_obj(path); }), path + ":" + c.expected) << c.label;
   }
+}
+
+TEST(MeshObj, DegenerateElementsInTheFilesNumbering) {
+  ScratchDir dir;
+  std::string path = dir.write("d.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 3\n");
+  EXPECT_EQ(mesh_error([&] { check_mesh(read_obj(path), path); }),
+            path + ": triangle 2 (vertices 1 3 3) has zero area (relative size 0)");
 }
 
 TEST(MeshObj, UnknownExtensionAndMissingFile) {

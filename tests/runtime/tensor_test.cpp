@@ -48,6 +48,42 @@ TEST(Shape, TooManyDimensionsIsAFault) {
   EXPECT_THROW(Shape::of({-1}), Fault);
 }
 
+TEST(Shape, SizesThatWouldWrapAreAFault) {
+  // 65536^4 components wrap size_t to 0; the run-time backstop refuses anything over 2^48.
+  try {
+    Shape::of({65536, 65536, 65536, 65536});
+    FAIL() << "expected a fault";
+  } catch (const Fault& f) {
+    EXPECT_STREQ(f.what(),
+                 "a tensor with dimensions of sizes 65536x65536x65536x65536 is too large");
+  }
+}
+
+// The allocation fails at once (a pebibyte): the fault names the tensor and its size.
+TEST(Tensor, OutOfMemoryNamesTheTensor) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer aborts on a pebibyte allocation instead of throwing";
+#else
+  const Shape s = Shape::of({1 << 20, 1 << 20, 1 << 7});
+  const char* want =
+      "out of memory while allocating a 1048576x1048576x128 float tensor (1125899906842624 "
+      "bytes)";
+  try {
+    Tensor t(ComponentKind::Float, s);
+    FAIL() << "expected a fault";
+  } catch (const Fault& f) {
+    EXPECT_STREQ(f.what(), want);
+  }
+  try {
+    Tensor t;
+    t.reset_uninit(ComponentKind::Float, s);
+    FAIL() << "expected a fault";
+  } catch (const Fault& f) {
+    EXPECT_STREQ(f.what(), want);
+  }
+#endif
+}
+
 TEST(Tensor, ZeroInitialisedOfEveryKind) {
   Tensor f(ComponentKind::Float, Shape{3});
   Tensor i(ComponentKind::Int, Shape{2, 2});

@@ -177,9 +177,15 @@ TEST_F(SceneTest, RunsTheFramesAndWritesTheSeries) {
   const std::vector<std::string> pvd = lines(path("out/tet.pvd"));
   std::string series;
   for (const std::string& line : pvd) series += line + "\n";
-  EXPECT_NE(series.find("timestep=\"0\" group=\"\" part=\"0\" file=\"tet_000000.vtu\""), std::string::npos) << series;
-  EXPECT_NE(series.find("timestep=\"2\" group=\"\" part=\"0\" file=\"tet_000001.vtu\""), std::string::npos) << series;
-  EXPECT_NE(series.find("timestep=\"3\" group=\"\" part=\"0\" file=\"tet_000002.vtu\""), std::string::npos) << series;
+  EXPECT_NE(series.find("timestep=\"0\" group=\"\" part=\"0\" file=\"tet_000000.vtu\""),
+            std::string::npos)
+      << series;
+  EXPECT_NE(series.find("timestep=\"2\" group=\"\" part=\"0\" file=\"tet_000001.vtu\""),
+            std::string::npos)
+      << series;
+  EXPECT_NE(series.find("timestep=\"3\" group=\"\" part=\"0\" file=\"tet_000002.vtu\""),
+            std::string::npos)
+      << series;
   EXPECT_TRUE(fs::exists(path("out/tet_000002.vtu")));
   EXPECT_FALSE(fs::exists(path("out/tet_000003.vtu")));
   const std::vector<std::string> stats = lines(path("out/stats.csv"));
@@ -267,6 +273,59 @@ TEST(PositionExpr, EvaluatesOverThePositionAndTheBox) {
   EXPECT_DOUBLE_EQ(PositionExpr("y < 1e-4 or z >= zmax - 1").eval(p, lo, hi), 1.0);
   EXPECT_DOUBLE_EQ(PositionExpr("max(x, sqrt(16))").eval(p, lo, hi), 4.0);
   EXPECT_THROW(PositionExpr("x +"), std::invalid_argument);
+}
+
+// The message of the std::invalid_argument that parsing `text` throws, or "no error".
+std::string expr_error(const std::string& text) {
+  try {
+    PositionExpr e(text);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::string repeated(const std::string& s, int n) {
+  std::string out;
+  for (int i = 0; i < n; ++i) out += s;
+  return out;
+}
+
+TEST(PositionExpr, NestingIsLimitedAndNamesTheColumn) {
+  const double p[3] = {2.0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  // 256 levels are allowed; the 257th '(' (column 257) is one too many.
+  EXPECT_DOUBLE_EQ(PositionExpr(repeated("(", 256) + "x" + repeated(")", 256)).eval(p, lo, hi),
+                   2.0);
+  EXPECT_EQ(expr_error(repeated("(", 10000) + "x" + repeated(")", 10000)),
+            "column 257: the expression is nested more than 256 levels deep");
+  EXPECT_EQ(expr_error(repeated("-", 10000) + "x"),
+            "column 257: the expression is nested more than 256 levels deep");
+  EXPECT_EQ(expr_error(repeated("not ", 300) + "x"),
+            "column 1025: the expression is nested more than 256 levels deep");
+  EXPECT_EQ(expr_error(repeated("sqrt(", 300) + "x" + repeated(")", 300)),
+            "column 1285: the expression is nested more than 256 levels deep");
+  EXPECT_EQ(expr_error("x" + repeated("^x", 300)),
+            "column 514: the expression is nested more than 256 levels deep");
+}
+
+TEST(PositionExpr, LengthIsLimited) {
+  std::string sum = "x" + repeated("+x", 1000000);
+  EXPECT_EQ(expr_error(sum),
+            "the expression is 2000001 characters long; at most 65536 are allowed");
+}
+
+TEST(PositionExpr, FlatChainsAreNotNesting) {
+  const double p[3] = {0.5, 3.0, 0}, lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  // 30,000 terms: far beyond the nesting limit, within the length limit.
+  EXPECT_DOUBLE_EQ(PositionExpr("x" + repeated("+x", 29999)).eval(p, lo, hi), 15000.0);
+  // Left to right: 1 - 1 - 1 - 1 is -2, and 64 / 2 / 2 * 4 is 64.
+  EXPECT_DOUBLE_EQ(PositionExpr("1 - 1 - 1 - 1").eval(p, lo, hi), -2.0);
+  EXPECT_DOUBLE_EQ(PositionExpr("64 / 2 / 2 * 4").eval(p, lo, hi), 64.0);
+  EXPECT_DOUBLE_EQ(PositionExpr("y - (x + x) - x").eval(p, lo, hi), 1.5);
+  EXPECT_DOUBLE_EQ(PositionExpr("(y - x) - (x - y)").eval(p, lo, hi), 5.0);
+  EXPECT_DOUBLE_EQ(PositionExpr("x > 0 and y > 2 and x < 0").eval(p, lo, hi), 0.0);
+  EXPECT_DOUBLE_EQ(PositionExpr("x < 0 or y < 2 or x > 0").eval(p, lo, hi), 1.0);
+  EXPECT_DOUBLE_EQ(PositionExpr(repeated("x < 0 or ", 5000) + "y > 2").eval(p, lo, hi), 1.0);
 }
 
 }  // namespace

@@ -87,6 +87,15 @@ TEST(Literal, Errors) {
   EXPECT_NE(error_of("[1, 2").find("expected ']'"), std::string::npos);
 }
 
+TEST(Literal, NestingIsLimited) {
+  // 64 levels are read (a shape of 64 ones); 100,000 are refused without recursing into them.
+  Literal deep = ok((std::string(64, '[') + "1" + std::string(64, ']')).c_str());
+  EXPECT_EQ(deep.shape, std::vector<int>(64, 1));
+  std::string text = std::string(100000, '[') + "1" + std::string(100000, ']');
+  EXPECT_EQ(error_of(text.c_str()), "bad literal '" + std::string(60, '[') +
+                                        "...': a dense literal is nested more than 64 levels deep");
+}
+
 TEST(Literal, SplitTopLevel) {
   EXPECT_EQ(split_top_level("1.0, [1.0, 2.0], <1.0,2.0>, \"a,b\""),
             (std::vector<std::string>{"1.0", "[1.0, 2.0]", "<1.0,2.0>", "\"a,b\""}));

@@ -63,6 +63,18 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(cli({"test"}).status, 2);
 }
 
+// A bad frame count names a sane bound (CLI11's own check printed the largest double).
+TEST(Cli, BadFrameCountsNameTheirBound) {
+  for (const char* bad : {"-1", "abc", "1e5", "99999999999999999999", "2.5"}) {
+    Result r = cli({"run", "scene.toml", "--frames", bad});
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+              std::string("simit: error: --frames: expected a whole number of frames from 0 to "
+                          "2147483647, got '") +
+                  bad + "'");
+  }
+}
+
 TEST(Cli, CheckHelpDescribesDumpAndExitStatus) {
   Result r = cli({"check", "--help"});
   EXPECT_EQ(r.status, 0);

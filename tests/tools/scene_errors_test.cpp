@@ -219,6 +219,17 @@ TEST_F(SceneErrors, Meshes) {
   write("tet.node", kNode);
   expect_error(replace(s, "mesh = \"tet.node\"", "mesh = \"none.node\""), "\"none.node\"",
                "[sets.verts] mesh: no such file '" + path("none.node") + "'");
+  // A 1-based mesh: the degenerate tet and its vertices in the file's own numbering.
+  write("tet.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n");
+  write("tet.ele", "1 4 0\n7 1 2 3 3\n");
+  expect_error(s, at,
+               path("tet.node") + ": tet 7 (vertices 1 2 3 3) has zero volume (relative size 0)\n");
+  write("tet.node", kNode);
+  // No .ele file: the message names it rather than saying only that there are no tets.
+  fs::remove(path("tet.ele"));
+  expect_error(s, "\"tets\"\n[output]",
+               "[sets.tets]: the mesh '" + path("tet.node") + "' gives no tets: they come from '" +
+                   path("tet.ele") + "', which does not exist\n");
 }
 
 TEST_F(SceneErrors, QuickLookPicture) {

@@ -53,7 +53,7 @@ class GmshReader {
   BlockHeader read_block_header(const char* third);
   void add_node_tag(size_t token);
   int node(size_t token) const;
-  void read_element(size_t first, const ElementType& type);
+  void read_element(long long tag, size_t first, const ElementType& type);
   void next_record(int index, int total, const char* noun);
   void expect_line(const std::string& marker, const std::string& what);
   void expect_end(const char* section, int count, const char* noun);
@@ -146,6 +146,7 @@ void GmshReader::add_node_tag(size_t token) {
   int index = static_cast<int>(node_index_.size());
   if (!node_index_.emplace(tag, index).second)
     in_.fail_token(token, "a node tag not used by an earlier node");
+  mesh_.point_numbers.ids.push_back(tag);
 }
 
 int GmshReader::node(size_t token) const {
@@ -219,7 +220,7 @@ void GmshReader::read_nodes_v4() {
   expect_end("Nodes", total, "nodes");
 }
 
-void GmshReader::read_element(size_t first, const ElementType& type) {
+void GmshReader::read_element(long long tag, size_t first, const ElementType& type) {
   std::array<int, 4> corners{};
   for (int k = 0; k < type.nodes; ++k) {
     int v = node(first + k);
@@ -227,11 +228,18 @@ void GmshReader::read_element(size_t first, const ElementType& type) {
   }
   in_.expect_end(first + type.nodes, "an element record");
   switch (type.kind) {
-    case ElementKind::Tet: mesh_.tets.push_back(corners); break;
+    case ElementKind::Tet:
+      mesh_.tets.push_back(corners);
+      mesh_.tet_numbers.ids.push_back(tag);
+      break;
     case ElementKind::Triangle:
       mesh_.triangles.push_back({corners[0], corners[1], corners[2]});
+      mesh_.triangle_numbers.ids.push_back(tag);
       break;
-    case ElementKind::Edge: mesh_.edges.push_back({corners[0], corners[1]}); break;
+    case ElementKind::Edge:
+      mesh_.edges.push_back({corners[0], corners[1]});
+      mesh_.edge_numbers.ids.push_back(tag);
+      break;
   }
 }
 
@@ -241,13 +249,13 @@ void GmshReader::read_elements_v2() {
   in_.expect_end(1, "the element count");
   for (int i = 0; i < n; ++i) {
     next_record(i, n, "element");
-    in_.integer(0, "an element tag");
+    long long tag = in_.integer(0, "an element tag");
     ElementType type{};
     bool used = element_type(in_.integer(1, "an element type"), type);
     int tags = in_.count(2, "the element's tag count");
     if (!used) continue;
     for (int t = 0; t < tags; ++t) in_.integer(3 + t, "an element tag (physical, geometrical)");
-    read_element(3 + static_cast<size_t>(tags), type);
+    read_element(tag, 3 + static_cast<size_t>(tags), type);
   }
   expect_end("Elements", n, "elements");
 }
@@ -271,8 +279,8 @@ void GmshReader::read_elements_v4() {
     bool used = element_type(h.third, type);
     for (int j = 0; j < m; ++j, ++seen) {
       next_record(j, m, "element");
-      in_.integer(0, "an element tag");
-      if (used) read_element(1, type);
+      long long tag = in_.integer(0, "an element tag");
+      if (used) read_element(tag, 1, type);
     }
   }
   if (seen != total)

@@ -79,11 +79,16 @@ double triangle_measure(const Mesh& mesh, const Triangle& t) {
   return norm(cross(sub(mesh.points[t[1]], a), sub(mesh.points[t[2]], a))) / 2 / (l * l);
 }
 
+// In the file's own numbering of elements and vertices.
 std::string describe(const Mesh& mesh, const Degenerate& d) {
   std::ostringstream msg;
-  msg << element_kind_name(d.kind) << " " << d.index << " (vertices";
+  const Numbering& numbers = d.kind == ElementKind::Tet        ? mesh.tet_numbers
+                             : d.kind == ElementKind::Triangle ? mesh.triangle_numbers
+                                                               : mesh.edge_numbers;
+  msg << element_kind_name(d.kind) << " " << numbers.of(static_cast<size_t>(d.index))
+      << " (vertices";
   auto list = [&](const auto& e) {
-    for (int v : e) msg << " " << v;
+    for (int v : e) msg << " " << mesh.point_numbers.of(static_cast<size_t>(v));
   };
   if (d.kind == ElementKind::Tet) list(mesh.tets[d.index]);
   if (d.kind == ElementKind::Triangle) list(mesh.triangles[d.index]);

@@ -18,11 +18,21 @@ using Edge = std::array<int, 2>;
 // the element order and the vertex order within each element exactly as in the file. TetGen
 // and Gmsh write tets with det[x0-x3 | x1-x3 | x2-x3] < 0 ("TetGen's orientation", the one the
 // FEM rest volume -det/6 assumes); orient_tets brings any other mesh to it.
+// How a file numbers its vertices or elements, for messages: a number per item (Gmsh tags),
+// or, with `ids` empty, consecutive numbers from `first` (TetGen's 0 or 1, OBJ's 1).
+struct Numbering {
+  long long first = 0;
+  std::vector<long long> ids;
+  long long of(size_t i) const { return ids.empty() ? first + static_cast<long long>(i) : ids[i]; }
+};
+
 struct Mesh {
   std::vector<Point> points;
   std::vector<Tet> tets;
   std::vector<Triangle> triangles;
   std::vector<Edge> edges;
+  // Defaulted, so that a mesh written as {points, tets, ...} needs no numbering.
+  Numbering point_numbers = {}, tet_numbers = {}, triangle_numbers = {}, edge_numbers = {};
 };
 
 // A mesh file that cannot be read or written, or a mesh that fails a check. The message is

@@ -118,7 +118,8 @@ void ObjValidator::check_index(std::string_view part, size_t i, long long seen, 
   long long value = 0;
   auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
   bool parsed = ec == std::errc() && end == part.data() + part.size() && !part.empty();
-  if (parsed && value != 0 && value <= total && -value <= seen) return;
+  // Compared without negating `value`: -LLONG_MIN overflows.
+  if (parsed && (value > 0 ? value <= total : value < 0 && value >= -seen)) return;
   std::string n = noun;
   if (total == 0) in_.fail_token(i, "no " + n + " index (the file defines no " + n + "s)");
   std::string range = "in 1.." + std::to_string(total);
@@ -166,6 +167,8 @@ Mesh load_with_tinyobj(const std::string& path, const std::string& text) {
   const auto& v = attrib.vertices;
   for (size_t i = 0; i + 2 < v.size(); i += 3) mesh.points.push_back({v[i], v[i + 1], v[i + 2]});
   for (const tinyobj::shape_t& shape : shapes) append_shape(shape, mesh);
+  // OBJ counts from 1 (triangles counted after polygons are split, lines by segment).
+  mesh.point_numbers.first = mesh.triangle_numbers.first = mesh.edge_numbers.first = 1;
   return mesh;
 }
 

@@ -90,6 +90,7 @@ IndexRange read_nodes(const std::string& path, Mesh& mesh) {
     mesh.points.push_back(p);
   }
   expect_file_end(in, n, "vertex");
+  mesh.point_numbers.first = base;
   return {base, n};
 }
 
@@ -104,7 +105,8 @@ void read_tets(const std::string& path, IndexRange range, Mesh& mesh) {
   mesh.tets.reserve(std::min(n, kMaxReserve));
   for (int i = 0; i < n; ++i) {
     next_record(in, i, n, "tet");
-    in.integer(0, "a tet index");
+    long long number = in.integer(0, "a tet index");
+    if (i == 0) mesh.tet_numbers.first = number;  // messages count on from the first
     Tet t{};
     for (int k = 0; k < nodes; ++k) {
       int v = vertex_index(in, 1 + k, range);
@@ -126,7 +128,7 @@ std::string with_article(const char* noun) {
 // `adjacent` neighbouring-tet columns that Simit does not use.
 template <size_t N>
 void read_simplices(const std::string& path, IndexRange range, size_t adjacent, const char* noun,
-                    std::vector<std::array<int, N>>& out) {
+                    std::vector<std::array<int, N>>& out, Numbering& numbers) {
   LineReader in(path, '#');
   in.require_next(std::string("a header '") + noun + "-count marker-count'");
   int n = in.count(0, with_article(noun) + " count");
@@ -136,7 +138,8 @@ void read_simplices(const std::string& path, IndexRange range, size_t adjacent, 
   size_t plain = 1 + N + markers;
   for (int i = 0; i < n; ++i) {
     next_record(in, i, n, noun);
-    in.integer(0, with_article(noun) + " index");
+    long long number = in.integer(0, with_article(noun) + " index");
+    if (i == 0) numbers.first = number;
     std::array<int, N> e{};
     for (size_t k = 0; k < N; ++k) e[k] = vertex_index(in, 1 + k, range);
     if (markers) in.integer(1 + N, "a boundary marker");
@@ -160,8 +163,10 @@ Mesh read_tetgen(const std::string& path) {
   Mesh mesh;
   IndexRange range = read_nodes(base + ".node", mesh);
   if (exists(base + ".ele")) read_tets(base + ".ele", range, mesh);
-  if (exists(base + ".face")) read_simplices(base + ".face", range, 2, "face", mesh.triangles);
-  if (exists(base + ".edge")) read_simplices(base + ".edge", range, 1, "edge", mesh.edges);
+  if (exists(base + ".face"))
+    read_simplices(base + ".face", range, 2, "face", mesh.triangles, mesh.triangle_numbers);
+  if (exists(base + ".edge"))
+    read_simplices(base + ".edge", range, 1, "edge", mesh.edges, mesh.edge_numbers);
   return mesh;
 }
 
