@@ -2,6 +2,7 @@
 // reported the way `simit run` prints them.
 #include "simit/scene.h"
 
+#include "runtime/mesh/atomic_file.h"
 #include "runtime/mesh/mesh.h"
 #include "scene/scene_run.h"
 #include "scene/scene_sets.h"
@@ -100,6 +101,8 @@ std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
   return d;
 }
 
+void remove_temporaries_on_signals() { runtime::remove_temporaries_on_signals(); }
+
 int run_scene(const SceneOptions& options, std::ostream& out, std::ostream& err) {
   std::unique_ptr<Scene> scene = Scene::open(options, err);
   return scene ? scene->run(out, err) : 1;
@@ -112,8 +115,9 @@ std::optional<SceneSets> load_scene_sets(const std::string& path, bool float32, 
   std::shared_ptr<Scene> scene = Scene::open(options, err);
   if (!scene) return std::nullopt;
   std::optional<SceneSets> sets = SceneAccess::build(*scene, err);
-  if (sets) sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
-                  scene, sets->owner);
+  if (sets)
+    sets->owner = std::make_shared<std::pair<std::shared_ptr<Scene>, std::shared_ptr<void>>>(
+        scene, sets->owner);
   return sets;
 }
 

@@ -5,9 +5,12 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <iterator>
 #include <sstream>
 #include <vector>
 
@@ -226,7 +229,8 @@ TEST_F(SceneErrors, QuickLookPicture) {
   expect_error(s + "png = \"tet.jpg\"\n", "\"tet.jpg\"",
                "[output] png: '" + path("out/tet.jpg") + "' is not a .png file name");
   expect_error(s + "png = \"pics/tet.png\"\n", "\"pics/tet.png\"",
-               "[output] png: the folder '" + path("out/pics") + "' does not exist");
+               "[output] png: 'pics/tet.png' is not a plain file name (output files go directly "
+               "in the output folder: no '/', no '..')");
   expect_error(s, "", "--png: the folder '" + path("nowhere") + "' does not exist",
                {"--png", path("nowhere/tet.png")});
   // The picture is written (a PNG signature), with no temporary file beside it.
@@ -242,6 +246,114 @@ TEST_F(SceneErrors, QuickLookPicture) {
   r = run(s + "png = \"tet.png\"\n", {"--png", path("other.png")});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(path("other.png")));
+}
+
+// [output] name, csv and png are plain names inside the output folder, distinct from each other
+// and from every input of the run; --final-csv and --png are checked against them too. Each is
+// reported at its key before anything is written.
+TEST_F(SceneErrors, OutputNames) {
+  const std::string s = fem_scene();
+  const std::string plain =
+      "' is not a plain file name (output files go directly in the output folder: no '/', no "
+      "'..')";
+  expect_error(replace(s, "name = \"tet\"", "name = \"\""), "\"\"\npoints",
+               "[output] name: expected a file name, not an empty string");
+  expect_error(replace(s, "name = \"tet\"", "name = \"../tet\""), "\"../tet\"",
+               "[output] name: '../tet" + plain);
+  expect_error(replace(s, "name = \"tet\"", "name = \"sub/tet\""), "\"sub/tet\"",
+               "[output] name: 'sub/tet" + plain);
+  expect_error(replace(s, "name = \"tet\"", "name = \"..\""), "\"..\"",
+               "[output] name: '.." + plain);
+  expect_error(s + "csv = \"../scene.toml\"\n", "\"../scene.toml\"",
+               "[output] csv: '../scene.toml" + plain);
+  expect_error(s + "csv = \"/tmp/stats.csv\"\n", "\"/tmp/stats.csv\"",
+               "[output] csv: '/tmp/stats.csv" + plain);
+  expect_error(s + "csv = \"missing/stats.csv\"\n", "\"missing/stats.csv\"",
+               "[output] csv: 'missing/stats.csv" + plain);
+  expect_error(s + "csv = \"tet.pvd\"\n", "\"tet.pvd\"",
+               "[output] csv: '" + path("out/tet.pvd") + "' is also the file of [output] name");
+  expect_error(s + "csv = \"tet_000001.vtu\"\n", "\"tet_000001.vtu\"",
+               "[output] csv: '" + path("out/tet_000001.vtu") +
+                   "' is also the name of a frame of the series 'tet' (tet_NNNNNN.vtu)");
+  expect_error(s + "png = \"a.png\"\ncsv = \"a.png\"\n", "\"a.png\"",
+               "[output] png: '" + path("out/a.png") + "' is also the file of [output] csv");
+  expect_error(s, "",
+               "--final-csv: '" + path("out/tet.pvd") + "' is also the file of [output] name",
+               {"--final-csv", path("out/tet.pvd")});
+  // The output folder is the scene's own: an output named like an input is refused there.
+  std::string here =
+      replace(s, "folder = \"" + path("out") + "\"", "folder = \"" + path("") + "\"");
+  Result r = run(here + "csv = \"scene.toml\"\n");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, location(here + "csv = \"scene.toml\"\n", "\"scene.toml\"") + "[output] csv: '" +
+                       path("scene.toml") +
+                       "' is the scene file: an output must not overwrite an input of the run\n");
+  r = run(here + "csv = \"tet.ele\"\n");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("[output] csv: '" + path("tet.ele") +
+                       "' is a mesh file of the run: an output must not overwrite an input of "
+                       "the run\n"),
+            std::string::npos)
+      << r.err;
+  r = run(here, {"--final-csv", path("tet.node")});
+  EXPECT_EQ(r.err, path("scene.toml") + ": error: --final-csv: '" + path("tet.node") +
+                       "' is a mesh file of the run: an output must not overwrite an input of "
+                       "the run\n");
+  // The inputs are intact and no frame was written.
+  std::ifstream node(path("tet.node"));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(node), {}), kNode);
+  EXPECT_FALSE(fs::exists(path("tet.pvd")));
+}
+
+// --final-csv in a folder that does not exist, or without positions to write, fails before the
+// output folder is created; one that fits is written whole (no temporary beside it).
+TEST_F(SceneErrors, FinalCsvIsCheckedBeforeTheFirstFrame) {
+  const std::string s = fem_scene();
+  expect_error(s, "", "--final-csv: the folder '" + path("nowhere") + "' does not exist",
+               {"--final-csv", path("nowhere/final.csv")});
+  expect_error(replace(s, "position = \"x\"\n", ""), "",
+               "--final-csv needs [output] points and position", {"--final-csv", path("f.csv")});
+  fs::create_directory(path("locked"));
+  fs::permissions(path("locked"), fs::perms::owner_read | fs::perms::owner_exec);
+  if (access(path("locked").c_str(), W_OK) == 0) {
+    std::cout << "running as root: the unwritable-folder case cannot be made\n";
+  } else {
+    Result r = run(s, {"--final-csv", path("locked/final.csv")});
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err.rfind(path("scene.toml") + ": error: --final-csv: cannot write: " +
+                              path("locked/final.csv") + ": cannot create a temporary file",
+                          0),
+              0u)
+        << r.err;
+    EXPECT_FALSE(fs::exists(path("out")));
+  }
+  fs::permissions(path("locked"), fs::perms::owner_all);
+  Result r = run(s, {"--final-csv", path("out/final.csv")});  // into the output folder itself
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::ifstream csv(path("out/final.csv"));
+  std::string first;
+  std::getline(csv, first);
+  EXPECT_EQ(first, "x,y,z");
+  for (const auto& entry : fs::directory_iterator(path("out")))
+    EXPECT_EQ(entry.path().filename().string().find(".csv."), std::string::npos) << entry.path();
+}
+
+// Temporaries a killed run could not remove (NAME.pvd.XXXXXX, NAME_NNNNNN.vtu.XXXXXX) go with
+// the next run into the folder; other files stay.
+TEST_F(SceneErrors, TheNextRunRemovesStaleTemporaries) {
+  fs::create_directory(path("out"));
+  write("out/tet_000007.vtu.Ab12cD", "half a frame");
+  write("out/tet.pvd.x1Y2z3", "half a series");
+  write("out/other_000001.vtu.Ab12cD", "not ours");
+  write("out/tet_000007.vtu.notes", "not a temporary");
+  Result r = run(fem_scene());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(fs::exists(path("out/tet_000007.vtu.Ab12cD")));
+  EXPECT_FALSE(fs::exists(path("out/tet.pvd.x1Y2z3")));
+  EXPECT_TRUE(fs::exists(path("out/other_000001.vtu.Ab12cD")));
+  EXPECT_TRUE(fs::exists(path("out/tet_000007.vtu.notes")));
+  EXPECT_TRUE(fs::exists(path("out/tet_000001.vtu")));
 }
 
 }  // namespace
