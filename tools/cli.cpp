@@ -82,7 +82,8 @@ void add_run(CLI::App& app, Commands& c) {
   RunOptions& o = c.run_options;
   SceneOptions& so = c.scene_options;
   c.run = app.add_subcommand(
-      "run", "Run a scene (FILE.toml), or an exported function that needs no sets (FILE.sim --call)");
+      "run",
+      "Run a scene (FILE.toml), or an exported function that needs no sets (FILE.sim --call)");
   c.run->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
   c.run->add_option("--call", o.func, "Name of the exported function (.sim files; required there)");
   // The arguments are taken raw (CLI11 would split `[1, 2]` at its comma).
@@ -122,7 +123,8 @@ void add_repl(CLI::App& app, Commands& c) {
 
 void add_debug(CLI::App& app, Commands& c) {
   DebugOptions& o = c.debug_options;
-  c.debug = app.add_subcommand("debug", "Step-debug a scene (FILE.toml) or a Simit program (FILE.sim)");
+  c.debug =
+      app.add_subcommand("debug", "Step-debug a scene (FILE.toml) or a Simit program (FILE.sim)");
   c.debug->add_option("FILE", o.file, "A scene (.toml) or a Simit source file (.sim)")->required();
   c.debug->add_flag("--echo", o.echo,
                     "Print each command read after the prompt (for transcripts; without a terminal "
@@ -143,7 +145,8 @@ void add_debug(CLI::App& app, Commands& c) {
 #endif
 
 bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 int usage_error(const CLI::App& app, const std::string& message, std::ostream& err) {
@@ -201,6 +204,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.float32 = c.run_options.float32;
       so.check_finite = c.run_options.check_finite;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
+      scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
       return run_scene(so, out, err);
     }
     if (c.run_options.func.empty())

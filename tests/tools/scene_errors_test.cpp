@@ -5,12 +5,16 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
 
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <iterator>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -313,22 +317,17 @@ TEST_F(SceneErrors, FinalCsvIsCheckedBeforeTheFirstFrame) {
                {"--final-csv", path("nowhere/final.csv")});
   expect_error(replace(s, "position = \"x\"\n", ""), "",
                "--final-csv needs [output] points and position", {"--final-csv", path("f.csv")});
-  fs::create_directory(path("locked"));
-  fs::permissions(path("locked"), fs::perms::owner_read | fs::perms::owner_exec);
-  if (access(path("locked").c_str(), W_OK) == 0) {
-    std::cout << "running as root: the unwritable-folder case cannot be made\n";
-  } else {
-    Result r = run(s, {"--final-csv", path("locked/final.csv")});
-    EXPECT_EQ(r.status, 1);
-    EXPECT_EQ(r.err.rfind(path("scene.toml") + ": error: --final-csv: cannot write: " +
-                              path("locked/final.csv") + ": cannot create a temporary file",
-                          0),
-              0u)
-        << r.err;
-    EXPECT_FALSE(fs::exists(path("out")));
-  }
-  fs::permissions(path("locked"), fs::perms::owner_all);
-  Result r = run(s, {"--final-csv", path("out/final.csv")});  // into the output folder itself
+  // /proc takes no new files, not even from root.
+  Result r = run(s, {"--final-csv", "/proc/final.csv"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err.rfind(path("scene.toml") +
+                            ": error: --final-csv: cannot write: /proc/final.csv: cannot create a "
+                            "temporary file beside it: ",
+                        0),
+            0u)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out")));
+  r = run(s, {"--final-csv", path("out/final.csv")});  // into the output folder itself
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.err, "");
   std::ifstream csv(path("out/final.csv"));
@@ -354,6 +353,77 @@ TEST_F(SceneErrors, TheNextRunRemovesStaleTemporaries) {
   EXPECT_TRUE(fs::exists(path("out/other_000001.vtu.Ab12cD")));
   EXPECT_TRUE(fs::exists(path("out/tet_000007.vtu.notes")));
   EXPECT_TRUE(fs::exists(path("out/tet_000001.vtu")));
+}
+
+// A trivial step on a large generated cloth, so that a run spends its time writing frames.
+const char* kWriterProgram = R"(element Point
+  x : vector[3](float);
+end
+element Face
+end
+extern points : set{Point};
+extern faces : set{Face}(points, points, points);
+func nudge(inout p : Point)
+  p.x(1) = p.x(1) + 0.001;
+end
+export func step()
+  apply nudge to points;
+end
+)";
+
+// `simit run` killed by SIGTERM while it writes frames: it dies of the signal, removes the
+// temporary it was writing, and the .pvd lists exactly the complete frames on disk.
+TEST_F(SceneErrors, AKilledRunLeavesNoTemporaries) {
+  write("writer.sim", kWriterProgram);
+  std::string scene = "program = \"writer.sim\"\nstep = \"step\"\nframes = 1000\n";
+  for (const char* set : {"points", "faces"})
+    scene += std::string("[sets.") + set +
+             "]\ngenerate = \"square_cloth\"\nn = 400\nelements = \"" +
+             (std::string(set) == "points" ? "vertices" : "triangles") + "\"\n";
+  scene += "[sets.points.fields]\nx = \"position\"\n[output]\nfolder = \"" + path("out") +
+           "\"\nname = \"c\"\npoints = \"points\"\nposition = \"x\"\ncells = \"faces\"\n";
+  write("scene.toml", scene);
+  const std::string scene_path = path("scene.toml");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    freopen("/dev/null", "w", stdout);
+    execl(SIMIT_EXE, SIMIT_EXE, "run", scene_path.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Once the .pvd lists frame 0, wait until a later frame's temporary is seen, then kill.
+  auto writing = [&] {
+    std::error_code ec;
+    if (!fs::exists(path("out/c.pvd"), ec)) return false;
+    for (const auto& entry : fs::directory_iterator(path("out"), ec))
+      if (entry.path().filename().string().find(".vtu.") != std::string::npos) return true;
+    return false;
+  };
+  for (int waited = 0; !writing() && waited < 600000; ++waited) usleep(100);
+  ASSERT_TRUE(writing());
+  kill(child, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit status " << status;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  std::set<std::string> frames;
+  for (const auto& entry : fs::directory_iterator(path("out"))) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "c.pvd" || name.ends_with(".vtu")) << "left behind: " << name;
+    if (name.ends_with(".vtu")) frames.insert(name);
+  }
+  std::ifstream pvd(path("out/c.pvd"));
+  std::set<std::string> listed;
+  for (std::string line; std::getline(pvd, line);) {
+    const size_t at = line.find("file=\"");
+    if (at != std::string::npos)
+      listed.insert(line.substr(at + 6, line.find('"', at + 6) - at - 6));
+  }
+  EXPECT_FALSE(listed.empty());
+  // The .pvd is rewritten after each frame: a frame renamed into place just before the signal
+  // may not be listed yet, but every listed frame is on disk.
+  for (const std::string& f : listed) EXPECT_TRUE(frames.count(f)) << f;
+  EXPECT_LE(frames.size(), listed.size() + 1);
 }
 
 }  // namespace

@@ -23,16 +23,27 @@ constexpr size_t kPathMax = 4096;
 char g_temp_paths[kSlots][kPathMax];
 volatile std::sig_atomic_t g_slot_used[kSlots];
 
-int claim_slot(const std::string& temp) {
-  if (temp.size() >= kPathMax) return -1;  // not removed on a signal; still removed on return
-  for (int i = 0; i < kSlots; ++i) {
-    if (g_slot_used[i]) continue;
-    std::memcpy(g_temp_paths[i], temp.c_str(), temp.size() + 1);
-    std::atomic_signal_fence(std::memory_order_seq_cst);
-    g_slot_used[i] = 1;
-    return i;
+// Creates the temporary (mkstemp) in a slot's buffer, so that a signal finds its name from the
+// moment the file exists. Returns the descriptor (or -1) and sets `slot` (-1 when every slot
+// is taken or the path is too long: the file is then only removed by the destructor).
+int create_in_slot(std::string& temp, int& slot) {
+  slot = -1;
+  if (temp.size() < kPathMax)
+    for (int i = 0; i < kSlots && slot < 0; ++i)
+      if (!g_slot_used[i]) slot = i;
+  if (slot < 0) return mkstemp(temp.data());
+  char* buffer = g_temp_paths[slot];
+  std::memcpy(buffer, temp.c_str(), temp.size() + 1);
+  std::atomic_signal_fence(std::memory_order_seq_cst);
+  g_slot_used[slot] = 1;  // until then the handler ignores the buffer; after, it may see the
+                          // template (no such file) or the name chosen
+  const int fd = mkstemp(buffer);
+  std::memcpy(temp.data(), buffer, temp.size());
+  if (fd < 0) {
+    g_slot_used[slot] = 0;
+    slot = -1;
   }
-  return -1;
+  return fd;
 }
 
 void release_slot(int slot) {
@@ -61,12 +72,11 @@ void remove_temporaries_on_signals() {
 }
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), temp_path_(path_ + ".XXXXXX") {
-  int fd = mkstemp(temp_path_.data());
+  int fd = create_in_slot(temp_path_, slot_);
   if (fd < 0) {
     temp_path_.clear();
     fail("cannot create a temporary file beside it");
   }
-  slot_ = claim_slot(temp_path_);
   // mkstemp makes the file private; the result is an ordinary output file.
   fchmod(fd, 0644);
   file_ = fdopen(fd, "wb");
