@@ -39,6 +39,7 @@ struct Commands {
   TestCommandOptions test_options;  // how `simit test` runs %! tests and graph sections
   RunOptions run_options;
   SceneOptions scene_options;
+  bool no_finite_check = false;  // simit run --no-finite-check (scenes)
 };
 
 void add_check(CLI::App& app, Commands& c) {
@@ -91,6 +92,10 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_flag("--float32", o.float32, "Run with 32-bit floats");
   c.run->add_flag("--check-finite", o.check_finite,
                   "Stop with a run-time error at the first NaN or infinity produced");
+  c.run->add_flag("--no-finite-check", c.no_finite_check,
+                  "Scenes: let NaN and infinity through (by default the run stops at the first "
+                  "one in the sets' float fields or step's results, checked after init and after "
+                  "every frame; the frames before it stay written)");
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
       ->check(CLI::NonNegativeNumber);
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
@@ -203,6 +208,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.file = c.run_options.file;
       so.float32 = c.run_options.float32;
       so.check_finite = c.run_options.check_finite;
+      so.finite_check = !c.no_finite_check;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
       return run_scene(so, out, err);

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -353,6 +354,63 @@ TEST_F(SceneErrors, TheNextRunRemovesStaleTemporaries) {
   EXPECT_TRUE(fs::exists(path("out/other_000001.vtu.Ab12cD")));
   EXPECT_TRUE(fs::exists(path("out/tet_000007.vtu.notes")));
   EXPECT_TRUE(fs::exists(path("out/tet_000001.vtu")));
+}
+
+// A NaN or an infinity stops the run at the frame boundary where it first appears, naming the
+// frame, the field, the element and the set; the frames written before it stay, listed in the
+// .pvd. --no-finite-check and `finite_check = false` let it through.
+TEST_F(SceneErrors, NonFiniteValuesStopTheRunAtTheirFrame) {
+  // The fem example with E = 1e300, one vertex pinned and an initial velocity: the first step
+  // overflows.
+  std::ifstream fem(std::string(SIMIT_SOURCE_DIR) + "/examples/fem/fem.sim");
+  std::string program((std::istreambuf_iterator<char>(fem)), {});
+  write("fem.sim", replace(program, "const E         = 5e3;", "const E         = 1e300;"));
+  std::string s =
+      replace(fem_scene(), std::string(SIMIT_SOURCE_DIR) + "/examples/fem/fem.sim", "fem.sim");
+  s = replace(s, "frames = 1", "frames = 3");
+  s = replace(s, "x = \"position\"\n",
+              "x = \"position\"\npinned = \"x + y + z < 0.5\"\nv = [0.1, 0.0, 0.1]\n");
+  s += "csv = \"stats.csv\"\n";
+  const std::string hint =
+      " (--check-finite stops at the statement that makes it; --no-finite-check lets it "
+      "through)\n";
+  Result r = run(s);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, path("scene.toml") +
+                       ": error: after frame 1: field 'x' of element 0 of set 'verts' is nan "
+                       "(component 0)" +
+                       hint);
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(path("out")))
+    files.push_back(entry.path().filename().string());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"stats.csv", "tet.pvd", "tet_000000.vtu"}));
+  std::ifstream pvd(path("out/tet.pvd"));
+  std::string series((std::istreambuf_iterator<char>(pvd)), {});
+  EXPECT_NE(series.find("file=\"tet_000000.vtu\""), std::string::npos) << series;
+  EXPECT_EQ(series.find("tet_000001"), std::string::npos) << series;
+  EXPECT_NE(series.find("</VTKFile>"), std::string::npos) << series;
+  // Turned off, the run goes on (and writes the NaN frames).
+  fs::remove_all(path("out"));
+  r = run(s, {"--no-finite-check"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("out/tet_000003.vtu")));
+  fs::remove_all(path("out"));
+  r = run(replace(s, "frames = 3", "frames = 3\nfinite_check = false"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  fs::remove_all(path("out"));
+  expect_error(replace(s, "frames = 3", "frames = 3\nfinite_check = 0"), "0\n[",
+               "finite_check: expected true or false");
+  // A field expression that divides by zero: stopped before frame 0 is written. (Element 0 is
+  // pinned: init zeroes its velocity.)
+  r = run(replace(s, "v = [0.1, 0.0, 0.1]", "v = \"1/0\""));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, path("scene.toml") +
+                       ": error: after init (frame 0): field 'v' of element 1 of set 'verts' is "
+                       "inf (component 0)" +
+                       hint);
+  EXPECT_FALSE(fs::exists(path("out/tet.pvd")));
+  EXPECT_FALSE(fs::exists(path("out/tet_000000.vtu")));
 }
 
 // A trivial step on a large generated cloth, so that a run spends its time writing frames.
