@@ -104,7 +104,8 @@ class Interpreter {
   const Frame& frame() const { return *frames_[depth_]; }
   Value& var(const frontend::ast::Variable& v);
   Value& read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at);
-  [[noreturn]] void fail_unset(const frontend::ast::Variable& v, const frontend::ast::Expr& at) const;
+  [[noreturn]] void fail_unset(const frontend::ast::Variable& v,
+                               const frontend::ast::Expr& at) const;
   int dim_size(const frontend::IndexSet& d, const frontend::SourceSpan& at);
   Shape shape_of(const frontend::Type& t, const frontend::SourceSpan& at);
   Value zero_of(const frontend::Type& t, const frontend::SourceSpan& at);
@@ -181,7 +182,7 @@ class Interpreter {
   // exec_stmt.cpp: statements
   void exec_block(const frontend::ast::Block& b);
   void exec(const frontend::ast::Stmt& s);
-  void exec_trapped(const frontend::ast::Stmt& s);  // the trap point's slow path
+  void exec_trapped(const frontend::ast::Stmt& s);     // the trap point's slow path
   bool offer_statement(const frontend::ast::Stmt& s);  // the executor seam for statements
   void exec_node(const frontend::ast::Stmt& s);
   void exec_var_decl(const frontend::ast::VarDecl& d);
@@ -221,6 +222,7 @@ class Interpreter {
   void exec_apply(const frontend::ast::Apply& a);
   void run_assembly(const frontend::ast::Assembly& a, const frontend::ast::Variable* through,
                     MapContext* ctx, const frontend::SourceSpan& at);
+  std::string element_note(const MapContext& ctx) const;
   AssemblyPlan& plan_site(const frontend::ast::Assembly& a, const MapContext& ctx);
   std::shared_ptr<runtime::SystemMatrix> result_matrix(AssemblyPlan::Result& r,
                                                        const runtime::PatternPtr& pattern,
@@ -258,7 +260,7 @@ class Interpreter {
   // The trap point's switch: the host's (Options::trap) or our own, holding Options::hook.
   Trap own_trap_;
   Trap* trap_ = &own_trap_;
-  uint64_t activations_ = 0;  // numbers every call and mapped element (FrameView::activation)
+  uint64_t activations_ = 0;   // numbers every call and mapped element (FrameView::activation)
   bool post_process_ = false;  // float32 or check_finite: results need a second look
   std::vector<Value> globals_;
   std::vector<std::unique_ptr<Frame>> frames_;  // reused by depth; index 0 is a base frame
