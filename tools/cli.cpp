@@ -41,6 +41,7 @@ struct Commands {
   TestCommandOptions test_options;  // how `simit test` runs %! tests and graph sections
   RunOptions run_options;
   SceneOptions scene_options;
+  bool no_finite_check = false;  // simit run --no-finite-check (scenes)
 };
 
 void add_check(CLI::App& app, Commands& c) {
@@ -113,6 +114,10 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_flag("--float32", o.float32, "Run with 32-bit floats");
   c.run->add_flag("--check-finite", o.check_finite,
                   "Stop with a run-time error at the first NaN or infinity produced");
+  c.run->add_flag("--no-finite-check", c.no_finite_check,
+                  "Scenes: let NaN and infinity through (by default the run stops at the first "
+                  "one in the sets' float fields or step's results, checked after init and after "
+                  "every frame; the frames before it stay written)");
   c.run->add_option("--backend", o.backend,
                     "What runs the program: interpreter (default) or jit (hot map and apply sites "
                     "compiled to native code with LLVM; the rest interpreted)")
@@ -247,7 +252,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.jit_stats = c.run_options.jit_stats;
       so.dump = c.run_options.dump;
       so.check_jit = c.run_options.check_jit;
+      so.finite_check = !c.no_finite_check;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
+      scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
       return run_scene(so, out, err);
     }
     if (c.run_options.func.empty())

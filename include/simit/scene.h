@@ -20,7 +20,11 @@ struct SceneOptions {
   std::string final_csv;   // when set: the last frame's positions as "x,y,z" lines
   std::string png;         // overrides [output] png when not empty (relative to the current folder)
   bool float32 = false;
-  bool check_finite = false;
+  bool check_finite = false;  // stop at the statement that produces the first NaN or infinity
+  // Check the float fields of the sets and step's float results after init and after every
+  // frame, stopping at the first NaN or infinity (the scene's `finite_check = false`, or this
+  // option false, turns it off).
+  bool finite_check = true;
   // The executor: "interpreter" (the reference) or "jit" (hot sites compiled with LLVM).
   std::string backend = "interpreter";
   long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
@@ -58,5 +62,10 @@ class Scene {
 
 // `simit run SCENE.toml`: open, then run. Returns 0 or 1 as Scene::run.
 int run_scene(const SceneOptions& options, std::ostream& out, std::ostream& err);
+
+// Makes SIGINT and SIGTERM remove the output file being written (its temporary) before the
+// process dies of the signal, so that a killed run leaves only complete files. Process-wide;
+// for command-line programs, once before the first run.
+void remove_temporaries_on_signals();
 
 }  // namespace simit::scene

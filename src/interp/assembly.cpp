@@ -75,7 +75,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   ctx->assembly = &a;
   ctx->at = at;
   ctx->target = var(*a.target_set).binding();
-  if (!ctx->target) fail(at, "set '" + a.target_set->name + "' has no value (the host did not bind it)");
+  if (!ctx->target)
+    fail(at, "set '" + a.target_set->name + "' has no value (the host did not bind it)");
   if (through) {
     ctx->grid = var(*through).binding();
     if (!ctx->grid) fail(at, "grid '" + through->name + "' is not bound");
@@ -85,9 +86,12 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   const std::vector<Value> generics = [&] {
     std::vector<Value> g;
     for (const IndexSet& b : a.bindings) {
-      if (b.kind == IndexSet::Kind::Fixed) g.push_back(Value::of_int(b.size));
-      else if (b.var) g.push_back(var(*b.var));
-      else g.emplace_back();
+      if (b.kind == IndexSet::Kind::Fixed)
+        g.push_back(Value::of_int(b.size));
+      else if (b.var)
+        g.push_back(var(*b.var));
+      else
+        g.emplace_back();
     }
     return g;
   }();
@@ -105,10 +109,12 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       else
         callee.refs[param.var->slot] = &p;
     }
-    if (k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_element(ctx->target, element);
+    if (k < f.params.size())
+      callee.slots[f.params[k++].var->slot] = Value::of_element(ctx->target, element);
     if (a.pass_endpoints && k < f.params.size())
       callee.slots[f.params[k++].var->slot] = Value::of_tuple(ctx->target, element);
-    if (ctx->grid && k < f.params.size()) callee.slots[f.params[k++].var->slot] = Value::of_set(ctx->grid);
+    if (ctx->grid && k < f.params.size())
+      callee.slots[f.params[k++].var->slot] = Value::of_set(ctx->grid);
     for (size_t i = 0; i < f.generics.size(); ++i)
       callee.slots[f.generics[i].var->slot] = i < generics.size() ? generics[i] : Value();
     for (const ast::Param& p : f.params) {
@@ -147,7 +153,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       auto set_of = [&](const IndexSet& d) -> runtime::Set& {
         const Value& v = *frame().refs[d.var->slot];
         const Value& s = d.kind == IndexSet::Kind::Set ? var(*d.var) : v;
-        if (s.kind() != Value::Kind::Set) fail(r.span, "matrix dimension '" + d.var->name + "' is not bound to a set");
+        if (s.kind() != Value::Kind::Set)
+          fail(r.span, "matrix dimension '" + d.var->name + "' is not bound to a set");
         return *s.binding()->set;
       };
       runtime::PatternPtr pattern =
@@ -179,7 +186,8 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       ctx->element = e;
       if (reuse && frame_of_element) {
         frame_of_element->activation = ++activations_;
-        if (element_slot >= 0) frame_of_element->slots[element_slot] = Value::of_element(ctx->target, e);
+        if (element_slot >= 0)
+          frame_of_element->slots[element_slot] = Value::of_element(ctx->target, e);
         if (tuple_slot >= 0) frame_of_element->slots[tuple_slot] = Value::of_tuple(ctx->target, e);
       } else {
         frame_of_element = &setup(e);
@@ -188,6 +196,12 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       execute_body(f);
     }
     if (offer) options_.sites->site_done(call);
+  } catch (RuntimeError& e) {
+    e.note_element(f.name, element_note(*ctx));
+    depth_ = base_depth;
+    map_ = saved;
+    map_depth_ = saved_depth;
+    throw;
   } catch (...) {
     depth_ = base_depth;
     map_ = saved;
@@ -196,6 +210,30 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   }
   map_ = saved;
   map_depth_ = saved_depth;
+}
+
+// "mapping over element 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')": built only when
+// an error leaves the map.
+std::string Interpreter::element_note(const MapContext& ctx) const {
+  const runtime::Set* set = ctx.target ? ctx.target->set : nullptr;
+  const ast::Variable* target = ctx.assembly ? ctx.assembly->target_set : nullptr;
+  const std::string name = target ? target->name : set ? set->name() : "?";
+  std::string note =
+      "mapping over element " + std::to_string(ctx.element) + " of set '" + name + "'";
+  if (!set || set->is_grid() || ctx.element < 0 || ctx.element >= set->size() || set->arity() == 0)
+    return note;
+  const Type* type = target && target->type ? target->type.get() : nullptr;
+  std::string list, open;
+  for (int k = 0; k < set->arity(); ++k) {
+    const ast::Variable* ep =
+        type && static_cast<size_t>(k) < type->endpoints.size() ? type->endpoints[k].var : nullptr;
+    const std::string of = ep ? ep->name : set->endpoint_set(k).name();
+    if (!open.empty() && of != open) list += " of '" + open + "';";
+    list += (list.empty() || of != open ? (list.empty() ? "" : " ") : ", ") +
+            std::to_string(set->endpoint(ctx.element, k));
+    open = of;
+  }
+  return note + " (endpoints " + list + " of '" + open + "')";
 }
 
 // The site's plan, made again when the target set or its topology changed.
@@ -217,10 +255,9 @@ AssemblyPlan& Interpreter::plan_site(const ast::Assembly& a, const MapContext& c
 
 // A zero matrix over `pattern` for one result of a site: the site's previous matrix when
 // nothing holds it any more (the program dropped it), otherwise a new one.
-std::shared_ptr<runtime::SystemMatrix> Interpreter::result_matrix(AssemblyPlan::Result& r,
-                                                                  const runtime::PatternPtr& pattern,
-                                                                  int block_rows, int block_cols,
-                                                                  ComponentKind kind) {
+std::shared_ptr<runtime::SystemMatrix> Interpreter::result_matrix(
+    AssemblyPlan::Result& r, const runtime::PatternPtr& pattern, int block_rows, int block_cols,
+    ComponentKind kind) {
   r.is_matrix = true;
   r.pattern = pattern;
   auto& last = r.last;
@@ -279,7 +316,8 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   p.accumulate = ctx.reduce;
   if (ctx.grid) {
     if (row.index() != ctx.element)
-      fail(r.span, "a stencil map writes only the row of the point it visits, not " + element_text(row));
+      fail(r.span,
+           "a stencil map writes only the row of the point it visits, not " + element_text(row));
     int tag = col.offset_tag();
     if (tag < 0) {
       if (col.index() != ctx.element)
@@ -297,7 +335,8 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
     return p;
   }
   const runtime::SystemMatrix& mat = *m.matrix();
-  int32_t pos = mat.pattern().assembly_position(*ctx.target->set, ctx.element, row.index(), col.index());
+  int32_t pos =
+      mat.pattern().assembly_position(*ctx.target->set, ctx.element, row.index(), col.index());
   if (pos < 0)
     fail(r.span, "write to (" + element_text(row) + ", " + element_text(col) +
                      ") outside the sparsity pattern while mapping element " +

@@ -234,6 +234,7 @@ class Interpreter {
   void exec_apply(const frontend::ast::Apply& a);
   void run_assembly(const frontend::ast::Assembly& a, const frontend::ast::Variable* through,
                     MapContext* ctx, const frontend::SourceSpan& at);
+  std::string element_note(const MapContext& ctx) const;
   AssemblyPlan& plan_site(const frontend::ast::Assembly& a, const MapContext& ctx);
   std::shared_ptr<runtime::SystemMatrix> result_matrix(AssemblyPlan::Result& r,
                                                        const runtime::PatternPtr& pattern,

@@ -24,8 +24,13 @@ RuntimeError::RuntimeError(frontend::SourceSpan where, std::string message)
       next_(where) {}
 
 void RuntimeError::add_frame(std::string func, frontend::SourceSpan call_site) {
-  stack_.push_back({std::move(func), next_});
+  stack_.push_back({std::move(func), next_, {}});
   next_ = call_site;
+}
+
+void RuntimeError::note_element(const std::string& func, std::string element) {
+  if (stack_.empty() || stack_.back().func != func || !stack_.back().element.empty()) return;
+  stack_.back().element = std::move(element);
 }
 
 int RuntimeError::line() const { return where_.valid() ? where_.start().line : 0; }
@@ -37,6 +42,7 @@ std::string RuntimeError::render() const {
     out += "  in " + f.func;
     if (f.at.valid())
       out += " (" + f.at.file->name() + ":" + std::to_string(f.at.start().line) + ")";
+    if (!f.element.empty()) out += ", " + f.element;
     out += "\n";
   }
   return out;

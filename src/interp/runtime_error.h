@@ -16,6 +16,9 @@ class RuntimeError : public std::runtime_error {
   struct Frame {
     std::string func;
     frontend::SourceSpan at;
+    // For a function called by a map or apply: the element it served ("mapping over element
+    // 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')"); empty otherwise.
+    std::string element;
   };
 
   RuntimeError(frontend::SourceSpan where, std::string message);
@@ -27,10 +30,15 @@ class RuntimeError : public std::runtime_error {
   // Records the next enclosing call, innermost first: `func` was at the place recorded last
   // (the error itself for the first frame); `call_site` is where `func` was called from.
   void add_frame(std::string func, frontend::SourceSpan call_site);
+  // Names the element the innermost frame recorded so far, `func`, was mapped over (added by
+  // the map on the way out, so the per-element loop pays nothing). No-op when that frame is
+  // not `func`'s or already names one.
+  void note_element(const std::string& func, std::string element);
   // The line of `where` (0 when it has no place).
   int line() const;
 
-  // `file:line:col: runtime error: message`, then `  in f (file:line)` per active call.
+  // `file:line:col: runtime error: message`, then `  in f (file:line)` per active call, with
+  // `, mapping over element ...` for a function called by a map.
   std::string render() const;
 
  private:

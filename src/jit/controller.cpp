@@ -121,6 +121,20 @@ double component(const Value& v, int i) {
   }
 }
 
+// "mapping over element 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')", as the
+// interpreter writes it.
+std::string element_note(const interp::SiteCall& call, int element) {
+  const runtime::Set& t = call.target;
+  const ast::Variable* target = call.plan.site->target_set;
+  std::string note = "mapping over element " + std::to_string(element) + " of set '" +
+                     (target ? target->name : t.name()) + "'";
+  if (element < 0 || element >= t.size() || t.arity() == 0) return note;
+  std::string list;
+  for (int k = 0; k < t.arity(); ++k) list += (k ? ", " : "") + std::to_string(t.endpoint(element, k));
+  const bool one_set = t.homogeneous();
+  return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") + ")";
+}
+
 void zero_results(interp::SiteCall& call) {
   for (Value& r : call.results) {
     if (r.kind() == Value::Kind::Matrix && r.matrix()) r.matrix()->set_zero();
@@ -271,8 +285,11 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         zero_results(call);
         return false;
       }
-      throw interp::RuntimeError(err.span, err.message + " (element " + std::to_string(failed) +
-                                               " of " + call.target.describe() + ")");
+      // Located as the interpreter locates it: the mapped function's frame names the element.
+      interp::RuntimeError error(err.span, err.message);
+      error.add_frame(call.plan.func->name, call.at);
+      error.note_element(call.plan.func->name, element_note(call, failed));
+      throw error;
     }
     if (end < n && trap.interrupt_pending()) {
       trap.take_interrupt();

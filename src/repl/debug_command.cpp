@@ -104,7 +104,7 @@ class DebugSession {
   bool tty_;
   repl::Debugger debugger_;
   scene::SceneOptions scene_options_;
-  std::unique_ptr<scene::Scene> scene_;                // a .toml file
+  std::unique_ptr<scene::Scene> scene_;                  // a .toml file
   std::shared_ptr<const api::CompiledProgram> program_;  // a .sim file
 };
 
@@ -113,6 +113,7 @@ bool DebugSession::open() {
     scene_options_.file = options_.file;
     scene_options_.float32 = options_.float32;
     scene_options_.quiet = true;
+    scene_options_.finite_check = false;  // `break on nan` is the debugger's way to find one
     scene_ = scene::SceneAccess::open(scene_options_, &debugger_.trap(), err_);
     if (!scene_) return false;
     debugger_.set_program(&scene::SceneAccess::program(*scene_),
@@ -124,7 +125,8 @@ bool DebugSession::open() {
     err_ << program_->compilation()->diagnostics.render_all();
     return false;
   }
-  debugger_.set_program(&program_->program(), {{1, fs::path(options_.file).filename().string(), 1}});
+  debugger_.set_program(&program_->program(),
+                        {{1, fs::path(options_.file).filename().string(), 1}});
   return true;
 }
 

@@ -19,7 +19,8 @@ runtime::Mesh square_cloth(int side) {
   m.points.resize(size_t(side) * side);
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i)
-      m.points[size_t(i) + size_t(side) * j] = {double(i) / (side - 1), 0.0, double(j) / (side - 1)};
+      m.points[size_t(i) + size_t(side) * j] = {double(i) / (side - 1), 0.0,
+                                                double(j) / (side - 1)};
   for (int j = 0; j + 1 < side; ++j)
     for (int i = 0; i + 1 < side; ++i) {
       const int p = i + side * j;
@@ -31,13 +32,15 @@ runtime::Mesh square_cloth(int side) {
 
 }  // namespace
 
-std::string MeshCache::generate(const SceneFile& file, const toml::table& t, const std::string& tname) {
+std::string MeshCache::generate(const SceneFile& file, const toml::table& t,
+                                const std::string& tname) {
   std::string kind = file.required_string(t, tname, "generate");
   if (kind != "square_cloth")
     file.fail(t.get("generate"),
               tname + " generate: '" + kind + "' is not a generator (expected square_cloth)");
   const toml::node* nn = t.get("n");
-  if (!nn) file.fail(t.get("generate"), tname + ": generate = \"square_cloth\" needs n (points per side)");
+  if (!nn)
+    file.fail(t.get("generate"), tname + ": generate = \"square_cloth\" needs n (points per side)");
   if (!nn->is_integer() || *nn->value<int64_t>() < 2 || *nn->value<int64_t>() > 4096)
     file.fail(nn, tname + " n: expected a whole number from 2 to 4096 (points per side)");
   const int side = static_cast<int>(*nn->value<int64_t>());
@@ -54,6 +57,9 @@ const runtime::Mesh& MeshCache::read(const SceneFile& file, const std::string& p
   try {
     runtime::Mesh m = runtime::read_mesh(path);
     runtime::check_mesh(m, path);
+    // A tet listed in the other orientation would have a negative rest volume in every FEM
+    // program written for TetGen's (-det/6); swapping two of its vertices is the same tet.
+    runtime::orient_tets(m);
     return meshes_.emplace(path, std::move(m)).first->second;
   } catch (const runtime::MeshError& e) {
     file.fail(at, key + ": " + e.what());

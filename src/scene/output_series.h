@@ -1,7 +1,8 @@
 // [output]: what a scene writes and where: a ParaView series (.pvd + one .vtu per written
 // frame), a per-frame CSV of timings and step results, a quick-look PNG of the last frame,
 // and (--final-csv) the last positions. Everything is checked before the first frame; the
-// folder is created only once every check has passed.
+// folder is created only once every check has passed. The names in [output] are plain file
+// names inside the output folder, distinct from each other and from the run's inputs.
 #pragma once
 
 #include <fstream>
@@ -19,7 +20,8 @@ namespace simit::scene {
 
 class OutputSeries {
  public:
-  OutputSeries(const SceneFile& file, const SceneOptions& options) : file_(file), options_(options) {}
+  OutputSeries(const SceneFile& file, const SceneOptions& options)
+      : file_(file), options_(options) {}
 
   // Checks [output] (and --output, --png) against the built sets. Throws SceneError.
   void configure(const BoundSets& sets);
@@ -32,7 +34,8 @@ class OutputSeries {
   void write_frame(const MeshCache& meshes, int frame, bool last);
   // One row of the stats CSV, when there is one.
   void write_stats(int frame, double ms, const std::vector<double>& stats, double assembly_ms);
-  // --final-csv: the last frame's positions as x,y,z lines.
+  // --final-csv: the last frame's positions as x,y,z lines (under a temporary name, renamed
+  // when complete).
   void write_final_csv() const;
 
   bool every_frame(int frame) const { return frame % every_ == 0; }
@@ -47,11 +50,16 @@ class OutputSeries {
   void field_list(const toml::table& t, const std::string& key, const SceneSet* s,
                   std::vector<std::string>& list) const;
   void check_png(const toml::table& t);
+  std::string plain_name(const toml::table& t, const std::string& key) const;
+  void check_collisions(const toml::table& t, const BoundSets& sets) const;
+  void check_final_csv() const;
+  void probe_final_csv() const;
   void open_png(const toml::table& t);
+  void remove_stale_temporaries() const;
 
   const SceneFile& file_;
   const SceneOptions& options_;
-  std::string folder_, name_, csv_path_;
+  std::string folder_, name_, csv_name_, csv_path_;
   std::string png_path_;  // the quick-look picture of the last frame, when asked for
   SceneSet* points_ = nullptr;
   SceneSet* cells_ = nullptr;

@@ -4,6 +4,7 @@
 
 #include <new>
 
+#include "runtime/mesh/atomic_file.h"
 #include "runtime/mesh/mesh.h"
 #include "scene/scene_run.h"
 #include "scene/scene_sets.h"
@@ -111,6 +112,8 @@ std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
   d.owner = run;
   return d;
 }
+
+void remove_temporaries_on_signals() { runtime::remove_temporaries_on_signals(); }
 
 int run_scene(const SceneOptions& options, std::ostream& out, std::ostream& err) {
   std::unique_ptr<Scene> scene = Scene::open(options, err);

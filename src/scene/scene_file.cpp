@@ -11,7 +11,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string located(const std::string& file, const toml::source_region& at, const std::string& what) {
+std::string located(const std::string& file, const toml::source_region& at,
+                    const std::string& what) {
   std::ostringstream s;
   s << file;
   if (at.begin.line > 0) s << ':' << at.begin.line << ':' << at.begin.column;
@@ -24,10 +25,12 @@ const ast::FuncDecl* find_procedure(const SceneFile& file, const std::string& ke
                                     const std::string& name) {
   const ast::FuncDecl* f = file.program->find_func(name);
   if (!f) file.fail(file.doc.get(key), key + ": the program has no function '" + name + "'");
-  if (!f->exported) file.fail(file.doc.get(key), key + ": '" + name + "' is not an exported function");
+  if (!f->exported)
+    file.fail(file.doc.get(key), key + ": '" + name + "' is not an exported function");
   if (!f->params.empty())
-    file.fail(file.doc.get(key), key + ": '" + name + "' takes parameters; a scene can only run "
-                                       "procedures without parameters");
+    file.fail(file.doc.get(key), key + ": '" + name +
+                                     "' takes parameters; a scene can only run "
+                                     "procedures without parameters");
   return f;
 }
 
@@ -58,6 +61,10 @@ void read_frames(SceneFile& file) {
     if (!n->is_number() || !(n->value<double>().value() > 0))
       file.fail(n, "frame_time: expected a positive number (seconds between frames in the .pvd)");
     file.frame_time = *n->value<double>();
+  }
+  if (const toml::node* n = file.doc.get("finite_check")) {
+    if (!n->is_boolean()) file.fail(n, "finite_check: expected true or false");
+    file.finite_check = *n->value<bool>();
   }
 }
 
@@ -110,7 +117,8 @@ std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
   }
   file->dir = fs::path(path).parent_path().string();
   file->check_keys(file->doc, "the scene",
-                   {"program", "init", "step", "frames", "frame_time", "sets", "tensors", "output"});
+                   {"program", "init", "step", "frames", "frame_time", "finite_check", "sets",
+                    "tensors", "output"});
   file->program_path = file->resolve(file->required_string(file->doc, "the scene", "program"));
   file->init_name = file->optional_string(file->doc, "the scene", "init").value_or("");
   file->step_name = file->required_string(file->doc, "the scene", "step");

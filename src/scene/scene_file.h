@@ -29,6 +29,7 @@ struct SceneFile {
   std::string program_path, init_name, step_name;
   int frames = 0;
   double frame_time = 1.0;
+  bool finite_check = true;  // `finite_check = false` lets NaN and infinity through the frames
   std::shared_ptr<const api::CompiledProgram> program;
   std::vector<std::string> stat_names;  // the scalar results of step, reported per frame
 
@@ -49,6 +50,6 @@ std::unique_ptr<SceneFile> read_scene_file(const std::string& path);
 
 // The program's extern declarations of one kind (sets or tensors), by name.
 std::map<std::string, const frontend::ast::Variable*> program_externs(const SceneFile& file,
-                                                                     bool sets);
+                                                                      bool sets);
 
 }  // namespace simit::scene

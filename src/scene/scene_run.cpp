@@ -80,6 +80,63 @@ void SceneRun::print_sizes(std::ostream& out, int frames) const {
   out << file_.path << ": " << sizes << "; " << frames << " frames\n";
 }
 
+namespace {
+
+// The first non-finite component of a float field: element and component, or -1.
+template <typename T>
+std::pair<int, int> first_non_finite(const runtime::Field& f, int size) {
+  const T* p = f.data<T>();
+  const size_t components = f.components();
+  const size_t count = components * static_cast<size_t>(size);
+  for (size_t i = 0; i < count; ++i)
+    if (!std::isfinite(p[i]))
+      return {static_cast<int>(i / components), static_cast<int>(i % components)};
+  return {-1, -1};
+}
+
+std::string number_text(double v) { return std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf"; }
+
+}  // namespace
+
+// The default check at frame boundaries: one pass over the float fields of every set and the
+// step's float results, so that a NaN or an infinity stops the run at the frame that made it
+// instead of filling the rest of the series. Frame 0 is the state after init.
+void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& results) const {
+  if (!options_.finite_check || !file_.finite_check) return;
+  const std::string when = frame > 0                 ? "after frame " + std::to_string(frame)
+                           : file_.init_name.empty() ? "in the initial state (frame 0)"
+                                                     : "after init (frame 0)";
+  const std::string hint =
+      " (--check-finite stops at the statement that makes it; --no-finite-check lets it through)";
+  for (const auto& s : sets_.sets) {
+    const runtime::Set& set = *s->set;
+    for (int k = 0; k < set.field_count(); ++k) {
+      const runtime::Field& f = set.field(k);
+      if (f.type().kind != ComponentKind::Float) continue;
+      auto [element, component] = f.type().single ? first_non_finite<float>(f, set.size())
+                                                  : first_non_finite<double>(f, set.size());
+      if (element < 0) continue;
+      const double v = f.type().single
+                           ? f.data<float>()[size_t(element) * f.components() + component]
+                           : f.data<double>()[size_t(element) * f.components() + component];
+      const std::string part =
+          f.components() > 1 ? " (component " + std::to_string(component) + ")" : "";
+      throw RunFailure(file_.path + ": error: " + when + ": field '" + f.name() + "' of element " +
+                       std::to_string(element) + " of set '" + s->name + "' is " + number_text(v) +
+                       part + hint);
+    }
+  }
+  const std::vector<ast::Param>& declared = file_.program->find_func(file_.step_name)->results;
+  for (size_t i = 0; i < results.size() && i < declared.size(); ++i) {
+    const runtime::Tensor v = results[i].to_tensor();
+    if (v.kind() != ComponentKind::Float) continue;
+    for (size_t c = 0; c < v.size(); ++c)
+      if (!std::isfinite(v.floats()[c]))
+        throw RunFailure(file_.path + ": error: " + when + ": the result '" + declared[i].name +
+                         "' of " + file_.step_name + " is " + number_text(v.floats()[c]) + hint);
+  }
+}
+
 api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   api::EngineOptions eo;
   eo.float32 = options_.float32;
@@ -102,6 +159,7 @@ void SceneRun::run(int frames, std::ostream& out) {
   print_sizes(out, frames);
   // Everything is checked: run.
   if (!file_.init_name.empty()) call(engine, file_.init_name);
+  check_finite_state(0, {});
   output_.write_frame(meshes_, 0, frames == 0);
   const double total_ms = run_frames(engine, frames, out);
   if (options_.progress_line && frames > 0) out << '\n';
@@ -123,11 +181,14 @@ double SceneRun::run_frames(api::Engine& engine, int frames, std::ostream& out) 
     const double assembly_ms = std::min(ms, 1e3 * engine.stats().assembly_seconds);
     total_ms += ms;
     const std::vector<double> stats = step_stats(results);
-    if (output_.every_frame(frame) || frame == frames) output_.write_frame(meshes_, frame, frame == frames);
+    check_finite_state(frame, results);
+    if (output_.every_frame(frame) || frame == frames)
+      output_.write_frame(meshes_, frame, frame == frames);
     output_.write_stats(frame, ms, stats, assembly_ms);
     if (options_.quiet) continue;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-    print_progress(out, FrameReport{frame, frames, ms, total_ms, elapsed, &file_.stat_names, &stats},
+    print_progress(out,
+                   FrameReport{frame, frames, ms, total_ms, elapsed, &file_.stat_names, &stats},
                    options_.progress_line);
   }
   return total_ms;

@@ -50,6 +50,7 @@ class SceneRun {
   std::vector<interp::Value> call(api::Engine& engine, const std::string& name);
   std::vector<double> step_stats(const std::vector<interp::Value>& results) const;
   void print_sizes(std::ostream& out, int frames) const;
+  void check_finite_state(int frame, const std::vector<interp::Value>& results) const;
 
   const SceneFile& file_;
   const SceneOptions& options_;

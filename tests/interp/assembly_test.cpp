@@ -75,13 +75,15 @@ VectorXd vec(runtime::Set& s, const char* name) {
                                     static_cast<Eigen::Index>(f.components() * s.size()));
 }
 
-#define EXPECT_MATRIX_NEAR(actual, expected, tol)                                      \
-  do {                                                                                 \
-    const MatrixXd a_ = (actual), e_ = (expected);                                     \
-    ASSERT_EQ(a_.rows(), e_.rows());                                                   \
-    ASSERT_EQ(a_.cols(), e_.cols());                                                   \
-    EXPECT_LE((a_ - e_).cwiseAbs().maxCoeff(), (tol) * std::max(1.0, e_.cwiseAbs().maxCoeff())) \
-        << "actual:\n" << a_ << "\nexpected:\n" << e_;                                \
+#define EXPECT_MATRIX_NEAR(actual, expected, tol)                                             \
+  do {                                                                                        \
+    const MatrixXd a_ = (actual), e_ = (expected);                                            \
+    ASSERT_EQ(a_.rows(), e_.rows());                                                          \
+    ASSERT_EQ(a_.cols(), e_.cols());                                                          \
+    EXPECT_LE((a_ - e_).cwiseAbs().maxCoeff(), (tol)*std::max(1.0, e_.cwiseAbs().maxCoeff())) \
+        << "actual:\n"                                                                        \
+        << a_ << "\nexpected:\n"                                                              \
+        << e_;                                                                                \
   } while (0)
 
 // Distinct (row, col) element pairs, for pattern sizes.
@@ -193,8 +195,8 @@ end
 struct SpringGraph {
   static constexpr int n = 7;
   // A ring, two chords, and a repeated edge (its contributions add).
-  std::vector<std::pair<int, int>> edges = {{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 5}, {5, 6},
-                                            {6, 0}, {0, 3}, {5, 2}, {1, 0}};
+  std::vector<std::pair<int, int>> edges = {{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 5},
+                                            {5, 6}, {6, 0}, {0, 3}, {5, 2}, {1, 0}};
   runtime::Set nodes{"nodes"};
   runtime::Set springs{"springs", {&nodes, &nodes}};
   SpringGraph() {
@@ -349,7 +351,8 @@ end
 )");
   ASSERT_TRUE(h.ok());
   const int n = 6;
-  const std::vector<std::array<int, 3>> tris = {{0, 1, 2}, {2, 1, 3}, {3, 4, 2}, {5, 4, 3}, {0, 2, 5}};
+  const std::vector<std::array<int, 3>> tris = {
+      {0, 1, 2}, {2, 1, 3}, {3, 4, 2}, {5, 4, 3}, {0, 2, 5}};
   runtime::Set verts("verts"), t("tris", {&verts, &verts, &verts});
   verts.add_many(n);
   for (auto& c : tris) t.add({c[0], c[1], c[2]});
@@ -412,7 +415,8 @@ end
 )");
   ASSERT_TRUE(h.ok());
   const int n = 7;
-  const std::vector<std::array<int, 4>> tets = {{0, 1, 2, 3}, {1, 2, 3, 4}, {4, 3, 2, 5}, {6, 5, 0, 1}};
+  const std::vector<std::array<int, 4>> tets = {
+      {0, 1, 2, 3}, {1, 2, 3, 4}, {4, 3, 2, 5}, {6, 5, 0, 1}};
   runtime::Set verts("verts"), t("tets", {&verts, &verts, &verts, &verts});
   verts.add_many(n);
   for (auto& c : tets) t.add({c[0], c[1], c[2], c[3]});
@@ -530,7 +534,8 @@ end
 
   const int np = static_cast<int>(probes.size());
   VectorXd y = VectorXd::Zero(ns), z = VectorXd::Zero(3 * nc);
-  MatrixXd B = MatrixXd::Zero(ns, nc), Bb = MatrixXd::Zero(2 * ns, 3 * nc), P = MatrixXd::Zero(np, nc);
+  MatrixXd B = MatrixXd::Zero(ns, nc), Bb = MatrixXd::Zero(2 * ns, 3 * nc),
+           P = MatrixXd::Zero(np, nc);
   VectorXd rv(ns), r2v(2 * ns), cv(nc), v3v(3 * nc);
   for (int i = 0; i < ns; ++i) {
     rv(i) = reading(i);
@@ -673,6 +678,66 @@ end
 // ------------------------------------------------------------------------------------------
 // Writes outside the pattern or the neighbourhood: run-time errors naming element and line.
 
+// A run-time error inside a mapped function (here in a helper it calls) names, in the stack, the
+// element the map was serving and its endpoints; a nested map names both elements.
+TEST(Assembly, RunTimeErrorsNameTheMappedElement) {
+  Harness h(R"(element N  d : int; end
+element T  k : int; end
+extern nodes : set{N};
+extern tris : set{T}(nodes, nodes, nodes);
+func ratio(a : int, b : int) -> r : int
+  r = a / b;
+end
+func per_tri(t : T, v : (N * 3)) -> f : vector[nodes](float)
+  q = ratio(t.k, v(1).d);
+  f(v(0)) = 1.0;
+end
+func per_node(inout n : N)
+  f = map per_tri to tris reduce +;
+  n.d = n.d + 1;
+end
+export func run_tris() -> f : vector[nodes](float)
+  f = map per_tri to tris reduce +;
+end
+export func run_nodes()
+  apply per_node to nodes;
+end
+)");
+  ASSERT_TRUE(h.ok());
+  runtime::Set nodes("nodes"), tris("tris", {&nodes, &nodes, &nodes});
+  nodes.add_many(5);
+  tris.add({0, 1, 2});
+  tris.add({3, 4, 0});  // v(1) = node 4, whose d is 0: the division fails here
+  tris.add({1, 2, 3});
+  h.bind("nodes", nodes);
+  h.bind("tris", tris);
+  int32_t* d = nodes.field("d").data<int32_t>();
+  for (int i = 0; i < 4; ++i) d[i] = 1;
+  try {
+    h.run("run_tris");
+    FAIL() << "expected a run-time error";
+  } catch (const RuntimeError& e) {
+    EXPECT_EQ(e.render(),
+              "assembly.sim:6:7: runtime error: integer division by zero\n"
+              "  in ratio (assembly.sim:6)\n"
+              "  in per_tri (assembly.sim:9), mapping over element 1 of set 'tris' (endpoints 3, "
+              "4, 0 of 'nodes')\n"
+              "  in run_tris (assembly.sim:17)\n");
+  }
+  try {
+    h.run("run_nodes");
+    FAIL() << "expected a run-time error";
+  } catch (const RuntimeError& e) {
+    EXPECT_EQ(e.render(),
+              "assembly.sim:6:7: runtime error: integer division by zero\n"
+              "  in ratio (assembly.sim:6)\n"
+              "  in per_tri (assembly.sim:9), mapping over element 1 of set 'tris' (endpoints 3, "
+              "4, 0 of 'nodes')\n"
+              "  in per_node (assembly.sim:13), mapping over element 0 of set 'nodes'\n"
+              "  in run_nodes (assembly.sim:20)\n");
+  }
+}
+
 TEST(Assembly, WriteOutsideThePatternNamesElementAndLine) {
   Harness h(R"(element N  x : float; end
 element S  k : float; end
@@ -786,7 +851,8 @@ struct Network {
       for (int j = 0; j < side; ++j) {
         if (j + 1 < side) springs.add({id(i, j), id(i, j + 1)});
         if (i + 1 < side) springs.add({id(i + 1, j), id(i, j)});
-        if (i + 1 < side && j + 1 < side && (i + j) % 3 == 0) springs.add({id(i, j), id(i + 1, j + 1)});
+        if (i + 1 < side && j + 1 < side && (i + j) % 3 == 0)
+          springs.add({id(i, j), id(i + 1, j + 1)});
       }
     for (int t = 0; t < side; ++t) springs.add({id(t, 0), id(side - 1 - t, side - 1)});
   }
@@ -795,7 +861,8 @@ struct Network {
       field(nodes, "m")[i] = 0.5 + 0.01 * (i % 17);
       field(nodes, "b")[i] = std::sin(0.37 * i) + 0.1 * (i % 5);
     }
-    for (int e = 0; e < springs.size(); ++e) field(springs, "k")[e] = 1.0 + 0.5 * std::cos(0.11 * e) + 0.2 * (e % 3);
+    for (int e = 0; e < springs.size(); ++e)
+      field(springs, "k")[e] = 1.0 + 0.5 * std::cos(0.11 * e) + 0.2 * (e % 3);
   }
   // The same matrix, assembled here from the element data with triplets.
   runtime::EigenSparse matrix() {
@@ -839,7 +906,11 @@ TEST(ConjugateGradient, ConvergedSolutionMatchesEigenCG) {
   ASSERT_EQ(cg.info(), Eigen::Success);
   VectorXd xs = vec(r[1]);
   ASSERT_EQ(xs.size(), x.size());
-  RecordProperty("max_abs_difference", [&] { char b[32]; std::snprintf(b, sizeof b, "%.3e", (xs - x).cwiseAbs().maxCoeff()); return std::string(b); }());
+  RecordProperty("max_abs_difference", [&] {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3e", (xs - x).cwiseAbs().maxCoeff());
+    return std::string(b);
+  }());
   RecordProperty("max_abs_x", std::to_string(x.cwiseAbs().maxCoeff()));
   RecordProperty("eigen_iterations", static_cast<int>(cg.iterations()));
   EXPECT_LE((xs - x).cwiseAbs().maxCoeff(), 1e-10 * x.cwiseAbs().maxCoeff())
@@ -869,7 +940,8 @@ TEST(ConjugateGradient, IteratesMatchUnpreconditionedEigenCG) {
     VectorXd x = cg.solve(b);
     EXPECT_EQ(cg.iterations(), iters);
     VectorXd xs = vec(r[1]);
-    EXPECT_LE((xs - x).cwiseAbs().maxCoeff(), 1e-10 * x.cwiseAbs().maxCoeff()) << iters << " iterations";
+    EXPECT_LE((xs - x).cwiseAbs().maxCoeff(), 1e-10 * x.cwiseAbs().maxCoeff())
+        << iters << " iterations";
   }
 }
 

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "mesh_test_util.h"
 #include "runtime/mesh/tetgen_reader.h"
 
@@ -176,6 +178,41 @@ TEST(MeshTopology, DegenerateElementsAreFoundWithTheirIndex) {
             "m.node: tet 2 (vertices 0 1 2 5) has zero volume (relative size 0) (and 4 more "
             "degenerate elements)");
   EXPECT_TRUE(find_degenerate(pyramid()).empty());
+}
+
+// Coordinates near 1e300: the volume (area, length) overflows, so the element cannot pass the
+// relative-size test by a NaN comparison; a coordinate that is not finite is refused first.
+TEST(MeshTopology, OverflowingElementsFailTheCheck) {
+  Mesh m = single_tet();
+  for (Point& p : m.points)
+    for (double& c : p) c *= 1e300;
+  std::vector<Degenerate> d = find_degenerate(m);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_TRUE(std::isnan(d[0].measure));
+  EXPECT_EQ(mesh_error([&] { check_mesh(m, "big.node"); }),
+            "big.node: tet 0 (vertices 0 1 2 3) has a volume beyond the range of double precision "
+            "(coordinates too large)");
+  m.tets.clear();
+  m.triangles = {{0, 1, 2}};
+  m.edges = {{0, 1}};
+  d = find_degenerate(m);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].kind, ElementKind::Triangle);
+  EXPECT_EQ(d[1].kind, ElementKind::Edge);
+  EXPECT_EQ(mesh_error([&] { check_mesh(m, "big.obj"); }),
+            "big.obj: triangle 0 (vertices 0 1 2) has an area beyond the range of double precision "
+            "(coordinates too large) (and 1 more degenerate elements)");
+  Mesh scaled = single_tet();  // 1e150 keeps the volume (1e450) out of range too
+  for (Point& p : scaled.points)
+    for (double& c : p) c *= 1e150;
+  EXPECT_EQ(find_degenerate(scaled).size(), 1u);
+  Mesh fine = single_tet();  // 1e100: volume 1e300, in range
+  for (Point& p : fine.points)
+    for (double& c : p) c *= 1e100;
+  EXPECT_TRUE(find_degenerate(fine).empty());
+  fine.points[2][1] = INFINITY;
+  EXPECT_EQ(mesh_error([&] { check_mesh(fine, "inf.node"); }),
+            "inf.node: vertex 2 has a coordinate that is not a finite number");
 }
 
 TEST(MeshTopology, Bar2kDerivedSetsAreConsistent) {

@@ -155,6 +155,20 @@ TEST_F(SceneTest, BuildsTheSetsWithTheirFieldValues) {
   EXPECT_EQ(s->tensors[1].second.ints()[0], 10);
 }
 
+// A tet listed in the other orientation (det[x0-x3 | x1-x3 | x2-x3] > 0) is oriented as the
+// scene reads the mesh: its first two vertices swap, so every tet has TetGen's orientation and
+// a positive rest volume -det/6. The tets in TetGen's orientation keep their order.
+TEST_F(SceneTest, InvertedTetsAreOrientedOnReading) {
+  write("tet.ele", "2 4 0\n0 0 1 2 3\n1 1 0 2 3\n");
+  std::ostringstream err;
+  std::optional<SceneSets> s = load_scene_sets(path("tet.toml"), false, err);
+  ASSERT_TRUE(s) << err.str();
+  const runtime::Set& tets = *s->sets[0].second;
+  ASSERT_EQ(tets.size(), 2);
+  for (int e = 0; e < 2; ++e)
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(tets.endpoint(e, k), k) << e;
+}
+
 TEST_F(SceneTest, Float32FieldsAreSingle) {
   std::ostringstream err;
   std::optional<SceneSets> s = load_scene_sets(path("tet.toml"), true, err);

@@ -5,9 +5,17 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
+#include <cstdio>
+
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -237,7 +245,8 @@ TEST_F(SceneErrors, QuickLookPicture) {
   expect_error(s + "png = \"tet.jpg\"\n", "\"tet.jpg\"",
                "[output] png: '" + path("out/tet.jpg") + "' is not a .png file name");
   expect_error(s + "png = \"pics/tet.png\"\n", "\"pics/tet.png\"",
-               "[output] png: the folder '" + path("out/pics") + "' does not exist");
+               "[output] png: 'pics/tet.png' is not a plain file name (output files go directly "
+               "in the output folder: no '/', no '..')");
   expect_error(s, "", "--png: the folder '" + path("nowhere") + "' does not exist",
                {"--png", path("nowhere/tet.png")});
   // The picture is written (a PNG signature), with no temporary file beside it.
@@ -253,6 +262,237 @@ TEST_F(SceneErrors, QuickLookPicture) {
   r = run(s + "png = \"tet.png\"\n", {"--png", path("other.png")});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(path("other.png")));
+}
+
+// [output] name, csv and png are plain names inside the output folder, distinct from each other
+// and from every input of the run; --final-csv and --png are checked against them too. Each is
+// reported at its key before anything is written.
+TEST_F(SceneErrors, OutputNames) {
+  const std::string s = fem_scene();
+  const std::string plain =
+      "' is not a plain file name (output files go directly in the output folder: no '/', no "
+      "'..')";
+  expect_error(replace(s, "name = \"tet\"", "name = \"\""), "\"\"\npoints",
+               "[output] name: expected a file name, not an empty string");
+  expect_error(replace(s, "name = \"tet\"", "name = \"../tet\""), "\"../tet\"",
+               "[output] name: '../tet" + plain);
+  expect_error(replace(s, "name = \"tet\"", "name = \"sub/tet\""), "\"sub/tet\"",
+               "[output] name: 'sub/tet" + plain);
+  expect_error(replace(s, "name = \"tet\"", "name = \"..\""), "\"..\"",
+               "[output] name: '.." + plain);
+  expect_error(s + "csv = \"../scene.toml\"\n", "\"../scene.toml\"",
+               "[output] csv: '../scene.toml" + plain);
+  expect_error(s + "csv = \"/tmp/stats.csv\"\n", "\"/tmp/stats.csv\"",
+               "[output] csv: '/tmp/stats.csv" + plain);
+  expect_error(s + "csv = \"missing/stats.csv\"\n", "\"missing/stats.csv\"",
+               "[output] csv: 'missing/stats.csv" + plain);
+  expect_error(s + "csv = \"tet.pvd\"\n", "\"tet.pvd\"",
+               "[output] csv: '" + path("out/tet.pvd") + "' is also the file of [output] name");
+  expect_error(s + "csv = \"tet_000001.vtu\"\n", "\"tet_000001.vtu\"",
+               "[output] csv: '" + path("out/tet_000001.vtu") +
+                   "' is also the name of a frame of the series 'tet' (tet_NNNNNN.vtu)");
+  expect_error(s + "png = \"a.png\"\ncsv = \"a.png\"\n", "\"a.png\"",
+               "[output] png: '" + path("out/a.png") + "' is also the file of [output] csv");
+  expect_error(s, "",
+               "--final-csv: '" + path("out/tet.pvd") + "' is also the file of [output] name",
+               {"--final-csv", path("out/tet.pvd")});
+  // The output folder is the scene's own: an output named like an input is refused there.
+  std::string here =
+      replace(s, "folder = \"" + path("out") + "\"", "folder = \"" + path("") + "\"");
+  Result r = run(here + "csv = \"scene.toml\"\n");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, location(here + "csv = \"scene.toml\"\n", "\"scene.toml\"") + "[output] csv: '" +
+                       path("scene.toml") +
+                       "' is the scene file: an output must not overwrite an input of the run\n");
+  r = run(here + "csv = \"tet.ele\"\n");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("[output] csv: '" + path("tet.ele") +
+                       "' is a mesh file of the run: an output must not overwrite an input of "
+                       "the run\n"),
+            std::string::npos)
+      << r.err;
+  r = run(here, {"--final-csv", path("tet.node")});
+  EXPECT_EQ(r.err, path("scene.toml") + ": error: --final-csv: '" + path("tet.node") +
+                       "' is a mesh file of the run: an output must not overwrite an input of "
+                       "the run\n");
+  // The inputs are intact and no frame was written.
+  std::ifstream node(path("tet.node"));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(node), {}), kNode);
+  EXPECT_FALSE(fs::exists(path("tet.pvd")));
+}
+
+// --final-csv in a folder that does not exist, or without positions to write, fails before the
+// output folder is created; one that fits is written whole (no temporary beside it).
+TEST_F(SceneErrors, FinalCsvIsCheckedBeforeTheFirstFrame) {
+  const std::string s = fem_scene();
+  expect_error(s, "", "--final-csv: the folder '" + path("nowhere") + "' does not exist",
+               {"--final-csv", path("nowhere/final.csv")});
+  expect_error(replace(s, "position = \"x\"\n", ""), "",
+               "--final-csv needs [output] points and position", {"--final-csv", path("f.csv")});
+  // /proc takes no new files, not even from root.
+  Result r = run(s, {"--final-csv", "/proc/final.csv"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err.rfind(path("scene.toml") +
+                            ": error: --final-csv: cannot write: /proc/final.csv: cannot create a "
+                            "temporary file beside it: ",
+                        0),
+            0u)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out")));
+  r = run(s, {"--final-csv", path("out/final.csv")});  // into the output folder itself
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::ifstream csv(path("out/final.csv"));
+  std::string first;
+  std::getline(csv, first);
+  EXPECT_EQ(first, "x,y,z");
+  for (const auto& entry : fs::directory_iterator(path("out")))
+    EXPECT_EQ(entry.path().filename().string().find(".csv."), std::string::npos) << entry.path();
+}
+
+// Temporaries a killed run could not remove (NAME.pvd.XXXXXX, NAME_NNNNNN.vtu.XXXXXX) go with
+// the next run into the folder; other files stay.
+TEST_F(SceneErrors, TheNextRunRemovesStaleTemporaries) {
+  fs::create_directory(path("out"));
+  write("out/tet_000007.vtu.Ab12cD", "half a frame");
+  write("out/tet.pvd.x1Y2z3", "half a series");
+  write("out/other_000001.vtu.Ab12cD", "not ours");
+  write("out/tet_000007.vtu.notes", "not a temporary");
+  Result r = run(fem_scene());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(fs::exists(path("out/tet_000007.vtu.Ab12cD")));
+  EXPECT_FALSE(fs::exists(path("out/tet.pvd.x1Y2z3")));
+  EXPECT_TRUE(fs::exists(path("out/other_000001.vtu.Ab12cD")));
+  EXPECT_TRUE(fs::exists(path("out/tet_000007.vtu.notes")));
+  EXPECT_TRUE(fs::exists(path("out/tet_000001.vtu")));
+}
+
+// A NaN or an infinity stops the run at the frame boundary where it first appears, naming the
+// frame, the field, the element and the set; the frames written before it stay, listed in the
+// .pvd. --no-finite-check and `finite_check = false` let it through.
+TEST_F(SceneErrors, NonFiniteValuesStopTheRunAtTheirFrame) {
+  // The fem example with E = 1e300, one vertex pinned and an initial velocity: the first step
+  // overflows.
+  std::ifstream fem(std::string(SIMIT_SOURCE_DIR) + "/examples/fem/fem.sim");
+  std::string program((std::istreambuf_iterator<char>(fem)), {});
+  write("fem.sim", replace(program, "const E         = 5e3;", "const E         = 1e300;"));
+  std::string s =
+      replace(fem_scene(), std::string(SIMIT_SOURCE_DIR) + "/examples/fem/fem.sim", "fem.sim");
+  s = replace(s, "frames = 1", "frames = 3");
+  s = replace(s, "x = \"position\"\n",
+              "x = \"position\"\npinned = \"x + y + z < 0.5\"\nv = [0.1, 0.0, 0.1]\n");
+  s += "csv = \"stats.csv\"\n";
+  const std::string hint =
+      " (--check-finite stops at the statement that makes it; --no-finite-check lets it "
+      "through)\n";
+  Result r = run(s);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, path("scene.toml") +
+                       ": error: after frame 1: field 'x' of element 0 of set 'verts' is nan "
+                       "(component 0)" +
+                       hint);
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(path("out")))
+    files.push_back(entry.path().filename().string());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"stats.csv", "tet.pvd", "tet_000000.vtu"}));
+  std::ifstream pvd(path("out/tet.pvd"));
+  std::string series((std::istreambuf_iterator<char>(pvd)), {});
+  EXPECT_NE(series.find("file=\"tet_000000.vtu\""), std::string::npos) << series;
+  EXPECT_EQ(series.find("tet_000001"), std::string::npos) << series;
+  EXPECT_NE(series.find("</VTKFile>"), std::string::npos) << series;
+  // Turned off, the run goes on (and writes the NaN frames).
+  fs::remove_all(path("out"));
+  r = run(s, {"--no-finite-check"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("out/tet_000003.vtu")));
+  fs::remove_all(path("out"));
+  r = run(replace(s, "frames = 3", "frames = 3\nfinite_check = false"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  fs::remove_all(path("out"));
+  expect_error(replace(s, "frames = 3", "frames = 3\nfinite_check = 0"), "0\n[",
+               "finite_check: expected true or false");
+  // A field expression that divides by zero: stopped before frame 0 is written. (Element 0 is
+  // pinned: init zeroes its velocity.)
+  r = run(replace(s, "v = [0.1, 0.0, 0.1]", "v = \"1/0\""));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, path("scene.toml") +
+                       ": error: after init (frame 0): field 'v' of element 1 of set 'verts' is "
+                       "inf (component 0)" +
+                       hint);
+  EXPECT_FALSE(fs::exists(path("out/tet.pvd")));
+  EXPECT_FALSE(fs::exists(path("out/tet_000000.vtu")));
+}
+
+// A trivial step on a large generated cloth, so that a run spends its time writing frames.
+const char* kWriterProgram = R"(element Point
+  x : vector[3](float);
+end
+element Face
+end
+extern points : set{Point};
+extern faces : set{Face}(points, points, points);
+func nudge(inout p : Point)
+  p.x(1) = p.x(1) + 0.001;
+end
+export func step()
+  apply nudge to points;
+end
+)";
+
+// `simit run` killed by SIGTERM while it writes frames: it dies of the signal, removes the
+// temporary it was writing, and the .pvd lists exactly the complete frames on disk.
+TEST_F(SceneErrors, AKilledRunLeavesNoTemporaries) {
+  write("writer.sim", kWriterProgram);
+  std::string scene = "program = \"writer.sim\"\nstep = \"step\"\nframes = 1000\n";
+  for (const char* set : {"points", "faces"})
+    scene += std::string("[sets.") + set +
+             "]\ngenerate = \"square_cloth\"\nn = 400\nelements = \"" +
+             (std::string(set) == "points" ? "vertices" : "triangles") + "\"\n";
+  scene += "[sets.points.fields]\nx = \"position\"\n[output]\nfolder = \"" + path("out") +
+           "\"\nname = \"c\"\npoints = \"points\"\nposition = \"x\"\ncells = \"faces\"\n";
+  write("scene.toml", scene);
+  const std::string scene_path = path("scene.toml");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    freopen("/dev/null", "w", stdout);
+    execl(SIMIT_EXE, SIMIT_EXE, "run", scene_path.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Once the .pvd lists frame 0, wait until a later frame's temporary is seen, then kill.
+  auto writing = [&] {
+    std::error_code ec;
+    if (!fs::exists(path("out/c.pvd"), ec)) return false;
+    for (const auto& entry : fs::directory_iterator(path("out"), ec))
+      if (entry.path().filename().string().find(".vtu.") != std::string::npos) return true;
+    return false;
+  };
+  for (int waited = 0; !writing() && waited < 600000; ++waited) usleep(100);
+  ASSERT_TRUE(writing());
+  kill(child, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit status " << status;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  std::set<std::string> frames;
+  for (const auto& entry : fs::directory_iterator(path("out"))) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "c.pvd" || name.ends_with(".vtu")) << "left behind: " << name;
+    if (name.ends_with(".vtu")) frames.insert(name);
+  }
+  std::ifstream pvd(path("out/c.pvd"));
+  std::set<std::string> listed;
+  for (std::string line; std::getline(pvd, line);) {
+    const size_t at = line.find("file=\"");
+    if (at != std::string::npos)
+      listed.insert(line.substr(at + 6, line.find('"', at + 6) - at - 6));
+  }
+  EXPECT_FALSE(listed.empty());
+  // The .pvd is rewritten after each frame: a frame renamed into place just before the signal
+  // may not be listed yet, but every listed frame is on disk.
+  for (const std::string& f : listed) EXPECT_TRUE(frames.count(f)) << f;
+  EXPECT_LE(frames.size(), listed.size() + 1);
 }
 
 }  // namespace

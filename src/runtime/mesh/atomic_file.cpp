@@ -3,7 +3,10 @@
 
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 
@@ -11,8 +14,65 @@
 
 namespace simit::runtime {
 
+namespace {
+
+// The temporaries being written, where a signal handler may read them: fixed buffers (a
+// handler cannot touch std::string) and a flag per slot set only once the path is complete.
+constexpr int kSlots = 8;
+constexpr size_t kPathMax = 4096;
+char g_temp_paths[kSlots][kPathMax];
+volatile std::sig_atomic_t g_slot_used[kSlots];
+
+// Creates the temporary (mkstemp) in a slot's buffer, so that a signal finds its name from the
+// moment the file exists. Returns the descriptor (or -1) and sets `slot` (-1 when every slot
+// is taken or the path is too long: the file is then only removed by the destructor).
+int create_in_slot(std::string& temp, int& slot) {
+  slot = -1;
+  if (temp.size() < kPathMax)
+    for (int i = 0; i < kSlots && slot < 0; ++i)
+      if (!g_slot_used[i]) slot = i;
+  if (slot < 0) return mkstemp(temp.data());
+  char* buffer = g_temp_paths[slot];
+  std::memcpy(buffer, temp.c_str(), temp.size() + 1);
+  std::atomic_signal_fence(std::memory_order_seq_cst);
+  g_slot_used[slot] = 1;  // until then the handler ignores the buffer; after, it may see the
+                          // template (no such file) or the name chosen
+  const int fd = mkstemp(buffer);
+  std::memcpy(temp.data(), buffer, temp.size());
+  if (fd < 0) {
+    g_slot_used[slot] = 0;
+    slot = -1;
+  }
+  return fd;
+}
+
+void release_slot(int slot) {
+  if (slot >= 0) g_slot_used[slot] = 0;
+}
+
+extern "C" void remove_temporaries_and_die(int sig) {
+  for (int i = 0; i < kSlots; ++i)
+    if (g_slot_used[i]) unlink(g_temp_paths[i]);  // async-signal-safe
+  // SA_RESETHAND restored the default action; the signal is delivered once the handler returns.
+  raise(sig);
+}
+
+}  // namespace
+
+void remove_temporaries_on_signals() {
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = remove_temporaries_and_die;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    sigaction(sig, &action, nullptr);
+  }
+}
+
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), temp_path_(path_ + ".XXXXXX") {
-  int fd = mkstemp(temp_path_.data());
+  int fd = create_in_slot(temp_path_, slot_);
   if (fd < 0) {
     temp_path_.clear();
     fail("cannot create a temporary file beside it");
@@ -24,6 +84,7 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), temp_path_(pa
     int saved = errno;
     close(fd);
     std::remove(temp_path_.c_str());
+    release_slot(slot_);  // the destructor does not run after a throwing constructor
     errno = saved;
     fail("cannot open the temporary file");
   }
@@ -32,6 +93,7 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), temp_path_(pa
 AtomicFile::~AtomicFile() {
   if (file_) std::fclose(file_);
   if (!committed_ && !temp_path_.empty()) std::remove(temp_path_.c_str());
+  release_slot(slot_);  // after the removal: a signal in between finds the file gone
 }
 
 void AtomicFile::write(const void* data, size_t bytes) {

@@ -29,6 +29,13 @@ class AtomicFile {
   std::string temp_path_;
   std::FILE* file_ = nullptr;
   bool committed_ = false;
+  int slot_ = -1;  // where the signal handler finds temp_path_ (see remove_temporaries_on_signals)
 };
+
+// Installs SIGINT and SIGTERM handlers that remove the temporary files of the AtomicFiles being
+// written at that moment and then end the process by the same signal, so that a killed run
+// leaves no PATH.XXXXXX behind. A signal the process ignores (a background job's SIGINT) stays
+// ignored. Call once, before writing; process-wide.
+void remove_temporaries_on_signals();
 
 }  // namespace simit::runtime

@@ -65,18 +65,24 @@ double bounding_box_diagonal(const Mesh& mesh) {
   return norm(sub(hi, lo));
 }
 
-// Dividing by the element's own size makes the test independent of the mesh's units.
+// Dividing by the element's own size makes the test independent of the mesh's units. A
+// volume or area that overflows (coordinates near 1e300) is NaN: the program could not compute
+// it either, so such an element fails the check instead of slipping past a comparison.
 double tet_measure(const Mesh& mesh, const Tet& t) {
   double l = longest_edge(mesh, t);
   if (repeats_vertex(t) || l == 0) return 0;
-  return std::abs(tet_orientation_det(mesh, t)) / 6 / (l * l * l);
+  const double det = tet_orientation_det(mesh, t);
+  if (!std::isfinite(det) || !std::isfinite(l * l * l)) return NAN;
+  return std::abs(det) / 6 / (l * l * l);
 }
 
 double triangle_measure(const Mesh& mesh, const Triangle& t) {
   double l = longest_edge(mesh, t);
   if (repeats_vertex(t) || l == 0) return 0;
   const Point& a = mesh.points[t[0]];
-  return norm(cross(sub(mesh.points[t[1]], a), sub(mesh.points[t[2]], a))) / 2 / (l * l);
+  const double twice_area = norm(cross(sub(mesh.points[t[1]], a), sub(mesh.points[t[2]], a)));
+  if (!std::isfinite(twice_area) || !std::isfinite(l * l)) return NAN;
+  return twice_area / 2 / (l * l);
 }
 
 // In the file's own numbering of elements and vertices.
@@ -96,6 +102,11 @@ std::string describe(const Mesh& mesh, const Degenerate& d) {
   const char* what = d.kind == ElementKind::Tet        ? "volume"
                      : d.kind == ElementKind::Triangle ? "area"
                                                        : "length";
+  if (std::isnan(d.measure)) {
+    msg << ") has " << (d.kind == ElementKind::Triangle ? "an " : "a ") << what
+        << " beyond the range of double precision (coordinates too large)";
+    return msg.str();
+  }
   msg << ") has " << (d.measure == 0 ? "zero " : "near-zero ") << what << " (relative size "
       << d.measure << ")";
   return msg.str();
@@ -145,18 +156,19 @@ std::vector<Degenerate> find_degenerate(const Mesh& mesh, double tolerance) {
   std::vector<Degenerate> found;
   for (size_t i = 0; i < mesh.tets.size(); ++i) {
     double m = tet_measure(mesh, mesh.tets[i]);
-    if (m <= tolerance) found.push_back({ElementKind::Tet, static_cast<int>(i), m});
+    if (!(m > tolerance)) found.push_back({ElementKind::Tet, static_cast<int>(i), m});
   }
   for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     double m = triangle_measure(mesh, mesh.triangles[i]);
-    if (m <= tolerance) found.push_back({ElementKind::Triangle, static_cast<int>(i), m});
+    if (!(m > tolerance)) found.push_back({ElementKind::Triangle, static_cast<int>(i), m});
   }
   double diagonal = bounding_box_diagonal(mesh);
   for (size_t i = 0; i < mesh.edges.size(); ++i) {
     const Edge& e = mesh.edges[i];
     double l = norm(sub(mesh.points[e[0]], mesh.points[e[1]]));
     double m = (e[0] == e[1] || diagonal == 0) ? 0 : l / diagonal;
-    if (m <= tolerance) found.push_back({ElementKind::Edge, static_cast<int>(i), m});
+    if (!std::isfinite(l) || !std::isfinite(diagonal)) m = NAN;
+    if (!(m > tolerance)) found.push_back({ElementKind::Edge, static_cast<int>(i), m});
   }
   return found;
 }
@@ -167,6 +179,12 @@ void check_mesh(const Mesh& mesh, const std::string& name, double tolerance) {
   } catch (const MeshError& e) {
     throw MeshError(name, 0, e.what());
   }
+  for (size_t i = 0; i < mesh.points.size(); ++i)
+    for (double c : mesh.points[i])
+      if (!std::isfinite(c))
+        throw MeshError(
+            name, 0,
+            "vertex " + std::to_string(i) + " has a coordinate that is not a finite number");
   std::vector<Degenerate> bad = find_degenerate(mesh, tolerance);
   if (bad.empty()) return;
   std::string more = bad.size() > 1

@@ -67,7 +67,8 @@ int orient_tets(Mesh& mesh);
 
 // An element whose size is (near) zero relative to its own longest edge: measure is
 // |volume| / L^3 for tets, area / L^2 for triangles, length / (bounding-box diagonal) for
-// edges, and 0 when the element repeats a vertex.
+// edges, and 0 when the element repeats a vertex; NaN when its volume (area, length)
+// overflows double precision.
 struct Degenerate {
   ElementKind kind;
   int index;
@@ -78,8 +79,8 @@ struct Degenerate {
 // flags elements that are flat to rounding error. Indices must be valid (check_indices).
 std::vector<Degenerate> find_degenerate(const Mesh& mesh, double tolerance = 1e-12);
 
-// check_indices, then find_degenerate; throws MeshError "NAME: tet 12 (vertices ...) has zero
-// volume" for the first problem, where NAME says which mesh (usually its file).
+// check_indices, finite coordinates, then find_degenerate; throws MeshError "NAME: tet 12 (vertices
+// ...) has zero volume" for the first problem, where NAME says which mesh (usually its file).
 void check_mesh(const Mesh& mesh, const std::string& name, double tolerance = 1e-12);
 
 }  // namespace simit::runtime
