@@ -39,7 +39,13 @@ class Backend {
                                           std::string& error) = 0;
 };
 
+// Functions of the host process compiled code calls (their addresses are built into it).
+struct HostCalls {
+  // int32_t (int32_t fn, int32_t n, int32_t float32, const double* in, double* out)
+  void* decompose = nullptr;
+};
+
 // The host CPU through LLVM ORC; null with `error` set when LLVM cannot target this machine.
-std::unique_ptr<Backend> make_cpu_backend(std::string& error);
+std::unique_ptr<Backend> make_cpu_backend(const HostCalls& host, std::string& error);
 
 }  // namespace simit::jit

@@ -9,6 +9,7 @@
 
 #include "interp/interpreter.h"
 #include "interp/runtime_error.h"
+#include "jit/decompose_call.h"
 #include "jit/pruned_matrix.h"
 
 namespace simit::jit {
@@ -130,9 +131,11 @@ std::string element_note(const interp::SiteCall& call, int element) {
                      (target ? target->name : t.name()) + "'";
   if (element < 0 || element >= t.size() || t.arity() == 0) return note;
   std::string list;
-  for (int k = 0; k < t.arity(); ++k) list += (k ? ", " : "") + std::to_string(t.endpoint(element, k));
+  for (int k = 0; k < t.arity(); ++k)
+    list += (k ? ", " : "") + std::to_string(t.endpoint(element, k));
   const bool one_set = t.homogeneous();
-  return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") + ")";
+  return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") +
+         ")";
 }
 
 void zero_results(interp::SiteCall& call) {
@@ -148,7 +151,9 @@ void zero_results(interp::SiteCall& call) {
 }  // namespace
 
 TraceController::TraceController(JitOptions options) : options_(options) {
-  backend_ = make_cpu_backend(backend_error_);
+  HostCalls host;
+  host.decompose = reinterpret_cast<void*>(&simit_jit_decompose);
+  backend_ = make_cpu_backend(host, backend_error_);
 }
 
 TraceController::~TraceController() = default;

@@ -41,6 +41,18 @@ const char* math_name(MathFn f) {
   return names[static_cast<int>(f)];
 }
 
+std::vector<int> decomposition_results(Decomposition d, int n) {
+  const int m = n * n;
+  switch (d) {
+    case Decomposition::Svd: return {m, n, m};
+    case Decomposition::Eig: return {n, m};
+    case Decomposition::Polar: return {m, m};
+    case Decomposition::ProjectSpd:
+    case Decomposition::ProjectSpdAbs: return {m};
+  }
+  return {};
+}
+
 namespace {
 
 const char* un_name(uint8_t op) {
@@ -159,6 +171,18 @@ void print_block(std::ostream& os, const std::vector<Stmt>& body, int indent) {
         print_expr(os, *s.value);
         os << " else error " << s.error;
         break;
+      case StmtKind::Decompose: {
+        static const char* const names[] = {"svd", "eig", "polar", "project_spd",
+                                            "project_spd_abs"};
+        os << "%" << s.outs.front() << "..%" << s.outs.back() << " = " << names[s.fn] << s.n << "x"
+           << s.n << "(";
+        for (size_t i = 0; i < s.args.size(); ++i) {
+          if (i) os << ", ";
+          print_expr(os, *s.args[i]);
+        }
+        os << ") else error " << s.error;
+        break;
+      }
     }
     os << line_of(s.span) << "\n";
   }
@@ -270,6 +294,23 @@ class Verifier {
         if (s.error < 0 || static_cast<size_t>(s.error) >= t_.errors.size())
           fail("check without error");
         return need(s.value, Ty::Bool, "check");
+      case StmtKind::Decompose: {
+        if (s.error < 0 || static_cast<size_t>(s.error) >= t_.errors.size())
+          fail("decomposition without error");
+        if (s.args.size() != static_cast<size_t>(s.n) * s.n)
+          return fail("decomposition argument count");
+        for (const ExprRef& a : s.args) need(a, Ty::F64, "decomposition");
+        size_t outs = 0;
+        for (int c : decomposition_results(static_cast<Decomposition>(s.fn), s.n))
+          outs += static_cast<size_t>(c);
+        if (s.outs.size() != outs) return fail("decomposition result count");
+        for (int l : s.outs) {
+          if (l < 0 || static_cast<size_t>(l) >= t_.locals.size() || t_.locals[l] != Ty::F64)
+            return fail("decomposition result local");
+          set_[l] = true;
+        }
+        return;
+      }
     }
   }
 
@@ -288,6 +329,7 @@ size_t count_block(const std::vector<Stmt>& body) {
   size_t n = 0;
   for (const Stmt& s : body) {
     n += 1 + (s.value ? count_expr(*s.value) : 0) + (s.index ? count_expr(*s.index) : 0);
+    for (const ExprRef& a : s.args) n += count_expr(*a);
     n += count_block(s.body) + count_block(s.orelse);
   }
   return n;

@@ -35,12 +35,13 @@ const char* ty_name(Ty t);
   X(Compare)  /* ops[0] op ops[1], a Bool                                       */ \
   X(Select)   /* ops[0] ? ops[1] : ops[2]                                       */ \
   X(Math)     /* C library function `op` of ops                                 */
-#define SIMIT_LOOP_STMTS(X)                                                          \
-  X(SetLocal) /* local `slot` = value                                            */  \
-  X(Store)    /* array `slot` at element `index`, component `comp` = value       */  \
-  X(Assemble) /* result `slot` += (or =) value, at a vector element or a block    */ \
-  X(If)       /* if value then body else orelse                                  */  \
-  X(Check)    /* if not value: stop with error `error`                           */
+#define SIMIT_LOOP_STMTS(X)                                                           \
+  X(SetLocal)  /* local `slot` = value                                            */  \
+  X(Store)     /* array `slot` at element `index`, component `comp` = value       */  \
+  X(Assemble)  /* result `slot` += (or =) value, at a vector element or a block    */ \
+  X(If)        /* if value then body else orelse                                  */  \
+  X(Check)     /* if not value: stop with error `error`                           */  \
+  X(Decompose) /* outs = decomposition `fn` of the n x n matrix args, or error   */
 
 enum class ExprKind : uint8_t {
 #define SIMIT_LOOP_ENUM(n) n,
@@ -71,6 +72,10 @@ enum class MathFn : uint8_t {
   Min
 };
 const char* math_name(MathFn f);
+// The decompositions a trace calls into the runtime for (docs/intrinsics.md).
+enum class Decomposition : uint8_t { Svd, Eig, Polar, ProjectSpd, ProjectSpdAbs };
+// Components each of its results has, for an n x n argument.
+std::vector<int> decomposition_results(Decomposition d, int n);
 
 struct Expr;
 using ExprRef = std::shared_ptr<const Expr>;
@@ -96,6 +101,11 @@ struct Stmt {
   ExprRef index;                   // Store / Assemble into a vector: the element written
   ExprRef value;                   // SetLocal, Store, Assemble: the value; If, Check: the condition
   std::vector<Stmt> body, orelse;  // If
+  // Decompose: a decomposition of the runtime (Decomposition) of the n x n matrix `args`,
+  // row-major, into the locals `outs` (its results one after another, each row-major).
+  int fn = 0, n = 0;
+  std::vector<ExprRef> args;
+  std::vector<int> outs;
   frontend::SourceSpan span;
 };
 
@@ -138,6 +148,7 @@ struct Trace {
   std::vector<Stmt> body;
   std::vector<ErrorSite> errors;
   bool writes_fields = false;  // some Store (an apply with inout fields)
+  bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
 };
 
 // A run of system-level statements (a CG loop): scalar statements, fused passes over the

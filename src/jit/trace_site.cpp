@@ -349,6 +349,7 @@ class Tracer {
   Sym eval_call(const ast::Call& c);
   std::vector<Sym> call_user(const ast::Call& c);
   Sym eval_intrinsic(const ast::Call& c);
+  std::vector<Sym> decompose(const ast::Call& c);
   int64_t const_int(const ast::Expr& e);
   Sym round(Sym s, const SourceSpan& at) {
     if (!in_.float32 || s.kind != Sym::Kind::Tensor || s.ty != Ty::F64) return s;
@@ -735,6 +736,8 @@ ExprRef Tracer::det(const std::vector<ExprRef>& a, int n, const std::vector<int>
 
 Sym Tracer::eval_intrinsic(const ast::Call& c) {
   using frontend::Intrinsic;
+  if (c.intrinsic == Intrinsic::ProjectSpd || c.intrinsic == Intrinsic::ProjectSpdAbs)
+    return decompose(c)[0];
   std::vector<Sym> a;
   for (const auto& arg : c.args) {
     a.push_back(settle(eval(*arg), c.span));
@@ -840,6 +843,50 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
   return round(std::move(v), c.span);
 }
 
+// svd, eig, polar, project_spd: a call into the runtime's decompositions (the interpreter's
+// own code, so the bits agree), with its results in new locals.
+std::vector<Sym> Tracer::decompose(const ast::Call& c) {
+  using frontend::Intrinsic;
+  Decomposition d;
+  switch (c.intrinsic) {
+    case Intrinsic::Svd: d = Decomposition::Svd; break;
+    case Intrinsic::Eig: d = Decomposition::Eig; break;
+    case Intrinsic::Polar: d = Decomposition::Polar; break;
+    case Intrinsic::ProjectSpd: d = Decomposition::ProjectSpd; break;
+    case Intrinsic::ProjectSpdAbs: d = Decomposition::ProjectSpdAbs; break;
+    default: give_up(c.span, "a call with several results that is not a decomposition");
+  }
+  if (c.args.size() != 1) give_up(c.span, "a decomposition of several arguments");
+  Sym a = settle(eval(*c.args[0]), c.span);
+  if (a.kind != Sym::Kind::Tensor || a.ty != Ty::F64 || a.dims.size() != 2 ||
+      a.dims[0] != a.dims[1])
+    give_up(c.span, "a decomposition of this value is not compiled");
+  const int n = a.dims[0];
+  trace_.errors.push_back(
+      {c.span, std::string(frontend::intrinsic_name(c.intrinsic)) + " needs a symmetric matrix"});
+  Stmt s;
+  s.kind = StmtKind::Decompose;
+  s.fn = static_cast<int>(d);
+  s.n = n;
+  s.args = a.c;
+  s.error = static_cast<int>(trace_.errors.size() - 1);
+  s.span = c.span;
+  std::vector<Sym> out;
+  for (int count : decomposition_results(d, n)) {
+    std::vector<ExprRef> comps;
+    for (int k = 0; k < count; ++k) {
+      const int l = new_local(Ty::F64, false);
+      s.outs.push_back(l);
+      comps.push_back(read_local(l));
+    }
+    out.push_back(round(tensor(Ty::F64, count == n ? std::vector<int>{n} : std::vector<int>{n, n},
+                               std::move(comps)),
+                        c.span));
+  }
+  emit(std::move(s));
+  return out;
+}
+
 Sym Tracer::eval_call(const ast::Call& c) {
   if (c.intrinsic != frontend::Intrinsic::None) return eval_intrinsic(c);
   std::vector<Sym> r = call_user(c);
@@ -896,9 +943,8 @@ void Tracer::exec(const ast::Stmt& s) {
       if (a.index_notation) give_up(a.span, "index notation is not compiled");
       if (a.targets.size() == 1) return assign(*a.targets[0], eval(*a.value), a.span);
       const auto* call = a.value->as<ast::Call>();
-      if (!call || !call->func)
-        give_up(a.span, "a multiple assignment from something other than a call");
-      std::vector<Sym> values = call_user(*call);
+      if (!call) give_up(a.span, "a multiple assignment from something other than a call");
+      std::vector<Sym> values = call->func ? call_user(*call) : decompose(*call);
       if (values.size() != a.targets.size()) give_up(a.span, "result count does not match");
       for (size_t i = 0; i < values.size(); ++i)
         assign(*a.targets[i], std::move(values[i]), a.span);
@@ -1195,6 +1241,7 @@ TracedSite Tracer::run() {
   if (site.func_span.valid()) trace_.name += ":" + std::to_string(site.func_span.start().line);
   trace_.arity = in_.target->arity();
   trace_.reduce = in_.reduce;
+  trace_.float32 = in_.float32;
   try {
     if (!f.generics.empty()) give_up(site.func_span, "generic mapped functions are not compiled");
     if (in_.target->is_grid()) give_up(site.func_span, "maps through grids are not compiled");

@@ -377,5 +377,84 @@ TEST(Jit, CheckModeRunsBothAndNamesTheFirstDifference) {
   }
 }
 
+// The decompositions of docs/intrinsics.md, called from compiled code into the runtime's own
+// functions: the same bits as the interpreter, on ordinary, inverted and degenerate elements.
+const char* kDecompositions = R"(
+element Vertex
+  x : vector[3](float);
+end
+element Tet
+  e : float;
+end
+extern verts : set{Vertex};
+extern tets : set{Tet}(verts, verts, verts, verts);
+
+func measures(t : Tet, v : (Vertex * 4)) -> (f : vector[verts](vector[3](float)),
+                                              K : matrix[verts,verts](matrix[3,3](float)))
+  var F : matrix[3,3](float);
+  for j in 0:3
+    e = v(j).x - v(3).x;
+    for i in 0:3
+      F(i, j) = e(i);
+    end
+  end
+  U, s, V = svd(F);
+  R, S = polar(F);
+  w, Q = eig(F' * F);
+  f(v(0)) = s;
+  f(v(1)) = w;
+  f(v(2)) = U * [1.0, 2.0, 3.0]' + V * [0.5, 0.25, 0.125]';
+  f(v(3)) = Q * [1.0, -1.0, 2.0]';
+  K(v(0), v(0)) = R;
+  K(v(1), v(1)) = S;
+  K(v(2), v(2)) = project_spd(S);
+  K(v(3), v(3)) = project_spd_abs(S);
+end
+
+export func step() -> (f : vector[verts](vector[3](float)), K : matrix[verts,verts](matrix[3,3](float)))
+  f, K = map measures to tets reduce +;
+end
+)";
+
+TEST(Jit, DecompositionsComputeTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::vector<Value> results[2];
+  std::string stats;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source("decompositions.sim", kDecompositions);
+    ASSERT_TRUE(compiled->ok());
+    runtime::Set verts("verts");
+    runtime::Set tets("tets", {&verts, &verts, &verts, &verts});
+    verts.add_many(6);
+    verts.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+    // A regular tet, an inverted one, and a flat one (repeated and zero singular values).
+    const double x[6][3] = {{0.1, 0.0, 0.03},  {1.07, 0.11, 0.0}, {0.0, 0.93, 0.2},
+                            {0.05, 0.1, 1.13}, {0.5, 0.5, 0.0},   {0.0, 0.0, 0.0}};
+    for (int i = 0; i < 6; ++i)
+      for (int c = 0; c < 3; ++c) verts.field(0).at<double>(i)[c] = x[i][c];
+    const int32_t ends[] = {0, 1, 2, 3, 1, 0, 2, 3, 5, 4, 5, 5};
+    tets.add_edges(ends);
+    tets.add_field("e", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("verts"), verts);
+    engine.bind_set(*compiled->find_extern("tets"), tets);
+    results[k] = engine.call(*compiled->find_func("step"), {});
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) stats = os.str();
+  }
+  EXPECT_NE(stats.find("measures (line 34)"), std::string::npos) << stats;
+  EXPECT_NE(stats.find(" compiled\n"), std::string::npos) << stats;
+  expect_same(results[0][0], results[1][0], "f");
+  expect_same(results[0][1], results[1][1], "K");
+  // Real values: the first tet's singular values are positive and descending.
+  const double* s = results[0][0].tensor().floats();
+  EXPECT_GT(s[0], s[1]);
+  EXPECT_GT(s[1], 0.0);
+}
+
 }  // namespace
 }  // namespace simit::jit

@@ -93,8 +93,14 @@ class CpuKernel : public Kernel {
 // Emits one trace as a function of the KernelFn signature, or a system trace as a SystemFn.
 class Emitter {
  public:
-  Emitter(const Trace& t, llvm::Module& m)
-      : t_(&t), slots_(t.arrays), local_types_(t.locals), m_(m), ctx_(m.getContext()), b_(ctx_) {}
+  Emitter(const Trace& t, llvm::Module& m, const HostCalls& host)
+      : t_(&t),
+        slots_(t.arrays),
+        local_types_(t.locals),
+        m_(m),
+        ctx_(m.getContext()),
+        b_(ctx_),
+        host_(host) {}
   Emitter(const SystemTrace& t, llvm::Module& m)
       : st_(&t), slots_(t.arrays), local_types_(t.locals), m_(m), ctx_(m.getContext()), b_(ctx_) {}
 
@@ -131,6 +137,8 @@ class Emitter {
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
   void load_arrays(Value* arrays);
 
+  void decompose(const Stmt& s);
+
   const Trace* t_ = nullptr;
   const SystemTrace* st_ = nullptr;
   const std::vector<ArraySlot>& slots_;
@@ -143,6 +151,7 @@ class Emitter {
   std::vector<Value*> ssa_;  // values of the locals set once
   Value* element_ = nullptr;
   Value* failed_ = nullptr;
+  HostCalls host_;
 };
 
 Value* Emitter::math(const Expr& e) {
@@ -294,6 +303,7 @@ void Emitter::stmt(const Stmt& s) {
       b_.SetInsertPoint(join);
       return;
     }
+    case StmtKind::Decompose: return decompose(s);
     case StmtKind::Check: {
       Value* ok = expr(*s.value);
       auto* fail = llvm::BasicBlock::Create(ctx_, "fail", fn_);
@@ -305,6 +315,40 @@ void Emitter::stmt(const Stmt& s) {
       b_.SetInsertPoint(cont);
       return;
     }
+  }
+}
+
+// The runtime's decomposition through its address: the argument and the results pass through
+// stack arrays; a non-zero return is the check that failed.
+void Emitter::decompose(const Stmt& s) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  llvm::Type* i32 = b_.getInt32Ty();
+  llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
+  Value* in = entry.CreateAlloca(f64, b_.getInt32(static_cast<uint32_t>(s.args.size())));
+  Value* out = entry.CreateAlloca(f64, b_.getInt32(static_cast<uint32_t>(s.outs.size())));
+  for (size_t i = 0; i < s.args.size(); ++i)
+    b_.CreateStore(expr(*s.args[i]), b_.CreateConstInBoundsGEP1_64(f64, in, i));
+  auto* ft = llvm::FunctionType::get(i32, {i32, i32, i32, b_.getPtrTy(), b_.getPtrTy()}, false);
+  Value* callee =
+      b_.CreateIntToPtr(b_.getInt64(reinterpret_cast<uint64_t>(host_.decompose)), b_.getPtrTy());
+  Value* rc = b_.CreateCall(
+      ft, callee,
+      {b_.getInt32(s.fn), b_.getInt32(s.n), b_.getInt32(t_ && t_->float32 ? 1 : 0), in, out});
+  auto* fail = llvm::BasicBlock::Create(ctx_, "decompose.fail", fn_);
+  auto* cont = llvm::BasicBlock::Create(ctx_, "decompose.ok", fn_);
+  b_.CreateCondBr(b_.CreateICmpEQ(rc, b_.getInt32(0)), cont, fail,
+                  llvm::MDBuilder(ctx_).createLikelyBranchWeights());
+  b_.SetInsertPoint(fail);
+  b_.CreateStore(element_, failed_);
+  b_.CreateRet(b_.getInt32(s.error + 1));
+  b_.SetInsertPoint(cont);
+  for (size_t i = 0; i < s.outs.size(); ++i) {
+    Value* v = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, out, i));
+    const int l = s.outs[i];
+    if (locals_[l])
+      b_.CreateStore(v, locals_[l]);
+    else
+      ssa_[l] = v;
   }
 }
 
@@ -519,12 +563,12 @@ void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
 
 class CpuBackend : public Backend {
  public:
-  explicit CpuBackend(Session& s) : s_(s) {}
+  CpuBackend(Session& s, const HostCalls& host) : s_(s), host_(host) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
     const int level = node_count(trace) > kLargeTrace ? kLargeTraceOptLevel : kOptLevel;
     auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
-      return Emitter(trace, m).run(name);
+      return Emitter(trace, m, host_).run(name);
     });
     if (k) k->fn = reinterpret_cast<KernelFn>(k->address);
     return k;
@@ -587,14 +631,15 @@ class CpuBackend : public Backend {
 
  private:
   Session& s_;
+  HostCalls host_;
 };
 
 }  // namespace
 
-std::unique_ptr<Backend> make_cpu_backend(std::string& error) {
+std::unique_ptr<Backend> make_cpu_backend(const HostCalls& host, std::string& error) {
   Session* s = Session::get(error);
   if (!s) return nullptr;
-  return std::make_unique<CpuBackend>(*s);
+  return std::make_unique<CpuBackend>(*s, host);
 }
 
 }  // namespace simit::jit
