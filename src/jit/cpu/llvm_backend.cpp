@@ -548,7 +548,12 @@ void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
   llvm::FunctionAnalysisManager fam;
   llvm::CGSCCAnalysisManager cgam;
   llvm::ModuleAnalysisManager mam;
-  llvm::PassBuilder pb(&tm);
+  // As clang at -O2: the loop and SLP vectorizers on (lane-wise IEEE operations, no
+  // reassociation: the bits do not change).
+  llvm::PipelineTuningOptions tuning;
+  tuning.LoopVectorization = level_number >= 2;
+  tuning.SLPVectorization = level_number >= 2;
+  llvm::PassBuilder pb(&tm, tuning);
   pb.registerModuleAnalyses(mam);
   pb.registerCGSCCAnalyses(cgam);
   pb.registerFunctionAnalyses(fam);
