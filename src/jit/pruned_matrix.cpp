@@ -21,7 +21,10 @@ void PrunedMatrix::assign(const runtime::SystemMatrix& m) {
       // A block is dropped only when every component is +0.0 or -0.0.
       if (std::all_of(blk, blk + bs, [](double x) { return x == 0.0; })) continue;
       cols.push_back(ci[k]);
-      values.insert(values.end(), blk, blk + bs);
+      // Stored by columns: a compiled product reads block column j as one vector.
+      const int n = m.block_rows();
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) values.push_back(blk[i * n + j]);
     }
     row_ptr[r + 1] = static_cast<int32_t>(cols.size());
   }

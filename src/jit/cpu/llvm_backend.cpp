@@ -447,13 +447,17 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
       const int bs = op.block;
       llvm::Type* i64 = b_.getInt64Ty();
       llvm::Type* f64 = b_.getDoubleTy();
-      std::vector<Value*> sums;
+      // The row's bs sums are the lanes of one vector: block column j (stored contiguously,
+      // the controller transposes the blocks) times x_j added lane by lane, so each sum
+      // still takes its terms in (block, j) order.
+      auto* vec = llvm::FixedVectorType::get(f64, static_cast<unsigned>(bs));
+      Value* sums;
       {
         llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
-        for (int i = 0; i < bs; ++i) sums.push_back(entry.CreateAlloca(f64));
+        sums = entry.CreateAlloca(vec);
       }
       loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
-        for (Value* s : sums) b_.CreateStore(llvm::ConstantFP::get(f64, 0.0), s);
+        b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
         Value* lo = b_.CreateSExt(
             b_.CreateLoad(b_.getInt32Ty(),
                           b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
@@ -470,23 +474,22 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
               i64);
           Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
           Value* xc = b_.CreateMul(col, b_.getInt64(bs));
-          for (int i = 0; i < bs; ++i) {
-            Value* s = b_.CreateLoad(f64, sums[i]);
-            for (int j = 0; j < bs; ++j) {
-              Value* a = b_.CreateLoad(
-                  f64, b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                            b_.CreateAdd(blk, b_.getInt64(i * bs + j))));
-              Value* x = b_.CreateLoad(
-                  f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
-              s = b_.CreateFAdd(s, b_.CreateFMul(a, x));
-            }
-            b_.CreateStore(s, sums[i]);
+          Value* s = b_.CreateLoad(vec, sums);
+          for (int j = 0; j < bs; ++j) {
+            llvm::LoadInst* a = b_.CreateLoad(
+                vec, b_.CreateInBoundsGEP(f64, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(j * bs))));
+            a->setAlignment(llvm::Align(8));
+            Value* x = b_.CreateLoad(
+                f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
+            s = b_.CreateFAdd(s, b_.CreateFMul(a, b_.CreateVectorSplat(static_cast<unsigned>(bs), x)));
           }
+          b_.CreateStore(s, sums);
         });
         Value* row = b_.CreateMul(r, b_.getInt64(bs));
+        Value* total = b_.CreateLoad(vec, sums);
         for (int i = 0; i < bs; ++i)
           b_.CreateStore(
-              b_.CreateLoad(f64, sums[i]),
+              b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
               b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
         for (int i = 0; i < bs; ++i) {
           element_ = b_.CreateTrunc(b_.CreateAdd(row, b_.getInt64(i)), b_.getInt32Ty());
