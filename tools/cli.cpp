@@ -73,16 +73,19 @@ void add_test(CLI::App& app, Commands& c) {
   c.test->add_flag("--float32", c.test_options.float32, "Run programs with 32-bit floats");
   c.test->add_flag("--check-finite", c.test_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
-  c.test->add_option("--backend", c.test_options.backend,
-                     "What runs the sections: interpreter (default) or jit (hot maps compiled)")
+  c.test
+      ->add_option("--backend", c.test_options.backend,
+                   "What runs the sections: interpreter (default) or jit (hot maps compiled)")
       ->check(CLI::IsMember({"interpreter", "jit"}));
-  c.test->add_option("--jit-threshold", c.test_options.jit_threshold,
-                     "jit: executions of a map before it is compiled (0: at once; default 2)")
+  c.test
+      ->add_option("--jit-threshold", c.test_options.jit_threshold,
+                   "jit: executions of a map before it is compiled (0: at once; default 2)")
       ->check(CLI::NonNegativeNumber);
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
-      "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...).\n"
+      "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...); "
+      "with --backend jit, hot maps and solver loops run compiled.\n"
       "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
       "otherwise, 2 on a usage error.\n");
 }
@@ -118,19 +121,22 @@ void add_run(CLI::App& app, Commands& c) {
                   "Scenes: let NaN and infinity through (by default the run stops at the first "
                   "one in the sets' float fields or step's results, checked after init and after "
                   "every frame; the frames before it stay written)");
-  c.run->add_option("--backend", o.backend,
-                    "What runs the program: interpreter (default) or jit (hot map and apply sites "
-                    "compiled to native code with LLVM; the rest interpreted)")
+  c.run
+      ->add_option("--backend", o.backend,
+                   "What runs the program: interpreter (default) or jit (hot map and apply sites "
+                   "compiled to native code with LLVM; the rest interpreted)")
       ->check(CLI::IsMember({"interpreter", "jit"}));
-  c.run->add_option("--jit-threshold", o.jit_threshold,
-                    "jit: executions of a site before it is compiled (0: at once; default 2)")
+  c.run
+      ->add_option("--jit-threshold", o.jit_threshold,
+                   "jit: executions of a site before it is compiled (0: at once; default 2)")
       ->check(CLI::NonNegativeNumber);
   c.run->add_flag("--jit-stats", o.jit_stats,
                   "jit: after the run, print each trace: site, key, compile ms, calls, ms spent, "
                   "or why it ran interpreted");
-  c.run->add_flag("--check-jit", o.check_jit,
-                  "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
-                  "the first result, field or variable that differs (bit for bit), naming it");
+  c.run->add_flag(
+      "--check-jit", o.check_jit,
+      "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
+      "the first result, field or variable that differs (bit for bit), naming it");
   c.run->add_option("--dump", o.dump, "jit: print each compiled trace: loop-ir, llvm (or both)")
       ->type_name("KIND")
       ->delimiter(',')

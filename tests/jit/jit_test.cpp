@@ -3,6 +3,7 @@
 // reasons, errors reported in the interpreter's words, and switching executors mid-run.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <sstream>
 
@@ -454,6 +455,102 @@ TEST(Jit, DecompositionsComputeTheInterpretersBits) {
   const double* s = results[0][0].tensor().floats();
   EXPECT_GT(s[0], s[1]);
   EXPECT_GT(s[1], 0.0);
+}
+
+// A CG loop compiled whole: three loops per iteration after fusion, the interpreter's bits.
+const char* kSolver = R"(
+element Point
+  b : float;
+  d : float;
+end
+element Link
+  k : float;
+end
+extern points : set{Point};
+extern links : set{Link}(points, points);
+
+func stiffness(l : Link, p : (Point * 2)) -> A : matrix[points,points](float)
+  A(p(0), p(0)) = l.k;
+  A(p(1), p(1)) = l.k;
+  A(p(0), p(1)) = -0.5 * l.k;
+  A(p(1), p(0)) = -0.5 * l.k;
+end
+
+func diagonal(q : Point) -> D : matrix[points,points](float)
+  D(q, q) = q.d;
+end
+
+export func solve() -> (x : vector[points](float), iterations : int)
+  A = (map stiffness to links reduce +) + (map diagonal to points reduce +);
+  b = points.b;
+  x = 0.0 * b;
+  var r = b;
+  var p = r;
+  var rr = r' * r;
+  while (rr > 1e-20) and (iterations < 50)
+    Ap = A * p;
+    alpha = rr / (p' * Ap);
+    x = x + alpha * p;
+    r = r - alpha * Ap;
+    rr_new = r' * r;
+    p = r + (rr_new / rr) * p;
+    rr = rr_new;
+    iterations = iterations + 1;
+  end
+end
+)";
+
+TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::vector<Value> results[2];
+  std::string dump, stats;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source("solver.sim", kSolver);
+    ASSERT_TRUE(compiled->ok());
+    runtime::Set points("points");
+    runtime::Set links("links", {&points, &points});
+    const int n = 40;
+    points.add_many(n);
+    points.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    points.add_field("d", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    links.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    for (int i = 0; i < n; ++i) {
+      points.field(0).at<double>(i)[0] = std::sin(0.3 * i);
+      points.field(1).at<double>(i)[0] = 0.1 + 0.01 * i;
+      if (i + 1 < n) links.add({i, i + 1});
+    }
+    for (int e = 0; e < links.size(); ++e)
+      links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
+    std::ostringstream dumped;
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    o.jit.dump = &dumped;
+    o.jit.dump_loop_ir = true;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("points"), points);
+    engine.bind_set(*compiled->find_extern("links"), links);
+    results[k] = engine.call(*compiled->find_func("solve"), {});
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) {
+      dump = dumped.str();
+      stats = os.str();
+    }
+  }
+  // The loop: the product with p'Ap, one pass for x, r and r'r, one for p.
+  const std::string loop = dump.substr(dump.find("system trace"));
+  auto count = [&](const std::string& what) {
+    size_t c = 0;
+    for (size_t at = loop.find(what); at != std::string::npos; at = loop.find(what, at + 1)) ++c;
+    return c;
+  };
+  EXPECT_EQ(count(" = spmv("), 1u) << loop;
+  EXPECT_EQ(count("pass over"), 2u) << loop;
+  EXPECT_NE(stats.find("4 loops fused away"), std::string::npos) << stats;
+  ASSERT_EQ(results[0][1].as_int(), results[1][1].as_int());
+  EXPECT_GT(results[0][1].as_int(), 5);  // CG took real iterations
+  expect_same(results[0][0], results[1][0], "x");
 }
 
 }  // namespace
