@@ -185,7 +185,12 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
         frame_of_element = &setup(e);
       }
       ++depth_;
-      execute_body(f);
+      try {
+        execute_body(f);
+      } catch (RuntimeError& err) {
+        err.name_element("element " + std::to_string(e) + " of " + ctx->target->set->describe());
+        throw;
+      }
     }
     if (offer) options_.sites->site_done(call);
   } catch (...) {

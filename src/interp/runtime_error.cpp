@@ -28,6 +28,10 @@ void RuntimeError::add_frame(std::string func, frontend::SourceSpan call_site) {
   next_ = call_site;
 }
 
+void RuntimeError::name_element(const std::string& element) {
+  if (!stack_.empty()) stack_.back().func += ", " + element;
+}
+
 int RuntimeError::line() const { return where_.valid() ? where_.start().line : 0; }
 
 std::string RuntimeError::render() const {

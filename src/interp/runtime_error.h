@@ -27,6 +27,9 @@ class RuntimeError : public std::runtime_error {
   // Records the next enclosing call, innermost first: `func` was at the place recorded last
   // (the error itself for the first frame); `call_site` is where `func` was called from.
   void add_frame(std::string func, frontend::SourceSpan call_site);
+  // Says which element the innermost frame recorded so far was mapped over, so that an error
+  // in a mapped function names its element: `  in f, element 17 of set 'tets' (file:line)`.
+  void name_element(const std::string& element);
   // The line of `where` (0 when it has no place).
   int line() const;
 

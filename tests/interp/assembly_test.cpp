@@ -713,7 +713,7 @@ end
     EXPECT_NE(e.message().find("element 0 of set 'springs'"), std::string::npos) << e.message();
     EXPECT_NE(e.render().find("assembly.sim:8:"), std::string::npos) << e.render();
     ASSERT_FALSE(e.stack().empty());
-    EXPECT_EQ(e.stack()[0].func, "bad");
+    EXPECT_EQ(e.stack()[0].func, "bad, element 0 of set 'springs'");
   }
   try {
     h.run("vec_case");
@@ -726,6 +726,45 @@ end
   }
   // The interpreter stays usable, and the pattern is intact for a correct program.
   EXPECT_THROW(h.run("mat_case"), RuntimeError);
+}
+
+// Any run-time error inside a mapped function names the element being mapped in the stack
+// frame of the mapped function, not in the frames of the functions it calls.
+TEST(Assembly, RuntimeErrorInMappedFunctionNamesTheElement) {
+  Harness h(R"(element N  d : int; end
+extern nodes : set{N};
+func quotient(n : N) -> q : int
+  q = 12 / n.d;
+end
+func per_node(n : N) -> f : vector[nodes](int)
+  f(n) = quotient(n);
+end
+export func run() -> f : vector[nodes](int)
+  f = map per_node to nodes;
+end
+)");
+  ASSERT_TRUE(h.ok());
+  runtime::Set nodes("nodes");
+  nodes.add_many(4);
+  h.bind("nodes", nodes);
+  int32_t* d = nodes.field("d").data<int32_t>();
+  d[0] = 1;
+  d[1] = 2;
+  d[2] = 0;  // the division by zero
+  d[3] = 3;
+  try {
+    h.run("run");
+    FAIL() << "expected a run-time error";
+  } catch (const RuntimeError& e) {
+    EXPECT_EQ(e.line(), 4);
+    ASSERT_EQ(e.stack().size(), 3u);
+    EXPECT_EQ(e.stack()[0].func, "quotient");
+    EXPECT_EQ(e.stack()[1].func, "per_node, element 2 of set 'nodes'");
+    EXPECT_EQ(e.stack()[2].func, "run");
+    EXPECT_NE(e.render().find("  in per_node, element 2 of set 'nodes' (assembly.sim:7)\n"),
+              std::string::npos)
+        << e.render();
+  }
 }
 
 // ------------------------------------------------------------------------------------------
