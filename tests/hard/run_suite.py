@@ -44,10 +44,10 @@ CASES = [
     ("nu0499", "nu0499.toml", "nu = 0.499", False),
     ("dt10", "dt10.toml", "h = 0.05, ten times fem.sim's", True),
     ("sliver", "sliver.toml", "24 sliver tets (1e-4 m thick, 1e-2 m wide)", False),
-    ("springs_k1e6", "springs_k1e6.toml", "springs, k = 1e6 N/m", True),
+    ("springs_k1e6", "springs_k1e6.toml", "springs, k = 1e6 N/m, swinging about one corner", True),
 ]
 # Stated tolerances of the robust runs (error relative to the reference's displacement).
-ERROR_TOL = {"float64": 1e-4, "float32": 1e-2}
+ERROR_TOL = {"float64": 1e-3, "float32": 1e-2}
 REFERENCE = {"newton_tol": 1e-9, "newton_max": 200, "cg_tol": 1e-12, "cg_max": 100000}
 MODELS = {0: "classic NH", 1: "stable NH"}
 INTEGRATORS = {0: "linearised", 1: "Newton"}
