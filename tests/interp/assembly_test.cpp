@@ -793,6 +793,46 @@ end
   EXPECT_THROW(h.run("mat_case"), RuntimeError);
 }
 
+// Any run-time error inside a mapped function names the element being mapped in the stack
+// frame of the mapped function, not in the frames of the functions it calls.
+TEST(Assembly, RuntimeErrorInMappedFunctionNamesTheElement) {
+  Harness h(R"(element N  d : int; end
+extern nodes : set{N};
+func quotient(n : N) -> q : int
+  q = 12 / n.d;
+end
+func per_node(n : N) -> f : vector[nodes](int)
+  f(n) = quotient(n);
+end
+export func run() -> f : vector[nodes](int)
+  f = map per_node to nodes;
+end
+)");
+  ASSERT_TRUE(h.ok());
+  runtime::Set nodes("nodes");
+  nodes.add_many(4);
+  h.bind("nodes", nodes);
+  int32_t* d = nodes.field("d").data<int32_t>();
+  d[0] = 1;
+  d[1] = 2;
+  d[2] = 0;  // the division by zero
+  d[3] = 3;
+  try {
+    h.run("run");
+    FAIL() << "expected a run-time error";
+  } catch (const RuntimeError& e) {
+    EXPECT_EQ(e.line(), 4);
+    ASSERT_EQ(e.stack().size(), 3u);
+    EXPECT_EQ(e.stack()[0].func, "quotient");
+    EXPECT_EQ(e.stack()[1].func, "per_node");
+    EXPECT_EQ(e.stack()[1].element, "mapping over element 2 of set 'nodes'");
+    EXPECT_EQ(e.stack()[2].func, "run");
+    EXPECT_NE(e.render().find("  in per_node (assembly.sim:7), mapping over element 2 of set 'nodes'\n"),
+              std::string::npos)
+        << e.render();
+  }
+}
+
 // ------------------------------------------------------------------------------------------
 // The conjugate-gradient loop of LANGUAGE.md §14.3 on an assembled SPD matrix, against
 // Eigen's ConjugateGradient on the same matrix.

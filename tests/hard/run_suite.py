@@ -1,0 +1,277 @@
+#!/usr/bin/env python3
+"""Runs the hard-case suite (tests/hard/*.toml) and writes its table.
+
+Usage: tests/hard/run_suite.py [--simit PATH] [--frames K] [--cases LIST] [--work DIR]
+                               [--table FILE] [--check]
+
+Every case is run with each model and integrator of its program (fem_newton.sim: classic or
+Stable Neo-Hookean, linearised step or Newton; springs_newton.sim: linearised step or
+Newton), in float64, and the cases marked float32 also with `simit run --float32`. Every run
+uses --check-finite, so that a NaN or an infinity stops it at the operation that made it,
+naming the line and the element (never a silent NaN). The error of each run is that of its
+final positions against a reference: the same model with Newton converged in float64
+(newton_tol 1e-9 m/s, PCG to a relative residual of 1e-12):
+    error = max over vertices |x - x_ref| / max over vertices |x_ref - x_start|,
+the error relative to the largest displacement of the reference over the run.
+
+--table writes the markdown table (case, model, integrator, precision, outcome, error,
+Newton and CG iterations per frame, ms per frame) into FILE between the markers
+<!-- table --> and <!-- end table -->. --check asserts the suite's claims and exits 1 when
+one fails: the robust runs (Stable Neo-Hookean, Newton) finish finite, without a CG
+breakdown, within ERROR_TOL[precision] of the reference; every other run either finishes
+with finite positions or stops with a diagnosis naming file, line and element, or reports
+its CG breakdown.
+"""
+import argparse
+import csv
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+# case: scene, what it tests, whether float32 runs too
+CASES = [
+    ("base", "base.toml", "fem.sim's set-up on a 240-tet bar", True),
+    ("inverted", "inverted.toml", "upper half mirrored: 108 tets start inverted", False),
+    ("nu049", "nu049.toml", "nu = 0.49", False),
+    ("nu0499", "nu0499.toml", "nu = 0.499", False),
+    ("dt10", "dt10.toml", "h = 0.05, ten times fem.sim's", True),
+    ("sliver", "sliver.toml", "24 sliver tets (1e-4 m thick, 1e-2 m wide)", False),
+    ("springs_k1e6", "springs_k1e6.toml", "springs, k = 1e6 N/m, swinging about one corner", True),
+]
+# Stated tolerances of the robust runs (error relative to the reference's displacement).
+ERROR_TOL = {"float64": 1e-3, "float32": 1e-2}
+REFERENCE = {"newton_tol": 1e-9, "newton_max": 200, "cg_tol": 1e-12, "cg_max": 100000}
+MODELS = {0: "classic NH", 1: "stable NH"}
+INTEGRATORS = {0: "linearised", 1: "Newton"}
+
+
+def make_scene(source, tensors, workdir, name):
+    """A copy of SOURCE with absolute program and mesh paths and [tensors] values replaced."""
+    base = os.path.dirname(os.path.abspath(source))
+    text = open(source).read()
+
+    def absolute(m):
+        return '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
+
+    text = re.sub(r'(?m)^(program|mesh) = "([^"]+)"', absolute, text)
+    for key, value in tensors.items():
+        text, n = re.subn(r"(?m)^%s = \S+" % key, "%s = %r" % (key, value), text)
+        if n != 1:
+            sys.exit("%s: expected one '%s = ' line" % (source, key))
+    path = os.path.join(workdir, name + ".toml")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def read_positions(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return [tuple(float(v) for v in r) for r in rows[1:] if r]
+
+
+def has_key(source, key):
+    return re.search(r"(?m)^%s = " % key, open(source).read()) is not None
+
+
+class Run:
+    """One run of a scene: its outcome, per-frame statistics and final positions."""
+
+    def __init__(self, simit, scene, frames, outdir, float32):
+        shutil.rmtree(outdir, ignore_errors=True)
+        final = outdir + "-final.csv"
+        if os.path.exists(final):
+            os.remove(final)
+        argv = [simit, "run", "--check-finite"] + (["--float32"] if float32 else []) + [
+            "--frames", str(frames), "--output", outdir, "--final-csv", final, scene]
+        start = time.monotonic()
+        proc = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.wall = time.monotonic() - start
+        self.log = proc.stdout
+        self.status = proc.returncode
+        self.rows = []
+        if os.path.isdir(outdir):
+            stats = [f for f in os.listdir(outdir) if f.endswith(".csv")]
+            if stats:
+                with open(os.path.join(outdir, stats[0])) as f:
+                    self.rows = list(csv.DictReader(f))
+        self.x = read_positions(final) if self.status == 0 and os.path.exists(final) else None
+        self.diagnosis = None
+        if self.status != 0:
+            # file:line:col: runtime error: message, then the frames; keep the message and the
+            # innermost frame that names an element.
+            m = re.search(r"(\S+):(\d+):\d+: runtime error: (.*)", self.log)
+            where = re.search(r"in (\w+) \([^)]*\), mapping over (element \d+ of set '\w+')", self.log)
+            if m:
+                self.diagnosis = "%s at %s:%s%s" % (
+                    m.group(3), os.path.basename(m.group(1)), m.group(2),
+                    " in %s, %s" % (where.group(1), where.group(2)) if where else "")
+            else:
+                self.diagnosis = "exit %d: %s" % (self.status, self.log.strip()[-200:])
+
+    def total(self, key):
+        return sum(float(r[key]) for r in self.rows if key in r)
+
+    def per_frame(self, key):
+        return self.total(key) / len(self.rows) if self.rows else float("nan")
+
+    def breakdowns(self):
+        return [int(r["frame"]) for r in self.rows if float(r.get("cg_breakdown", 0)) != 0]
+
+    def finite(self):
+        return self.x is not None and all(math.isfinite(c) for p in self.x for c in p)
+
+    def outcome(self):
+        if self.diagnosis:
+            return "stopped: " + self.diagnosis
+        if not self.finite():
+            return "NOT FINITE"
+        b = self.breakdowns()
+        if b:
+            return "finite; CG breakdown (p'Ap <= 0) in frames %s, step not taken" % compress(b)
+        halvings = self.total("halvings")
+        return "finite" + ("; %d line-search halvings" % halvings if halvings else "")
+
+
+def compress(frames):
+    """[1, 2, 3, 7] -> '1-3, 7'."""
+    out = []
+    for f in frames:
+        if out and out[-1][1] == f - 1:
+            out[-1][1] = f
+        else:
+            out.append([f, f])
+    return ", ".join("%d" % a if a == b else "%d-%d" % (a, b) for a, b in out)
+
+
+def error(x, ref, start):
+    motion = max(math.dist(p, q) for p, q in zip(ref, start))
+    worst = max(math.dist(p, q) for p, q in zip(x, ref))
+    return worst / motion if motion > 0 else float("nan")
+
+
+def run_case(simit, name, scene, float32_too, frames, work):
+    source = os.path.join(HERE, scene)
+    models = [0, 1] if has_key(source, "model") else [None]
+    results = []
+    start = Run(simit, make_scene(source, {}, work, name + "-start"), 0,
+                os.path.join(work, name + "-start"), False)
+    for model in models:
+        fix = {} if model is None else {"model": model}
+        ref_scene = make_scene(source, dict(fix, integrator=1, **REFERENCE), work,
+                               "%s-m%s-ref" % (name, model))
+        ref = Run(simit, ref_scene, frames, os.path.join(work, "%s-m%s-ref" % (name, model)),
+                  False)
+        for integrator in (0, 1):
+            precisions = ["float64", "float32"] if float32_too and integrator == 1 else ["float64"]
+            for prec in precisions:
+                tag = "%s-m%s-i%d-%s" % (name, model, integrator, prec)
+                sc = make_scene(source, dict(fix, integrator=integrator), work, tag)
+                r = Run(simit, sc, frames, os.path.join(work, tag), prec == "float32")
+                err = float("nan")
+                if r.finite() and ref.finite() and start.x:
+                    err = error(r.x, ref.x, start.x)
+                results.append({
+                    "case": name, "model": "springs" if model is None else MODELS[model],
+                    "integrator": INTEGRATORS[integrator], "precision": prec, "run": r,
+                    "reference": ref, "error": err, "robust": model != 0 and integrator == 1})
+    return results
+
+
+def fmt(v, spec):
+    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else spec % v
+
+
+def table(results, frames):
+    lines = ["| case | model | integrator | precision | outcome | error vs reference | "
+             "Newton its/frame | CG its/frame | ms/frame |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        run = r["run"]
+        ref_note = "" if r["reference"].finite() else " (reference stopped)"
+        lines.append("| %s | %s | %s | %s | %s | %s%s | %s | %s | %s |" % (
+            r["case"], r["model"], r["integrator"], r["precision"], run.outcome(),
+            fmt(r["error"], "%.1e"), ref_note, fmt(run.per_frame("newton_iterations"), "%.1f"),
+            fmt(run.per_frame("cg_iterations"), "%.0f"), fmt(run.per_frame("ms"), "%.0f")))
+    return "\n".join(lines) + "\n\n%d frames per run.\n" % frames
+
+
+def check(results):
+    failures = []
+    for r in results:
+        run, label = r["run"], "%s %s %s %s" % (r["case"], r["model"], r["integrator"],
+                                                r["precision"])
+        if r["robust"]:
+            if not r["reference"].finite():
+                failures.append("%s: the reference did not finish finite: %s" %
+                                (label, r["reference"].outcome()))
+            if not run.finite() or run.breakdowns():
+                failures.append("%s: %s" % (label, run.outcome()))
+            elif not r["error"] <= ERROR_TOL[r["precision"]]:
+                failures.append("%s: error %.2e above %g" % (label, r["error"],
+                                                             ERROR_TOL[r["precision"]]))
+        elif run.diagnosis:
+            if not re.search(r"\.sim:\d+ in \w+, element \d+ of set", run.diagnosis):
+                failures.append("%s: stopped without naming line and element: %s" %
+                                (label, run.diagnosis))
+        elif not run.finite():
+            failures.append("%s: finished with non-finite positions" % label)
+    return failures
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--simit", default=os.path.join(ROOT, "build", "tools", "simit"))
+    ap.add_argument("--frames", type=int, default=20)
+    ap.add_argument("--cases", default=",".join(c[0] for c in CASES))
+    ap.add_argument("--work", default=None, help="folder for the runs (default: a temporary one)")
+    ap.add_argument("--table", default=None)
+    ap.add_argument("--check", action="store_true")
+    args = ap.parse_args()
+    wanted = args.cases.split(",")
+    unknown = set(wanted) - {c[0] for c in CASES}
+    if unknown:
+        sys.exit("unknown cases: %s" % ", ".join(sorted(unknown)))
+    work = args.work or tempfile.mkdtemp(prefix="simit-hard-")
+    os.makedirs(work, exist_ok=True)
+    results = []
+    for name, scene, what, f32 in CASES:
+        if name in wanted:
+            print("%s: %s" % (name, what), flush=True)
+            rs = run_case(args.simit, name, scene, f32, args.frames, work)
+            for r in rs:
+                run = r["run"]
+                print("  %-10s %-10s %-7s %-60s error %s  %s ms/frame" % (
+                    r["model"], r["integrator"], r["precision"], run.outcome()[:60],
+                    fmt(r["error"], "%.1e"), fmt(run.per_frame("ms"), "%.0f")), flush=True)
+            results += rs
+    text = table(results, args.frames)
+    if args.table:
+        doc = open(args.table).read()
+        doc, n = re.subn(r"(?s)<!-- table -->.*<!-- end table -->",
+                         lambda _: "<!-- table -->\n" + text + "<!-- end table -->", doc)
+        if n != 1:
+            sys.exit("%s: no <!-- table --> ... <!-- end table --> markers" % args.table)
+        with open(args.table, "w") as f:
+            f.write(doc)
+    if not args.work:
+        shutil.rmtree(work, ignore_errors=True)
+    if args.check:
+        failures = check(results)
+        for f in failures:
+            print("FAIL: " + f)
+        print("%d runs, %d failures" % (len(results), len(failures)))
+        return 1 if failures else 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
