@@ -178,14 +178,13 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
   };
   if (!backend_) {
     give_up("no code generator: " + backend_error_);
-  } else if (options_.check_finite) {
-    give_up("interpreted: --check-finite pinpoints the statement in the interpreter");
   } else {
     SiteShape shape;
     shape.site = call.plan.site;
     shape.target = &call.target;
     shape.reduce = call.plan.reduce;
     shape.float32 = options_.float32;
+    shape.check_finite = options_.check_finite;
     for (const auto& r : call.plan.results)
       shape.patterns.push_back(r.is_matrix ? r.pattern.get() : nullptr);
     shape.partial_args = &call.partial_args;

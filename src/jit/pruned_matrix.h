@@ -13,7 +13,7 @@ namespace simit::jit {
 
 struct PrunedMatrix {
   std::vector<int32_t> row_ptr, cols;
-  std::vector<double> values;  // each block column-major (square blocks only)
+  std::vector<double> values;   // each block column-major (square blocks only)
   int64_t kept = 0, total = 0;  // blocks
 
   // Rebuilds the arrays from `m` (float components), reusing their storage.

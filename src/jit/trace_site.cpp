@@ -2,6 +2,7 @@
 #include "jit/trace_site.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -356,6 +357,27 @@ class Tracer {
     for (ExprRef& e : s.c) e = unary(UnOp::Round32, Ty::F64, e, at);
     return s;
   }
+  // --check-finite: where the interpreter checks an operation's value (operators and
+  // intrinsic calls), a check that every component is finite.
+  Sym finite(Sym s, const SourceSpan& at) {
+    if (!in_.check_finite || s.kind != Sym::Kind::Tensor || s.ty != Ty::F64) return s;
+    s = settle(std::move(s), at);
+    ExprRef ok;
+    for (const ExprRef& e : s.c) {
+      if (is_const(e) && std::isfinite(e->f)) continue;
+      ExprRef one = compare(CmpOp::Lt, math(MathFn::Abs, {e}, at), fconst(HUGE_VAL), at);
+      ok = ok ? binary(BinOp::And, Ty::Bool, ok, one, at) : one;
+    }
+    if (!ok) return s;
+    trace_.errors.push_back({at, "the operation produced a NaN or an infinity"});
+    Stmt check;
+    check.kind = StmtKind::Check;
+    check.value = ok;
+    check.error = static_cast<int>(trace_.errors.size() - 1);
+    check.span = at;
+    emit(std::move(check));
+    return s;
+  }
   Sym elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at);
   Sym product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
   ExprRef det(const std::vector<ExprRef>& a, int n, const std::vector<int>& rows,
@@ -690,7 +712,7 @@ Sym Tracer::eval_binary(const ast::Binary& b) {
       give_up(b.span,
               std::string("operator ") + ast::binary_op_spelling(b.op) + " is not compiled");
   }
-  return round(std::move(v), b.span);
+  return finite(round(std::move(v), b.span), b.span);
 }
 
 Sym Tracer::eval_compare(const ast::Compare& c) {
@@ -840,7 +862,7 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
       give_up(c.span, std::string("intrinsic ") + frontend::intrinsic_name(c.intrinsic) +
                           " is not compiled");
   }
-  return round(std::move(v), c.span);
+  return finite(round(std::move(v), c.span), c.span);
 }
 
 // svd, eig, polar, project_spd: a call into the runtime's decompositions (the interpreter's
@@ -884,6 +906,7 @@ std::vector<Sym> Tracer::decompose(const ast::Call& c) {
                         c.span));
   }
   emit(std::move(s));
+  for (Sym& r : out) r = finite(std::move(r), c.span);
   return out;
 }
 

@@ -35,6 +35,7 @@ struct SiteShape {
   const runtime::Set* target = nullptr;
   bool reduce = false;
   bool float32 = false;
+  bool check_finite = false;  // a check after every operation, as the interpreter's
   // Per result: its pattern when it is a system matrix (null for vectors).
   std::vector<const runtime::MatrixPattern*> patterns;
   const std::vector<interp::Value>* partial_args = nullptr;

@@ -553,5 +553,80 @@ TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
   expect_same(results[0][0], results[1][0], "x");
 }
 
+// --check-finite compiled: a check after every operation, as the interpreter does; a map's
+// error is reported by the interpreter running it again, an apply's by the kernel.
+const char* kFinite = R"(
+element P
+  a : float;
+  b : float;
+end
+extern ps : set{P};
+
+func logs(p : P) -> r : vector[ps](float)
+  r(p) = 2.0 * log(p.a);
+end
+
+func roots(inout p : P)
+  p.b = sqrt(p.a) + 1.0;
+end
+
+export func map_it() -> (r : vector[ps](float))
+  r = map logs to ps reduce +;
+end
+
+export func apply_it()
+  apply roots to ps;
+end
+)";
+
+TEST(Jit, CheckFiniteIsCompiledAndStopsWhereTheInterpreterStops) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::string messages[2][2], stats;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source("finite.sim", kFinite);
+    ASSERT_TRUE(compiled->ok());
+    runtime::Set ps("ps");
+    ps.add_many(5);
+    ps.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    for (int i = 0; i < 5; ++i) ps.field(0).at<double>(i)[0] = i == 3 ? -1.0 : 1.0 + i;
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    o.check_finite = true;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("ps"), ps);
+    for (int f = 0; f < 2; ++f) {
+      try {
+        engine.call(*compiled->find_func(f ? "apply_it" : "map_it"), {});
+      } catch (const interp::RuntimeError& e) {
+        messages[k][f] = e.render();
+      }
+    }
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) stats = os.str();
+  }
+  EXPECT_NE(stats.find("logs (line 17)"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("roots (line 21)"), std::string::npos) << stats;
+  EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
+  // The map: the interpreter's own words (it ran the site again).
+  EXPECT_NE(messages[0][0].find("finite.sim:9:16: runtime error: the operation produced NaN"),
+            std::string::npos)
+      << messages[0][0];
+  EXPECT_EQ(messages[0][0], messages[1][0]);
+  // The apply: the same place and element, in the kernel's words.
+  EXPECT_NE(messages[0][1].find("finite.sim:13:9: runtime error: the operation produced NaN"),
+            std::string::npos)
+      << messages[0][1];
+  EXPECT_NE(messages[1][1].find(
+                "finite.sim:13:9: runtime error: the operation produced a NaN or an infinity"),
+            std::string::npos)
+      << messages[1][1];
+  EXPECT_NE(messages[1][1].find("in roots (finite.sim:13), mapping over element 3 of set 'ps'"),
+            std::string::npos)
+      << messages[1][1];
+}
+
 }  // namespace
 }  // namespace simit::jit
