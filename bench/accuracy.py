@@ -385,6 +385,7 @@ def plot(plt, out, example, frames):
                      color=color, linewidth=0.8, alpha=0.8, label=label)
         axes[1].plot([float(r["value"]) for r in series], err, marker=marker, color=color,
                      label=label)
+    labelled = False
     for r in rows:
         if r["shipped"]:
             err = max(float(r["max_rel_error"]), floor)
@@ -392,12 +393,13 @@ def plot(plt, out, example, frames):
                     if example.param == "cg_tol" else "h %g" % float(r["value"]))
             for ax, x in ((axes[0], float(r["ms_per_frame"])), (axes[1], float(r["value"]))):
                 ax.plot([x], [err], marker="*", markersize=15, color="k", linestyle="none",
-                        label="as shipped: %s, float64 (%s)" % (what, r["executor"]))
+                        label=None if labelled else "as shipped: %s, float64" % what)
+            labelled = True
     unstable = sorted({float(r["value"]) for r in load(out, example.name)
                        if r["status"] != "ok"})
     if unstable:  # the smallest failed value: where the explicit step stops being stable
         axes[1].axvline(unstable[0], color="grey", linestyle=":", linewidth=1)
-        axes[1].text(unstable[0], axes[1].get_ylim()[1], " unstable from %g" % unstable[0],
+        axes[1].text(unstable[0], axes[1].get_ylim()[1], "unstable from h = %.3g " % unstable[0],
                      color="grey", va="top", ha="right", fontsize=8)
     ylabel = "max |x - x_ref| / max |x_ref|"
     axes[0].set(xscale="log", yscale="log", xlabel="ms/frame (median)", ylabel=ylabel,
@@ -408,7 +410,7 @@ def plot(plt, out, example, frames):
         axes[1].invert_xaxis()  # tighter tolerances to the right, like longer times on the left
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+    axes[1].legend(fontsize=8, loc="best")  # one legend serves both panels
     fig.suptitle("%s (%s), %d frames; reference float64 converged" %
                  (example.name, os.path.basename(example.scene), frames))
     fig.tight_layout()
