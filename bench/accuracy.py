@@ -3,7 +3,7 @@
 
 Usage: bench/accuracy.py [--build DIR] [--example fem,springs,cloth] [--executor LIST]
                          [--frames K] [--points LIST] [--precisions LIST] [--repeat N]
-                         [--out DIR] [--plot-only]
+                         [--out DIR] [--plot-only] [--table]
 
 Each example runs its scene for K frames (default 10) once per point of a sweep, with
 float64 and with float32 (`simit run --float32`), and each point gives the median ms/frame
@@ -46,8 +46,9 @@ Writes DIR/accuracy_EXAMPLE_EXECUTOR.csv per run and DIR/accuracy_EXAMPLE.png (d
 bench-accuracy) with matplotlib: error against ms/frame and against the sweep's parameter,
 one series per executor and precision, from every accuracy_EXAMPLE_*.csv in DIR (so that an
 interpreter run and a JIT run of the same example share one figure). --plot-only redraws the
-figures from the CSVs. Not a test. With the JIT the default sweep of all three examples
-takes a few minutes; with the interpreter about 2 s per fem frame (use --points to thin it).
+figures from the CSVs; --table prints each example's table in markdown. Not a test. With the
+JIT the default sweep of all three examples takes a few minutes; with the interpreter about
+0.5 to 1 s per fem frame (use --points to thin it).
 """
 import argparse
 import csv
@@ -399,8 +400,9 @@ def plot(plt, out, example, frames):
                        if r["status"] != "ok"})
     if unstable:  # the smallest failed value: where the explicit step stops being stable
         axes[1].axvline(unstable[0], color="grey", linestyle=":", linewidth=1)
-        axes[1].text(unstable[0], axes[1].get_ylim()[1], "unstable from h = %.3g " % unstable[0],
-                     color="grey", va="top", ha="right", fontsize=8)
+        axes[1].text(unstable[0], axes[1].get_ylim()[1],
+                     "unstable from h = %.3g " % unstable[0], color="grey", va="top",
+                     ha="right", fontsize=8)
     ylabel = "max |x - x_ref| / max |x_ref|"
     axes[0].set(xscale="log", yscale="log", xlabel="ms/frame (median)", ylabel=ylabel,
                 title="%s: error against time" % example.name)
@@ -418,6 +420,48 @@ def plot(plt, out, example, frames):
     fig.savefig(path, dpi=100)
     plt.close(fig)
     print("wrote %s" % path)
+
+
+def table(out, example):
+    """The example's results as markdown (--table): per executor, a row per setting, the
+    shipped one first, and for each precision ms/frame and the max relative error."""
+    rows = load(out, example.name)
+    cg = example.param == "cg_tol"
+    head = ["executor", example.param, "cg_max" if cg else "substeps"] + \
+        (["CG it/frame", "rel. resid."] if cg else []) + \
+        ["float64 ms/frame", "float64 error", "float32 ms/frame", "float32 error"]
+    lines = ["| " + " | ".join(head) + " |",
+             "|" + "|".join("---" if i == 0 else "---:" for i in range(len(head))) + "|"]
+    settings = []
+    for r in rows:
+        key = (r["executor"], bool(r["shipped"]), float(r["value"]))
+        if key not in settings:
+            settings.append(key)
+    order = {"jit": 0, "interpreter": 1}
+    settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
+    for executor, shipped, value in settings:
+        by_prec = {r["precision"]: r for r in rows if r["executor"] == executor and
+                   bool(r["shipped"]) == shipped and float(r["value"]) == value}
+        first = by_prec.get("float64") or by_prec.get("float32")
+        cells = [executor, ("**%.3g (shipped)**" if shipped else "%.3g") % value,
+                 first["cg_max"] if cg else first["substeps"]]
+        if cg:
+            ok = first["status"] == "ok"
+            capped = " (capped)" if ok and first["capped"] not in ("", "0") else ""
+            cells += ["%g%s" % (float(first["cg_iterations"]), capped) if ok else "-",
+                      "%.1e" % float(first["rel_residual"]) if ok else "-"]
+        for prec in PRECISIONS:
+            r = by_prec.get(prec)
+            if r is None:
+                cells += ["", ""]
+            elif r["status"] != "ok":
+                cells += ["failed", "-"]
+            else:
+                ms = float(r["ms_per_frame"])
+                cells += ["%.3g" % ms if ms < 1000 else "%.0f" % ms,
+                          "%.2e" % float(r["max_rel_error"])]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def main():
@@ -443,6 +487,8 @@ def main():
                    help="substeps per frame of the cloth reference (default 1600)")
     p.add_argument("--out", default="bench-accuracy", help="output folder (default bench-accuracy)")
     p.add_argument("--plot-only", action="store_true", help="redraw the figures from the CSVs")
+    p.add_argument("--table", action="store_true",
+                   help="also print each example's results as a markdown table")
     args = p.parse_args()
     plt = require_matplotlib()
     names = [n.strip() for n in args.example.split(",") if n.strip()]
@@ -475,6 +521,8 @@ def main():
                 sweep(simit, executor, ref_executor, example, args, args.out)
     for example in examples:
         plot(plt, args.out, example, args.frames)
+        if args.table:
+            print(table(args.out, example))
     print("total %.0f s" % (time.monotonic() - started))
 
 
