@@ -363,7 +363,18 @@ def load(out, name):
     return rows
 
 
-def plot(plt, out, example, frames):
+def frames_of(out, name):
+    """The frame counts the example's CSVs say their runs had (the comment on line 1)."""
+    counts = set()
+    for path in glob.glob(os.path.join(out, "accuracy_%s_*.csv" % name)):
+        with open(path) as f:
+            m = re.search(r"(\d+) frames", f.readline())
+        if m:
+            counts.add(int(m.group(1)))
+    return "/".join(str(c) for c in sorted(counts)) or "?"
+
+
+def plot(plt, out, example):
     """accuracy_EXAMPLE.png: error against ms/frame (left) and the sweep parameter (right)."""
     rows = [r for r in load(out, example.name) if r["status"] == "ok"]
     if not rows:
@@ -413,8 +424,8 @@ def plot(plt, out, example, frames):
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     axes[1].legend(fontsize=8, loc="best")  # one legend serves both panels
-    fig.suptitle("%s (%s), %d frames; reference float64 converged" %
-                 (example.name, os.path.basename(example.scene), frames))
+    fig.suptitle("%s (%s), %s frames; reference float64 converged" %
+                 (example.name, os.path.basename(example.scene), frames_of(out, example.name)))
     fig.tight_layout()
     path = os.path.join(out, "accuracy_%s.png" % example.name)
     fig.savefig(path, dpi=100)
@@ -520,7 +531,7 @@ def main():
             for executor in executors:
                 sweep(simit, executor, ref_executor, example, args, args.out)
     for example in examples:
-        plot(plt, args.out, example, args.frames)
+        plot(plt, args.out, example)
         if args.table:
             print(table(args.out, example))
     print("total %.0f s" % (time.monotonic() - started))
