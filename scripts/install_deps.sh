@@ -2,7 +2,8 @@
 # Installs every build and test dependency of Simit from Debian packages (run as root; idempotent).
 # With --tests also the packages only the tests use (scripts/test.sh passes it); with --llvm
 # also LLVM 19, which the JIT needs (a build configured with -DSIMIT_WITH_LLVM=ON; setup.sh and
-# test.sh pass it).
+# test.sh pass it); with --bench also matplotlib, which bench/accuracy.py draws its plots with
+# (Debian's python3-matplotlib, for /usr/bin/python3).
 set -euo pipefail
 
 packages=(
@@ -13,11 +14,14 @@ packages=(
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with.
 test_packages=(python3-vtk9)
+# Benchmark-only: the plots of bench/accuracy.py.
+bench_packages=(python3-matplotlib)
 for arg in "$@"; do
   case "$arg" in
     --tests) packages+=("${test_packages[@]}") ;;
     --llvm) packages+=(llvm-19-dev) ;;
-    *) echo "install_deps: unknown option $arg (expected --tests or --llvm)" >&2; exit 2 ;;
+    --bench) packages+=("${bench_packages[@]}") ;;
+    *) echo "install_deps: unknown option $arg (expected --tests, --llvm or --bench)" >&2; exit 2 ;;
   esac
 done
 
