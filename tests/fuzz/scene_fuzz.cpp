@@ -2,6 +2,7 @@
 // meshes; it is read, its program compiled, its tensors read and its sets built with their
 // field expressions, and nothing runs or is written. The input is also tried as a field
 // expression on its own.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -76,7 +77,15 @@ bool generates_large_mesh(const toml::table& doc) {
   return false;
 }
 
+// toml++ 3.3.0 (Debian 12) reaches __builtin_unreachable for some non-ASCII characters where it
+// expects whitespace (upstream issues #190 and #295, fixed by pull request #305): "\xc3\xa9" alone
+// does. Until the scene reader screens them, such inputs would only find that again.
+bool hits_toml_unicode_bug(std::string_view text) {
+  return std::any_of(text.begin(), text.end(), [](char c) { return (c & 0x80) != 0; });
+}
+
 void read_scene(std::string_view text) {
+  if (hits_toml_unicode_bug(text)) return;
   std::string path = fuzz::write_scratch("scene.toml", text);
   try {
     if (generates_large_mesh(toml::parse(text))) return;
