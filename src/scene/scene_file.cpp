@@ -2,6 +2,7 @@
 #include "scene/scene_file.h"
 
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 namespace simit::scene {
@@ -51,8 +52,10 @@ void compile_program(SceneFile& file) {
 
 void read_frames(SceneFile& file) {
   if (const toml::node* n = file.doc.get("frames")) {
-    if (!n->is_integer() || n->value<int64_t>().value() < 0)
-      file.fail(n, "frames: expected a whole number >= 0");
+    if (!n->is_integer() || *n->value<int64_t>() < 0 ||
+        *n->value<int64_t>() > std::numeric_limits<int>::max())
+      file.fail(n, "frames: expected a whole number from 0 to " +
+                       std::to_string(std::numeric_limits<int>::max()));
     file.frames = static_cast<int>(*n->value<int64_t>());
   } else {
     file.fail(nullptr, "the scene: missing key 'frames'");

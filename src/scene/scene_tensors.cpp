@@ -1,7 +1,9 @@
 // Reading [tensors] into values of the extern tensors' types.
 #include "scene/scene_tensors.h"
 
+#include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -55,7 +57,12 @@ void read_component(const SceneFile& file, const std::string& what, const toml::
       s.floats[k] = static_cast<float>(s.doubles[k]);
       break;
     case ComponentKind::Int:
-      if (!v.is_integer()) file.fail(&v, what + ": expected a whole number");
+      // Simit's int is 32 bits; TOML's integers are 64.
+      if (!v.is_integer() || *v.value<int64_t>() < std::numeric_limits<int32_t>::min() ||
+          *v.value<int64_t>() > std::numeric_limits<int32_t>::max())
+        file.fail(&v, what + ": expected a whole number from " +
+                          std::to_string(std::numeric_limits<int32_t>::min()) + " to " +
+                          std::to_string(std::numeric_limits<int32_t>::max()));
       s.ints[k] = static_cast<int32_t>(*v.value<int64_t>());
       break;
     case ComponentKind::Bool:

@@ -73,6 +73,18 @@ TEST(MeshObj, TrailingCommentsAreIgnored) {
   EXPECT_EQ(m.triangles[0], (Triangle{0, 1, 2}));
 }
 
+// tinyobjloader ends a line at a lone '\r' and does not take '\v' for a space; the reader reads
+// the records its validation pass checked, in which both are spaces (found by obj_fuzz: an
+// unchecked "l 1 5" after a '\r' gave an edge to a vertex that does not exist).
+TEST(MeshObj, CarriageReturnsAndVerticalTabsAreSpaces) {
+  ScratchDir dir;
+  Mesh m = read_obj(dir.write("r.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nx\rl 1 5\n\vf 1 2 3\r\n"));
+  EXPECT_EQ(m.points.size(), 3u);
+  EXPECT_TRUE(m.edges.empty());
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(m.triangles[0], (Triangle{0, 1, 2}));
+}
+
 TEST(MeshObj, MalformedInputNamesFileAndLine) {
   const std::string v3 = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   const struct {

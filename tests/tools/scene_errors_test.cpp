@@ -164,6 +164,13 @@ TEST_F(SceneErrors, Tensors) {
                "(its extern tensors: cg_max, cg_tol)");
   bad = replace(s, "cg_max = 10", "cg_max = 10.5");
   expect_error(bad, "10.5", "[tensors] cg_max: extern 'cg_max' is int: expected a whole number");
+  // TOML's integers are 64-bit; Simit's int is not (these used to wrap silently).
+  bad = replace(s, "cg_max = 10", "cg_max = 4294967306");
+  expect_error(bad, "4294967306",
+               "[tensors] cg_max: extern 'cg_max' is int: expected a whole number from "
+               "-2147483648 to 2147483647");
+  bad = replace(s, "cg_max = 10", "cg_max = -2147483649");
+  expect_error(bad, "-2147483649", "expected a whole number from -2147483648 to 2147483647");
   bad = replace(s, "cg_tol = 1e-12", "cg_tol = true");
   expect_error(bad, "true", "extern 'cg_tol' is float: expected a number");
   bad = replace(s, "cg_tol = 1e-12", "cg_tol = [1e-12, 1e-10]");
@@ -193,6 +200,17 @@ TEST_F(SceneErrors, Generate) {
   expect_error(bad, "\"square_cloth\"", "[sets.points]: give either mesh or generate, not both");
   bad = replace(fem_scene(), "mesh = \"tet.node\"", "mesh = \"tet.node\"\nn = 3");
   expect_error(bad, "3\nelements", "[sets.verts] n: only for generate");
+}
+
+// `frames` is an int, as --frames is: 2^32 + 1 frames must not run one.
+TEST_F(SceneErrors, FramesInRange) {
+  const std::string s = fem_scene();
+  expect_error(replace(s, "frames = 1", "frames = 4294967297"), "4294967297",
+               "frames: expected a whole number from 0 to 2147483647");
+  expect_error(replace(s, "frames = 1", "frames = -1"), "-1",
+               "frames: expected a whole number from 0 to 2147483647");
+  expect_error(replace(s, "frames = 1", "frames = 1.5"), "1.5",
+               "frames: expected a whole number from 0 to 2147483647");
 }
 
 TEST_F(SceneErrors, KeysSetsAndFields) {

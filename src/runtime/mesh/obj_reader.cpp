@@ -141,21 +141,25 @@ void append_shape(const tinyobj::shape_t& shape, Mesh& mesh) {
   }
 }
 
-// tinyobjloader reads a '#' after a face's corners as a corner; the validation pass ignored it.
-std::string without_comments(const std::string& text) {
+// The records the validation pass saw, as tinyobjloader must see them: it reads a '#' after a
+// face's corners as a corner, ends a line at a lone '\r' and separates tokens by ' ' and '\t'
+// only, where the validation pass takes '\r', '\v' and '\f' for spaces.
+std::string as_validated(const std::string& text) {
   std::string out;
   out.reserve(text.size());
   for (size_t pos = 0; pos < text.size();) {
     size_t eol = std::min(text.find('\n', pos), text.size());
     size_t hash = std::min(text.find('#', pos), eol);
-    out.append(text, pos, hash - pos).push_back('\n');
+    for (size_t i = pos; i < hash; ++i)
+      out.push_back(text[i] == '\r' || text[i] == '\v' || text[i] == '\f' ? ' ' : text[i]);
+    out.push_back('\n');
     pos = eol + 1;
   }
   return out;
 }
 
 Mesh load_with_tinyobj(const std::string& path, const std::string& text) {
-  std::istringstream stream(without_comments(text));
+  std::istringstream stream(as_validated(text));
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
@@ -188,6 +192,8 @@ Mesh read_obj(const std::string& path) {
                     "expected simple polygons: tinyobjloader could not triangulate them (" +
                         std::to_string(missing) +
                         " triangles missing; this line has the first polygon of over 4 corners)");
+  // A backstop: the two passes agree on every record, so no index is out of range here.
+  check_indices(mesh);
   return mesh;
 }
 

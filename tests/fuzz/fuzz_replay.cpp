@@ -1,5 +1,6 @@
-// Replays .sim files and deterministic mutations of them through the fuzz target, so that
-// ordinary builds (any compiler, no libFuzzer) exercise the harness and its invariants.
+// Replays input files and deterministic mutations of them through a fuzz target (linked in
+// beside this driver), so that ordinary builds (any compiler, no libFuzzer) exercise every
+// harness and its invariants, and every regression input stays fixed.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -20,20 +21,28 @@ namespace fs = std::filesystem;
 constexpr unsigned kSeed = 20240611;
 constexpr int kFlipVariants = 12;
 constexpr int kTruncations = 8;
-// Bytes that tend to reach interesting parser and lexer states.
-constexpr std::string_view kAlphabet = "%!{}[]()<>;,.:'\"=+-*/\\^ \n\t0123456789eE_azZ";
+// Bytes that tend to reach interesting parser and lexer states in every format fuzzed:
+// Simit, TOML, mesh files, literals, debugger commands.
+constexpr std::string_view kAlphabet = "%!{}[]()<>;,.:'\"=+-*/\\^#$@ \n\t0123456789eE_azZvf";
 
 void feed(const std::string& text) {
   LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(text.data()), text.size());
 }
 
-std::vector<std::string> sim_files(const std::vector<std::string>& roots) {
+// Every file under `roots` (files or folders) whose extension is one of `extensions` (any
+// extension when there are none).
+std::vector<std::string> input_files(const std::vector<std::string>& roots,
+                                     const std::vector<std::string>& extensions) {
+  auto wanted = [&](const fs::path& p) {
+    return extensions.empty() || std::find(extensions.begin(), extensions.end(),
+                                           p.extension().string()) != extensions.end();
+  };
   std::vector<std::string> files;
   for (const auto& root : roots) {
     if (fs::is_regular_file(root)) files.push_back(root);
     if (!fs::is_directory(root)) continue;
     for (const auto& e : fs::recursive_directory_iterator(root))
-      if (e.is_regular_file() && e.path().extension() == ".sim") files.push_back(e.path().string());
+      if (e.is_regular_file() && wanted(e.path())) files.push_back(e.path().string());
   }
   std::sort(files.begin(), files.end());
   return files;
@@ -76,14 +85,22 @@ int feed_mutations(const std::string& text, std::mt19937& rng) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> roots(argv + 1, argv + argc);
+  const std::string name = fs::path(argv[0]).filename().string();
+  std::vector<std::string> roots, extensions;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--ext" && i + 1 < argc)
+      extensions.push_back(argv[++i]);
+    else
+      roots.push_back(a);
+  }
   if (roots.empty()) {
-    std::cerr << "usage: frontend_fuzz_replay PATH...  (.sim files or folders)\n";
+    std::cerr << "usage: " << name << " [--ext .EXT]... PATH...  (files or folders)\n";
     return 2;
   }
-  std::vector<std::string> files = sim_files(roots);
+  std::vector<std::string> files = input_files(roots, extensions);
   if (files.empty()) {
-    std::cerr << "frontend_fuzz_replay: no .sim files found\n";
+    std::cerr << name << ": no input files found\n";
     return 1;
   }
   std::mt19937 rng(kSeed);
@@ -93,7 +110,6 @@ int main(int argc, char** argv) {
     feed(text);
     inputs += 1 + feed_truncations(text) + feed_mutations(text, rng);
   }
-  std::cout << "frontend_fuzz_replay: " << inputs << " inputs from " << files.size()
-            << " files, no crash\n";
+  std::cout << name << ": " << inputs << " inputs from " << files.size() << " files, no crash\n";
   return 0;
 }
