@@ -23,6 +23,10 @@ configure_build "$build" RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DSIMIT_FUZ
 cmake --build "$build" -j2 --target "${targets[@]/%/_fuzz}"
 
 fuzz_src="$SIMIT_ROOT/tests/fuzz"
+# The harnesses' scratch folders, apart from other runs' (a fuzzer that stops on a crash leaves
+# its folder behind).
+export TMPDIR="$build/fuzz-tmp"
+mkdir -p "$TMPDIR"
 findings="$build/fuzz-findings"
 rm -rf "$findings"
 mkdir -p "$findings"
