@@ -1,6 +1,12 @@
 // Reading a scene file: TOML syntax, the top-level keys, and the program compiled once.
 #include "scene/scene_file.h"
 
+#include <iterator>
+
+#include <fstream>
+
+#include <cstring>
+
 #include <filesystem>
 #include <limits>
 #include <sstream>
@@ -110,11 +116,74 @@ std::string SceneFile::resolve(const std::string& relative) const {
   return (fs::path(dir) / p).lexically_normal().string();
 }
 
+namespace {
+
+// Where a byte outside ASCII stands outside a string or comment: TOML allows none there, and
+// toml++ 3.3 (Debian 12) reaches unreachable code on some of them instead of reporting it
+// (upstream issues 190 and 295), so they are refused before it sees the text.
+void screen_non_ascii(const std::string& path, const std::string& text) {
+  int line = 1, col = 1;
+  enum class In { Code, Comment, Basic, Literal, MultiBasic, MultiLiteral } in = In::Code;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    const auto at = [&](const char* s) { return text.compare(i, std::strlen(s), s) == 0; };
+    if (in == In::Code && static_cast<unsigned char>(c) >= 0x80) {
+      toml::source_region where;
+      where.begin = {static_cast<toml::source_index>(line), static_cast<toml::source_index>(col)};
+      throw SceneError(located(path, where,
+                               "a character outside ASCII outside a string or comment (TOML allows "
+                               "them only in strings and comments)"));
+    }
+    switch (in) {
+      case In::Code:
+        if (c == '#')
+          in = In::Comment;
+        else if (at("\"\"\""))
+          in = In::MultiBasic, i += 2, col += 2;
+        else if (at("'''"))
+          in = In::MultiLiteral, i += 2, col += 2;
+        else if (c == '"')
+          in = In::Basic;
+        else if (c == '\'')
+          in = In::Literal;
+        break;
+      case In::Comment:
+        if (c == '\n') in = In::Code;
+        break;
+      case In::Basic:
+      case In::MultiBasic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')
+          ++i, ++col;
+        else if (in == In::Basic && (c == '"' || c == '\n'))
+          in = In::Code;
+        else if (in == In::MultiBasic && at("\"\"\""))
+          in = In::Code, i += 2, col += 2;
+        break;
+      case In::Literal:
+        if (c == '\'' || c == '\n') in = In::Code;
+        break;
+      case In::MultiLiteral:
+        if (at("'''")) in = In::Code, i += 2, col += 2;
+        break;
+    }
+    if (text[i] == '\n')
+      line += 1, col = 1;
+    else
+      ++col;
+  }
+}
+
+}  // namespace
+
 std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
   auto file = std::make_unique<SceneFile>();
   file->path = path;
   try {
-    file->doc = toml::parse_file(path);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw SceneError(path + ": error: cannot read the scene file");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    screen_non_ascii(path, text);
+    file->doc = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     throw SceneError(located(path, e.source(), std::string(e.description())));
   }

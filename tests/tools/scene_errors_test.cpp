@@ -213,6 +213,23 @@ TEST_F(SceneErrors, FramesInRange) {
                "frames: expected a whole number from 0 to 2147483647");
 }
 
+// Characters outside ASCII are refused outside strings and comments (TOML allows none there;
+// toml++ 3.3 would reach unreachable code on some), and are fine inside them.
+TEST_F(SceneErrors, NonAsciiOutsideStringsAndComments) {
+  const std::string s = fem_scene();
+  expect_error(replace(s, "frames = 1", "frames = 1 \xc3\xa9"), "\xc3\xa9",
+               "a character outside ASCII outside a string or comment");
+  expect_error(replace(s, "frames = 1",
+                       "\xc3\xa9"
+                       "frames = 1"),
+               "\xc3\xa9", "a character outside ASCII outside a string or comment");
+  Result ok =
+      run(replace(s, "frames = 1",
+                  "frames = 1  # caf\xc3\xa9\n# \xe2\x82\xac\nframe_time = 0.01 # \xc3\xa9"),
+          {});
+  EXPECT_EQ(ok.status, 0) << ok.err;
+}
+
 TEST_F(SceneErrors, KeysSetsAndFields) {
   const std::string s = fem_scene();
   expect_error(replace(s, "frames = 1", "frames = 1\nframe = 2"), "2\n",
