@@ -63,6 +63,8 @@ import sys
 import tempfile
 import time
 
+from run_bench import jit_available  # the same test of whether this simit has the JIT
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRECISIONS = ("float64", "float32")
 FRAME_TIME = 0.01  # cloth's frame, substeps * h
@@ -101,25 +103,6 @@ def require_matplotlib():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
-
-
-def help_mentions(simit, flag):
-    out = subprocess.run([simit, "run", "--help"], capture_output=True, text=True)
-    return flag in out.stdout
-
-
-def jit_available(simit):
-    """Whether this simit has the JIT (built with LLVM): a tiny program runs with it."""
-    if not help_mentions(simit, "--backend"):
-        return False
-    with tempfile.NamedTemporaryFile("w", suffix=".sim", delete=False) as f:
-        f.write("export func one() -> (x : float)\n  x = 1.0;\nend\n")
-    try:
-        out = subprocess.run([simit, "run", "--backend", "jit", f.name, "--call", "one"],
-                             capture_output=True, text=True)
-        return out.returncode == 0
-    finally:
-        os.unlink(f.name)
 
 
 def substitute(text, pattern, replacement, what):
@@ -314,8 +297,8 @@ def sweep(simit, executor, ref_executor, example, args, out):
         results = []
         # The shipped setting first, then the sweep; the precisions alternate at each value so
         # that a change in the machine's load hits both alike.
-        todo = [("float64", None, True)] + [(p, v, False) for p, v in points]
-        for prec, v, is_shipped in todo:
+        runs = [("float64", None, True)] + [(p, v, False) for p, v in points]
+        for prec, v, is_shipped in runs:
             if example.param == "h":
                 setting = (int(round(FRAME_TIME / shipped["value"])) if is_shipped
                            else int(v))

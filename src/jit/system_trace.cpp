@@ -6,6 +6,7 @@
 #include <map>
 
 #include "frontend/ast_walk.h"
+#include "jit/ir_build.h"
 
 namespace simit::jit {
 
@@ -17,27 +18,6 @@ using interp::Value;
 
 namespace {
 
-struct GiveUp {
-  std::string reason;
-};
-[[noreturn]] void give_up(const SourceSpan& at, const std::string& why) {
-  std::string where;
-  if (at.valid()) where = " (line " + std::to_string(at.start().line) + ")";
-  throw GiveUp{why + where};
-}
-
-ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
-ExprRef fconst(double v) {
-  Expr e;
-  e.f = v;
-  return make(e);
-}
-ExprRef iconst(int64_t v, Ty ty) {
-  Expr e;
-  e.ty = ty;
-  e.i = v;
-  return make(e);
-}
 ExprRef node(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops, const SourceSpan& at) {
   Expr e;
   e.kind = k;

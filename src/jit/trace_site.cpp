@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "frontend/ast_walk.h"
+#include "jit/ir_build.h"
 #include "jit/tunables.h"
 
 namespace simit::jit {
@@ -20,35 +21,9 @@ using frontend::Type;
 
 namespace {
 
-// The tracer gives up: the site stays interpreted, with this reason.
-struct GiveUp {
-  std::string reason;
-};
-[[noreturn]] void give_up(const SourceSpan& at, const std::string& why) {
-  std::string where;
-  if (at.valid()) where = " (line " + std::to_string(at.start().line) + ")";
-  throw GiveUp{why + where};
-}
-
 // ---------------------------------------------------------------------------
 // Expression constructors, folding constants as they go.
 
-ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
-
-ExprRef fconst(double v) {
-  Expr e;
-  e.kind = ExprKind::Const;
-  e.ty = Ty::F64;
-  e.f = v;
-  return make(std::move(e));
-}
-ExprRef iconst(int64_t v, Ty ty = Ty::I32) {
-  Expr e;
-  e.kind = ExprKind::Const;
-  e.ty = ty;
-  e.i = v;
-  return make(std::move(e));
-}
 bool is_const(const ExprRef& e) { return e->kind == ExprKind::Const; }
 
 ExprRef unary(UnOp op, Ty ty, ExprRef a, SourceSpan at = {}) {

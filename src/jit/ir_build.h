@@ -1,0 +1,41 @@
+// What both tracers share: giving up with a located reason, and the leaf constructors of
+// loop-IR expressions.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "frontend/source.h"
+#include "jit/loop_ir.h"
+
+namespace simit::jit {
+
+// A tracer gives up: the site or loop stays interpreted, with this reason.
+struct GiveUp {
+  std::string reason;
+};
+[[noreturn]] inline void give_up(const frontend::SourceSpan& at, const std::string& why) {
+  std::string where;
+  if (at.valid()) where = " (line " + std::to_string(at.start().line) + ")";
+  throw GiveUp{why + where};
+}
+
+inline ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
+
+inline ExprRef fconst(double v) {
+  Expr e;
+  e.kind = ExprKind::Const;
+  e.ty = Ty::F64;
+  e.f = v;
+  return make(std::move(e));
+}
+
+inline ExprRef iconst(int64_t v, Ty ty = Ty::I32) {
+  Expr e;
+  e.kind = ExprKind::Const;
+  e.ty = ty;
+  e.i = v;
+  return make(std::move(e));
+}
+
+}  // namespace simit::jit
