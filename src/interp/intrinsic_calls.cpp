@@ -56,12 +56,12 @@ const double* floats_of(const Value& v, size_t& n) {
   return v.tensor().floats();
 }
 
+// Both sum each element's block first, as every inner product does (docs/arithmetic.md).
 Value norm(const Value& v) {
   size_t n;
   const double* x = floats_of(v, n);
-  double s = 0.0;
-  for (size_t i = 0; i < n; ++i) s += x[i] * x[i];
-  return Value::of_float(std::sqrt(s));
+  const size_t group = runtime::inner_product_group(v.tensor().shape());
+  return Value::of_float(std::sqrt(runtime::grouped_dot(x, x, n, group)));
 }
 
 Value dot(const Value& a, const Value& b) {
@@ -69,9 +69,10 @@ Value dot(const Value& a, const Value& b) {
   const double* x = floats_of(a, n);
   const double* y = floats_of(b, m);
   if (n != m) throw runtime::Fault("dot of vectors of different lengths");
-  double s = 0.0;
-  for (size_t i = 0; i < n; ++i) s += x[i] * y[i];
-  return Value::of_float(s);
+  const size_t group = runtime::inner_product_group(a.tensor().shape());
+  if (runtime::inner_product_group(b.tensor().shape()) != group)
+    throw runtime::Fault("dot of vectors blocked differently");
+  return Value::of_float(runtime::grouped_dot(x, y, n, group));
 }
 
 Value cross(const Value& a, const Value& b) {

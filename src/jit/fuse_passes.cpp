@@ -86,8 +86,15 @@ int fuse_passes(SystemTrace& t) {
         out.back().kind != VectorOp::Kind::Scalar && out.back().length == op.length) {
       const Uses prev = uses_of(out.back()), cur = uses_of(op);
       const bool into_product = out.back().kind == VectorOp::Kind::SpMV;
-      if (!meets(cur.reads, prev.writes) && (!into_product || cur.array_writes.empty())) {
-        for (Stmt& s : op.body) out.back().body.push_back(std::move(s));
+      // Sums keep their runs: a pass with sums joins only a loop of the same runs.
+      VectorOp& last = out.back();
+      const bool runs_agree = op.sums.empty() || op.group == last.group ||
+                              (last.sums.empty() && last.kind == VectorOp::Kind::Pass);
+      if (!meets(cur.reads, prev.writes) && (!into_product || cur.array_writes.empty()) &&
+          runs_agree) {
+        if (!op.sums.empty()) last.group = op.group;
+        for (int s : op.sums) last.sums.push_back(s);
+        for (Stmt& s : op.body) last.body.push_back(std::move(s));
         continue;
       }
     }

@@ -363,12 +363,18 @@ void print(std::ostream& os, const SystemTrace& t) {
   for (const VectorOp& op : t.body) {
     switch (op.kind) {
       case VectorOp::Kind::Scalar: os << "    scalar\n"; break;
-      case VectorOp::Kind::Pass: os << "    pass over n" << op.length << "\n"; break;
+      case VectorOp::Kind::Pass: os << "    pass over n" << op.length; break;
       case VectorOp::Kind::SpMV:
         os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
-           << op.block << "x" << op.block << ", then per component\n";
+           << op.block << "x" << op.block << ", then per component";
         break;
     }
+    if (op.kind != VectorOp::Kind::Scalar && !op.sums.empty()) {
+      os << ", sums";
+      for (int s : op.sums) os << " l" << s;
+      os << " by runs of " << op.group;
+    }
+    if (op.kind != VectorOp::Kind::Scalar) os << "\n";
     print_block(os, op.body, 3);
   }
 }

@@ -170,6 +170,11 @@ struct VectorOp {
   int rows = -1;                             // SpMV: index into the sizes (block rows)
   int x = -1, y = -1;                        // SpMV: vector arrays
   int block = 1;                             // SpMV: block rows = block columns
+  // Inner products (docs/arithmetic.md) sum each element's block first: the locals in `sums`
+  // are reductions `s = s + term` whose terms arrive in runs of `group` components (one
+  // element; an SpMV's row); each run is summed on its own, then added to s.
+  int group = 1;
+  std::vector<int> sums;
 };
 
 struct SystemTrace {

@@ -1,34 +1,77 @@
 // PrunedMatrix (jit/pruned_matrix.h): one pass over the values, copying the non-zero blocks.
 #include "jit/pruned_matrix.h"
 
-#include <algorithm>
-
 namespace simit::jit {
+
+namespace {
+
+// Whether every component is +0.0 or -0.0, without a branch per component.
+template <int N>
+bool all_zero(const double* b) {
+  double m = 0.0;
+  for (int i = 0; i < N; ++i) m = m + (b[i] < 0.0 ? -b[i] : b[i]);
+  return m == 0.0;  // a NaN makes m NaN, and the block is kept
+}
+
+// Rows with N x N blocks; n is the run-time size when N is 0.
+template <int N>
+void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v, size_t rows,
+           int n) {
+  const int bs = N ? N * N : n * n;
+  // Pass 1: which blocks stay, and the arrays' sizes.
+  p.keep.resize(static_cast<size_t>(rp[rows]));
+  size_t kept = 0;
+  for (int32_t k = 0; k < rp[rows]; ++k) {
+    const double* blk = v + static_cast<size_t>(k) * bs;
+    bool zero;
+    if constexpr (N != 0) {
+      zero = all_zero<N * N>(blk);
+    } else {
+      zero = true;
+      for (int i = 0; i < bs && zero; ++i) zero = blk[i] == 0.0;
+    }
+    p.keep[k] = !zero;
+    kept += !zero;
+  }
+  p.cols.resize(kept);
+  p.values.resize(kept * bs);
+  // Pass 2: copy, each block by columns (a compiled product reads block column j as one
+  // vector).
+  int32_t* cols = p.cols.data();
+  double* out = p.values.data();
+  int32_t at = 0;
+  p.row_ptr[0] = 0;
+  for (size_t r = 0; r < rows; ++r) {
+    for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
+      if (!p.keep[k]) continue;
+      const double* blk = v + static_cast<size_t>(k) * bs;
+      cols[at] = ci[k];
+      double* o = out + static_cast<size_t>(at) * bs;
+      const int m = N ? N : n;
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) o[j * m + i] = blk[i * m + j];
+      ++at;
+    }
+    p.row_ptr[r + 1] = at;
+  }
+  p.kept = at;
+}
+
+}  // namespace
 
 void PrunedMatrix::assign(const runtime::SystemMatrix& m) {
   const auto& rp = m.pattern().row_ptr();
-  const auto& ci = m.pattern().col_idx();
-  const int bs = m.block_size();
-  const double* v = m.values();
+  const int32_t* ci = m.pattern().col_idx().data();
+  const size_t rows = rp.size() - 1;
   row_ptr.resize(rp.size());
-  cols.clear();
-  values.clear();
   total = m.pattern().nnz();
-  row_ptr[0] = 0;
-  for (size_t r = 0; r + 1 < rp.size(); ++r) {
-    for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
-      const double* blk = v + static_cast<size_t>(k) * bs;
-      // A block is dropped only when every component is +0.0 or -0.0.
-      if (std::all_of(blk, blk + bs, [](double x) { return x == 0.0; })) continue;
-      cols.push_back(ci[k]);
-      // Stored by columns: a compiled product reads block column j as one vector.
-      const int n = m.block_rows();
-      for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) values.push_back(blk[i * n + j]);
-    }
-    row_ptr[r + 1] = static_cast<int32_t>(cols.size());
+  const int n = m.block_rows();
+  switch (n) {
+    case 1: return prune<1>(*this, rp.data(), ci, m.values(), rows, n);
+    case 2: return prune<2>(*this, rp.data(), ci, m.values(), rows, n);
+    case 3: return prune<3>(*this, rp.data(), ci, m.values(), rows, n);
+    default: return prune<0>(*this, rp.data(), ci, m.values(), rows, n);
   }
-  kept = static_cast<int64_t>(cols.size());
 }
 
 }  // namespace simit::jit

@@ -202,16 +202,38 @@ class SystemTracer {
     give_up(e.span, "the length of this vector expression");
   }
 
-  // u' * v, dot(u, v): a reduction pass into a new local, from +0.0 in storage order.
+  // Components per element of a vector expression: the runs an inner product sums first.
+  int group_of(const ast::Expr& e) {
+    if (const auto* r = e.as<ast::VarRef>()) {
+      if (auto it = block_of_.find(r->var); it != block_of_.end()) return it->second;
+      for (const auto& [v, like] : b_.created)
+        if (v == r->var && block_of_.count(like)) return block_of_.at(like);
+    }
+    if (const auto* t = e.as<ast::Transpose>()) return group_of(*t->operand);
+    if (const auto* b = e.as<ast::Binary>()) {
+      const bool lv = b->lhs->type && is_vector(*b->lhs->type);
+      return group_of(lv ? *b->lhs : *b->rhs);
+    }
+    if (const auto* u = e.as<ast::Unary>()) return group_of(*u->operand);
+    give_up(e.span, "the blocks of this vector expression");
+  }
+
+  // u' * v, dot(u, v): a reduction pass into a new local, from +0.0 in storage order, each
+  // element's block summed first.
   ExprRef dot(const ast::Expr& u, const ast::Expr& v, const SourceSpan& at) {
     const int n = length_of(u);
     if (length_of(v) != n) give_up(at, "a dot product of vectors of different lengths");
+    const int group = group_of(u);
+    if (group_of(v) != group || group < 1)
+      give_up(at, "a dot product of vectors blocked differently");
     const int t = temp(Ty::F64);
     set_local(t, fconst(0.0), at);
     ExprRef a = component(u), b = component(v);
     VectorOp pass;
     pass.kind = VectorOp::Kind::Pass;
     pass.length = n;
+    pass.group = group;
+    pass.sums = {t};
     Stmt s;
     s.kind = StmtKind::SetLocal;
     s.slot = t;
@@ -430,6 +452,7 @@ class SystemTracer {
         op.values = m.values;
         op.rows = m.rows;
         op.block = m.block;
+        op.group = m.block;
         op.x = vector_slot_.at(x->var);
         op.y = vt->second;
         op.length = size_of_.at(&target);

@@ -262,12 +262,59 @@ Tensor outer_product(const Tensor& u, const Tensor& v) {
   return c;
 }
 
+size_t inner_product_group(const Shape& s) {
+  if (!s.is_blocked() || s.size() == 0) return 1;
+  return s.block().size();
+}
+
+double grouped_dot(const double* x, const double* y, size_t n, size_t group) {
+  double sum = 0.0;
+  if (group <= 1) {
+    for (size_t k = 0; k < n; ++k) sum += x[k] * y[k];
+    return sum;
+  }
+  for (size_t k = 0; k < n; k += group) {
+    double part = 0.0;
+    for (size_t c = 0; c < group; ++c) part += x[k + c] * y[k + c];
+    sum += part;
+  }
+  return sum;
+}
+
+namespace {
+
+template <class T>
+T grouped_sum_of_products(const T* x, const T* y, size_t n, size_t group) {
+  T sum{};
+  for (size_t k = 0; k < n; k += group) {
+    T part{};
+    for (size_t c = 0; c < group; ++c) part += x[k + c] * y[k + c];
+    sum += part;
+  }
+  return sum;
+}
+
+}  // namespace
+
 Tensor inner_product(const Tensor& u, const Tensor& v) {
   require(u.kind() == v.kind() && u.size() == v.size(), "inner product: sizes do not match");
-  int n = static_cast<int>(u.size());
+  const size_t group = inner_product_group(u.shape());
   Tensor c(u.kind(), Shape{1});
-  gemm(u, v, c, 1, n, 1);
-  return c;
+  switch (u.kind()) {
+    case ComponentKind::Float:
+      c.mutable_floats()[0] = grouped_dot(u.floats(), v.floats(), u.size(), group);
+      return c;
+    case ComponentKind::Complex:
+      c.mutable_complexes()[0] =
+          grouped_sum_of_products(u.complexes(), v.complexes(), u.size(), group);
+      return c;
+    default: {
+      // Integer sums wrap, so their order does not matter.
+      int n = static_cast<int>(u.size());
+      gemm(u, v, c, 1, n, 1);
+      return c;
+    }
+  }
 }
 
 Tensor transpose(const Tensor& m) {

@@ -72,9 +72,14 @@ void matvec_rows(const SystemMatrix& a, const T* x, T* y) {
     for (int32_t k = row_ptr[r]; k < row_ptr[r + 1]; ++k) {
       const T* blk = v + static_cast<size_t>(k) * br * bc;
       const T* xc = x + static_cast<size_t>(col_idx[k]) * bc;
-      for (int i = 0; i < br; ++i)
+      // Each block's row is summed from zero before it joins the row's sum: the additions
+      // into sum[i] then form a chain one block long, not one component long.
+      for (int i = 0; i < br; ++i) {
+        Acc<T> part = 0;
         for (int j = 0; j < bc; ++j)
-          sum[i] += static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xc[j]);
+          part += static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xc[j]);
+        sum[i] += part;
+      }
     }
     for (int i = 0; i < br; ++i) yr[i] = static_cast<T>(sum[i]);
   }
@@ -454,13 +459,12 @@ void divide_elementwise(std::span<const double> x, std::span<const double> y,
   zip(x, y, out, [](double a, double b) { return a / b; });
 }
 
-double dot(std::span<const double> x, std::span<const double> y) {
+double dot(std::span<const double> x, std::span<const double> y, size_t group) {
   check_same(x.size(), y.size());
-  double sum = 0.0;
-  for (size_t i = 0; i < x.size(); ++i) sum += x[i] * y[i];
-  return sum;
+  if (group == 0 || x.size() % group != 0) throw Fault("dot of vectors not made of whole blocks");
+  return grouped_dot(x.data(), y.data(), x.size(), group);
 }
 
-double norm(std::span<const double> x) { return std::sqrt(dot(x, x)); }
+double norm(std::span<const double> x, size_t group) { return std::sqrt(dot(x, x, group)); }
 
 }  // namespace simit::runtime

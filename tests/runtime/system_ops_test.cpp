@@ -185,5 +185,16 @@ TEST(VectorOps, ElementwiseAndReductions) {
   EXPECT_THROW(dot(x, std::vector<double>(2)), Fault);
 }
 
+// docs/arithmetic.md: each element's block is summed before it joins the total. Component by
+// component, 1e16 + 1 rounds to 1e16 and the last 1 survives (1.0); by element both 1s are
+// lost inside their elements (0.0).
+TEST(VectorOps, InnerProductsSumEachElementFirst) {
+  const std::vector<double> x = {1e16, 1.0, 0.0, -1e16, 1.0, 0.0}, ones(6, 1.0);
+  EXPECT_EQ(dot(x, ones), 1.0);
+  EXPECT_EQ(dot(x, ones, 3), 0.0);
+  EXPECT_EQ(dot(x, ones, 2), 1.0);  // runs (1e16, 1), (0, -1e16), (1, 0): 1e16 - 1e16 + 1
+  EXPECT_THROW(dot(x, ones, 4), Fault);
+}
+
 }  // namespace
 }  // namespace simit::runtime

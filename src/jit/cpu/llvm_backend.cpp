@@ -135,6 +135,9 @@ class Emitter {
   // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
   void loop(Value* begin, Value* end, const std::function<void(Value*)>& body);
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  // The op's body for the `group` components of one run starting at `first` (an i64), its
+  // sums taken over the run alone and then added to their totals.
+  void run_of(const VectorOp& op, Value* first, int group);
   void load_arrays(Value* arrays);
 
   void decompose(const Stmt& s);
@@ -439,6 +442,10 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   switch (op.kind) {
     case VectorOp::Kind::Scalar: return block(op.body);
     case VectorOp::Kind::Pass:
+      if (op.group > 1 && !op.sums.empty())
+        return loop(
+            b_.getInt64(0), b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group)),
+            [&](Value* e) { run_of(op, b_.CreateMul(e, b_.getInt64(op.group)), op.group); });
       return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
         element_ = k;
         block(op.body);
@@ -448,8 +455,10 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
       llvm::Type* i64 = b_.getInt64Ty();
       llvm::Type* f64 = b_.getDoubleTy();
       // The row's bs sums are the lanes of one vector: block column j (stored contiguously,
-      // the controller transposes the blocks) times x_j added lane by lane, so each sum
-      // still takes its terms in (block, j) order.
+      // the controller transposes the blocks) times x_j, summed over j lane by lane, is the
+      // block's part, added to the row's sums (docs/arithmetic.md). The part needs no +0.0
+      // start: a row sum starts at +0.0 and so is never -0.0, and a part that differs only
+      // in the sign of a zero then adds the same.
       auto* vec = llvm::FixedVectorType::get(f64, static_cast<unsigned>(bs));
       Value* sums;
       {
@@ -474,16 +483,18 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
               i64);
           Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
           Value* xc = b_.CreateMul(col, b_.getInt64(bs));
-          Value* s = b_.CreateLoad(vec, sums);
+          Value* part = nullptr;
           for (int j = 0; j < bs; ++j) {
-            llvm::LoadInst* a = b_.CreateLoad(
-                vec, b_.CreateInBoundsGEP(f64, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(j * bs))));
+            llvm::LoadInst* a =
+                b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                        b_.CreateAdd(blk, b_.getInt64(j * bs))));
             a->setAlignment(llvm::Align(8));
             Value* x = b_.CreateLoad(
                 f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
-            s = b_.CreateFAdd(s, b_.CreateFMul(a, b_.CreateVectorSplat(static_cast<unsigned>(bs), x)));
+            Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(static_cast<unsigned>(bs), x));
+            part = part ? b_.CreateFAdd(part, term) : term;
           }
-          b_.CreateStore(s, sums);
+          b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
         });
         Value* row = b_.CreateMul(r, b_.getInt64(bs));
         Value* total = b_.CreateLoad(vec, sums);
@@ -491,12 +502,31 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
           b_.CreateStore(
               b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
               b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
-        for (int i = 0; i < bs; ++i) {
-          element_ = b_.CreateTrunc(b_.CreateAdd(row, b_.getInt64(i)), b_.getInt32Ty());
-          block(op.body);
-        }
+        run_of(op, row, bs);
       });
       return;
+    }
+  }
+}
+
+// A sum's run part needs no +0.0 start either: its total starts at +0.0 (see the product).
+void Emitter::run_of(const VectorOp& op, Value* first, int group) {
+  std::vector<Value*> totals;
+  const bool runs = group > 1 && !op.sums.empty();
+  if (runs) {
+    for (int s : op.sums) {
+      totals.push_back(b_.CreateLoad(b_.getDoubleTy(), locals_[s]));
+      b_.CreateStore(llvm::ConstantFP::get(b_.getDoubleTy(), -0.0), locals_[s]);
+    }
+  }
+  for (int i = 0; i < group; ++i) {
+    element_ = b_.CreateTrunc(b_.CreateAdd(first, b_.getInt64(i)), b_.getInt32Ty());
+    block(op.body);
+  }
+  if (runs) {
+    for (size_t k = 0; k < op.sums.size(); ++k) {
+      Value* part = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
+      b_.CreateStore(b_.CreateFAdd(totals[k], part), locals_[op.sums[k]]);
     }
   }
 }
