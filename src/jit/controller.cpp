@@ -439,7 +439,10 @@ void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
 
 namespace {
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+// Equal bits, or zeros of either sign (a folded product by a zero, jit/zero_fold.h).
+bool same_bits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0 || (a == 0.0 && b == 0.0);
+}
 
 std::string number(double v) {
   char b[40];

@@ -90,6 +90,8 @@ struct Expr {
   int64_t i = 0;   // Const I32 / Bool
   std::vector<ExprRef> ops;
   frontend::SourceSpan span;
+  // F64: the value may be a zero of the other sign than the interpreter's (jit/zero_fold.h).
+  bool loose = false;
 };
 
 struct Stmt {

@@ -10,6 +10,7 @@
 #include "frontend/ast_walk.h"
 #include "jit/ir_build.h"
 #include "jit/tunables.h"
+#include "jit/zero_fold.h"
 
 namespace simit::jit {
 
@@ -26,14 +27,34 @@ namespace {
 
 bool is_const(const ExprRef& e) { return e->kind == ExprKind::Const; }
 
+// The zero folding of the trace being built (null while a site is traced without it); the
+// constructors below are free functions shared by every part of the tracer.
+thread_local ZeroFold* zero_fold = nullptr;
+
+// A folded constant that keeps its operands' looseness where it is a zero.
+ExprRef folded(double v, const ExprRef& a, const ExprRef& b = nullptr) {
+  ExprRef c = fconst(v);
+  if (zero_fold && v == 0.0 && (a->loose || (b && b->loose))) {
+    Expr e = *c;
+    e.loose = true;
+    return make(std::move(e));
+  }
+  return c;
+}
+
+ExprRef made(Expr e) {
+  if (zero_fold) zero_fold->propagate(e);
+  return make(std::move(e));
+}
+
 ExprRef unary(UnOp op, Ty ty, ExprRef a, SourceSpan at = {}) {
   if (is_const(a)) {
     switch (op) {
       case UnOp::Neg:
-        if (ty == Ty::F64) return fconst(-a->f);
+        if (ty == Ty::F64) return folded(-a->f, a);
         return iconst(static_cast<int32_t>(0u - static_cast<uint32_t>(a->i)));
       case UnOp::Not: return iconst(!a->i, Ty::Bool);
-      case UnOp::Round32: return fconst(static_cast<double>(static_cast<float>(a->f)));
+      case UnOp::Round32: return folded(static_cast<double>(static_cast<float>(a->f)), a);
       case UnOp::ToF64: return fconst(static_cast<double>(a->i));
     }
   }
@@ -43,17 +64,19 @@ ExprRef unary(UnOp op, Ty ty, ExprRef a, SourceSpan at = {}) {
   e.op = static_cast<uint8_t>(op);
   e.ops = {std::move(a)};
   e.span = at;
-  return make(std::move(e));
+  return made(std::move(e));
 }
 
 ExprRef binary(BinOp op, Ty ty, ExprRef a, ExprRef b, SourceSpan at = {}) {
   if (is_const(a) && is_const(b)) {
     if (ty == Ty::F64) {
+      if (zero_fold && op == BinOp::Div && b->loose)
+        throw FoldConflict{"a division by a value whose zero sign folding may change"};
       switch (op) {
-        case BinOp::Add: return fconst(a->f + b->f);
-        case BinOp::Sub: return fconst(a->f - b->f);
-        case BinOp::Mul: return fconst(a->f * b->f);
-        case BinOp::Div: return fconst(a->f / b->f);
+        case BinOp::Add: return folded(a->f + b->f, a, b);
+        case BinOp::Sub: return folded(a->f - b->f, a, b);
+        case BinOp::Mul: return folded(a->f * b->f, a, b);
+        case BinOp::Div: return folded(a->f / b->f, a, b);
         default: break;
       }
     } else if (ty == Ty::I32) {
@@ -74,13 +97,15 @@ ExprRef binary(BinOp op, Ty ty, ExprRef a, ExprRef b, SourceSpan at = {}) {
     }
   }
   if (ty == Ty::I32 && op == BinOp::Div) give_up(at, "integer division is not compiled");
+  if (zero_fold && ty == Ty::F64 && !(is_const(a) && is_const(b)))
+    if (ExprRef f = zero_fold->binary(op, a, b)) return f;
   Expr e;
   e.kind = ExprKind::Binary;
   e.ty = ty;
   e.op = static_cast<uint8_t>(op);
   e.ops = {std::move(a), std::move(b)};
   e.span = at;
-  return make(std::move(e));
+  return made(std::move(e));
 }
 
 ExprRef compare(CmpOp op, ExprRef a, ExprRef b, SourceSpan at = {}) {
@@ -114,7 +139,7 @@ ExprRef math(MathFn f, std::vector<ExprRef> args, SourceSpan at) {
   e.op = static_cast<uint8_t>(f);
   e.ops = std::move(args);
   e.span = at;
-  return make(std::move(e));
+  return made(std::move(e));
 }
 
 ExprRef leaf(ExprKind k, Ty ty, int slot) {
@@ -230,9 +255,11 @@ size_t offset_of(const std::vector<int>& dims, const std::vector<int64_t>& idx,
 
 class Tracer {
  public:
-  explicit Tracer(const SiteShape& shape) : in_(shape) {}
+  Tracer(const SiteShape& shape, bool fold) : in_(shape), fold_(fold) {}
 
   TracedSite run();
+  // Whether the folded trace cannot be used (a conflict, or a trace that writes fields).
+  bool fold_failed() const { return fold_failed_; }
 
  private:
   struct Frame {
@@ -252,8 +279,15 @@ class Tracer {
     mutable_.push_back(mut);
     return static_cast<int>(trace_.locals.size() - 1);
   }
-  ExprRef read_local(int l) { return leaf(ExprKind::Local, trace_.locals[l], l); }
+  ExprRef read_local(int l) {
+    ExprRef r = leaf(ExprKind::Local, trace_.locals[l], l);
+    if (!loose_locals_.count(l)) return r;
+    Expr e = *r;
+    e.loose = true;
+    return make(std::move(e));
+  }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
+    if (v->loose) loose_locals_.insert(l);
     Stmt s;
     s.kind = StmtKind::SetLocal;
     s.slot = l;
@@ -381,7 +415,9 @@ class Tracer {
   std::vector<bool> mutable_;
   std::vector<Frame> frames_;
   std::vector<Stmt>* out_ = &trace_.body;
-  std::vector<int> blocks_{0};  // the blocks open now, outermost first
+  std::vector<int> blocks_{0};            // the blocks open now, outermost first
+  std::unordered_set<int> loose_locals_;  // locals set to a loose value (jit/zero_fold.h)
+  bool fold_ = false, fold_failed_ = false;
   int next_block_ = 1;
   std::map<std::tuple<int, int, int>, CachedLoad> loads_;
   size_t statements_ = 0;
@@ -862,6 +898,7 @@ std::vector<Sym> Tracer::decompose(const ast::Call& c) {
   trace_.errors.push_back(
       {c.span, std::string(frontend::intrinsic_name(c.intrinsic)) + " needs a symmetric matrix"});
   Stmt s;
+  if (zero_fold) ZeroFold::require_exact(a.c, "a decomposition");
   s.kind = StmtKind::Decompose;
   s.fn = static_cast<int>(d);
   s.n = n;
@@ -1054,7 +1091,10 @@ void Tracer::exec_if_from(const ast::If& s, size_t first) {
       std::vector<Stmt>* saved = out_;
       out_ = &body;
       blocks_.push_back(next_block_++);
+      if (zero_fold) zero_fold->open();
       fn();
+      if (zero_fold)
+        if (auto check = zero_fold->close(trace_.errors, s.span)) body.push_back(std::move(*check));
       blocks_.pop_back();
       out_ = saved;
     };
@@ -1240,6 +1280,11 @@ TracedSite Tracer::run() {
   trace_.arity = in_.target->arity();
   trace_.reduce = in_.reduce;
   trace_.float32 = in_.float32;
+  ZeroFold folding;
+  struct Active {  // zero_fold points at this trace's folding while it is traced
+    explicit Active(ZeroFold* f) { zero_fold = f; }
+    ~Active() { zero_fold = nullptr; }
+  } active(fold_ ? &folding : nullptr);
   try {
     if (!f.generics.empty()) give_up(site.func_span, "generic mapped functions are not compiled");
     if (in_.target->is_grid()) give_up(site.func_span, "maps through grids are not compiled");
@@ -1300,10 +1345,20 @@ TracedSite Tracer::run() {
     }
     frames_.push_back(std::move(top));
     exec_block(f.body);
+    if (fold_)
+      if (auto check = folding.close(trace_.errors, site.func_span))
+        trace_.body.push_back(std::move(*check));
   } catch (const GiveUp& g) {
     out.reason = g.reason;
     return out;
+  } catch (const FoldConflict& c) {
+    fold_failed_ = true;
+    out.reason = c.reason;
+    return out;
   }
+  // A call that fails its checks is run again by the interpreter, which a trace that writes
+  // fields cannot allow.
+  if (folding.used() && trace_.writes_fields) fold_failed_ = true;
   out.scalar_sources = sources_;
   trace_.local_mutable = mutable_;
   out.trace = std::move(trace_);
@@ -1312,6 +1367,11 @@ TracedSite Tracer::run() {
 
 }  // namespace
 
-TracedSite trace_site(const SiteShape& shape) { return Tracer(shape).run(); }
+TracedSite trace_site(const SiteShape& shape) {
+  Tracer folded(shape, kFoldZeros);
+  TracedSite t = folded.run();
+  if (!folded.fold_failed()) return t;
+  return Tracer(shape, false).run();
+}
 
 }  // namespace simit::jit

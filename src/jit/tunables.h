@@ -22,5 +22,7 @@ inline constexpr int kChunkElements = 16384;
 inline constexpr int kOptLevel = 2;
 inline constexpr size_t kLargeTrace = 4000;
 inline constexpr int kLargeTraceOptLevel = 1;
+// Products by zeros known while tracing fold away (jit/zero_fold.h).
+inline constexpr bool kFoldZeros = true;
 
 }  // namespace simit::jit

@@ -628,5 +628,110 @@ TEST(Jit, CheckFiniteIsCompiledAndStopsWhereTheInterpreterStops) {
       << messages[1][1];
 }
 
+// ---------------------------------------------------------------------------
+// Zero folding (jit/zero_fold.h)
+
+const char* const kZeros = R"(element P
+  x : float;
+  y : vector[3](float);
+end
+extern ps : set{P};
+
+func unit(d : int) -> e : vector[3](float)
+  e(d) = 1.0;
+end
+
+func outer(p : P) -> r : vector[ps](vector[3](float))
+  M = unit(1) * p.y';
+  r(p) = M * p.y;
+end
+
+func reciprocal(p : P) -> q : vector[ps](float)
+  z = p.x * unit(1)(0);
+  q(p) = 1.0 / z;
+end
+
+export func main() -> (r : vector[ps](vector[3](float)), q : vector[ps](float))
+  r = map outer to ps reduce +;
+  q = map reciprocal to ps reduce +;
+end
+)";
+
+struct ZeroRun {
+  std::vector<Value> results;
+  std::string dump, stats;
+};
+
+// y of element 2 holds an infinity when `inf` is set: 0 * inf is NaN, not 0.
+ZeroRun run_zeros(ExecutorKind kind, bool inf) {
+  auto compiled = CompiledProgram::from_source("zeros.sim", kZeros);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set ps("ps");
+  ps.add_many(4);
+  ps.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  ps.add_field("y", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+  for (int i = 0; i < 4; ++i) {
+    ps.field(0).at<double>(i)[0] = i % 2 ? -2.0 - i : 3.0 + i;  // odd elements negative
+    for (int k = 0; k < 3; ++k) ps.field(1).at<double>(i)[k] = 0.5 * (i + 1) - 0.75 * k;
+  }
+  if (inf) ps.field(1).at<double>(2)[2] = HUGE_VAL;
+  std::ostringstream dump;
+  EngineOptions o;
+  o.executor = kind;
+  o.jit.threshold = 0;
+  o.jit.dump = &dump;
+  o.jit.dump_loop_ir = true;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  ZeroRun r;
+  r.results = engine.call(*compiled->find_func("main"), {});
+  std::ostringstream stats;
+  engine.print_jit_stats(stats);
+  r.dump = dump.str();
+  r.stats = stats.str();
+  return r;
+}
+
+TEST(Jit, ProductsByKnownZerosFoldWhereTheyCannotChangeAValue) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  for (bool inf : {false, true}) {
+    const ZeroRun in = run_zeros(ExecutorKind::Interpreter, inf);
+    const ZeroRun jit = run_zeros(ExecutorKind::Jit, inf);
+    const double* a = in.results[0].tensor().floats();
+    const double* b = jit.results[0].tensor().floats();
+    for (size_t i = 0; i < 12; ++i) {
+      // Row 1 of the outer product is y', so r(p) = (0, y'y, 0); rows 0 and 2 are zeros
+      // whose sign the interpreter takes from y (its 0 * y(k)), the JIT from nothing.
+      if (std::isnan(a[i])) {
+        EXPECT_TRUE(std::isnan(b[i])) << i;
+        continue;
+      }
+      EXPECT_EQ(a[i], b[i]) << "r[" << i << "] inf " << inf;
+    }
+    // Element 2's y holds an infinity: 0 * inf is NaN in its rows 0 and 2, and the JIT's check
+    // of the folded factors handed the call back to the interpreter, which computed it.
+    EXPECT_EQ(std::isnan(a[6]), inf);
+    EXPECT_EQ(a[1], 0.5 * 0.5 + -0.25 * -0.25 + -1.0 * -1.0);
+    // 1 / (x * 0) depends on the zero's sign (-inf for negative x): not folded, exact.
+    const double* qa = in.results[1].tensor().floats();
+    const double* qb = jit.results[1].tensor().floats();
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_EQ(qa[i], i % 2 ? -HUGE_VAL : HUGE_VAL) << i;
+      EXPECT_EQ(qb[i], qa[i]) << i;
+    }
+    // Both sites compiled; the outer product's zero rows left no multiplication behind.
+    EXPECT_NE(jit.stats.find("outer (line 22)"), std::string::npos) << jit.stats;
+    EXPECT_EQ(jit.stats.find("interpreted"), std::string::npos) << jit.stats;
+    const size_t outer = jit.dump.find("trace outer"), next = jit.dump.find("trace reciprocal");
+    ASSERT_NE(outer, std::string::npos) << jit.dump;
+    const std::string body = jit.dump.substr(outer, next - outer);
+    size_t products = 0;
+    for (size_t at = body.find(" * "); at != std::string::npos; at = body.find(" * ", at + 1))
+      ++products;
+    EXPECT_EQ(products, 3u) << body;  // y'y: three products
+    EXPECT_NE(body.find("check"), std::string::npos) << body;
+  }
+}
+
 }  // namespace
 }  // namespace simit::jit
