@@ -155,6 +155,16 @@ class Emitter {
   Value* element_ = nullptr;
   Value* failed_ = nullptr;
   HostCalls host_;
+  // A map that writes only its results: result memory and everything it reads are disjoint,
+  // and saying so lets LLVM keep table entries and field values in registers across the
+  // result writes (alias.scope / noalias metadata; null when the trace writes fields).
+  llvm::MDNode *inputs_ = nullptr, *results_ = nullptr;
+  void tag(llvm::Instruction* i, int slot) {
+    if (!inputs_) return;
+    const bool result = slots_[static_cast<size_t>(slot)].kind == ArraySlot::Kind::Result;
+    i->setMetadata(llvm::LLVMContext::MD_alias_scope, result ? results_ : inputs_);
+    i->setMetadata(llvm::LLVMContext::MD_noalias, result ? inputs_ : results_);
+  }
 };
 
 Value* Emitter::math(const Expr& e) {
@@ -205,7 +215,8 @@ Value* Emitter::expr(const Expr& e) {
     case ExprKind::Endpoint: return endpoints_[e.slot];
     case ExprKind::Load: {
       const ArraySlot& a = slots_[e.slot];
-      Value* v = b_.CreateLoad(storage(a), address(e.slot, expr(*e.ops[0]), e.comp));
+      llvm::LoadInst* v = b_.CreateLoad(storage(a), address(e.slot, expr(*e.ops[0]), e.comp));
+      tag(v, e.slot);
       if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
       if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
       return v;
@@ -281,14 +292,19 @@ void Emitter::stmt(const Stmt& s) {
         for (size_t i = 0; i < slots_.size(); ++i)
           if (slots_[i].kind == ArraySlot::Kind::Table && slots_[i].index == result)
             table = static_cast<int>(i);
-        Value* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
+        llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
+        tag(pos, table);
         at = address(s.slot, pos, s.comp);
       } else {
         at = address(s.slot, expr(*s.index), s.comp);
       }
       Value* v = expr(*s.value);
-      if (t_->reduce) v = b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), at), v);
-      b_.CreateStore(v, at);
+      if (t_->reduce) {
+        llvm::LoadInst* old = b_.CreateLoad(b_.getDoubleTy(), at);
+        tag(old, s.slot);
+        v = b_.CreateFAdd(old, v);
+      }
+      tag(b_.CreateStore(v, at), s.slot);
       return;
     }
     case StmtKind::If: {
@@ -372,6 +388,12 @@ llvm::Function* Emitter::run(const std::string& name) {
 
   auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
   b_.SetInsertPoint(entry);
+  if (!t_->writes_fields) {
+    llvm::MDBuilder md(ctx_);
+    llvm::MDNode* domain = md.createAnonymousAliasScopeDomain("arrays");
+    inputs_ = llvm::MDNode::get(ctx_, {md.createAnonymousAliasScope(domain, "inputs")});
+    results_ = llvm::MDNode::get(ctx_, {md.createAnonymousAliasScope(domain, "results")});
+  }
   // Everything invariant over the elements is read once, before the loop.
   for (size_t i = 0; i < slots_.size(); ++i)
     arrays_.push_back(
