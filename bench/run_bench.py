@@ -36,8 +36,8 @@ prints one row per run:
 --baseline-only SUBSTRING runs only the baselines on the matching cases (dragon160k takes
 about 40 s a frame under the interpreter). --compare-baseline LABEL=DIR adds rows for the
 baselines of another build folder (an older version, say); --fem-sim-form adds a row for
-fem_baseline --sim-form, whose stiffness is evaluated as fem.sim writes it rather than in
-closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
+fem_baseline --sim-form, whose stiffness is evaluated column by column from dP (as fem.sim
+wrote it before) rather than in closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
 machine's load inflates far less than wall time (compare baselines with baselines then).
 
 Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
@@ -461,7 +461,7 @@ def main():
                    help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
                         "busy machine inflates less than wall time; simit stays on wall time")
     p.add_argument("--fem-sim-form", action="store_true",
-                   help="also run fem_baseline --sim-form (the stiffness as fem.sim writes it)")
+                   help="also run fem_baseline --sim-form (the stiffness column by column from dP)")
     p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
     p.add_argument("--repeat", type=int, default=1,
                    help="run each case N times and keep each timing's least median "

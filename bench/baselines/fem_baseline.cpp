@@ -33,7 +33,7 @@ Mat3 edge_matrix(const Vec3s& x, const simit::runtime::Tet& t) {
 
 // A += -h^2 K for one tet, K's block (i, j) in closed form: with a_i = F^-T g_i,
 // K_ij = -W (mu (g_i'g_j) I + c a_j a_i' + lambda a_i a_j'), c = mu - lambda log J. It is
-// fem.sim's dP expression multiplied out (dF = e_d g_j' makes each term rank one).
+// fem.sim's tet_stiffness: dP multiplied out (dF = e_d g_j' makes each term rank one).
 void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, const Mat3& FinvT,
                    double c, double mu, double lambda) {
   std::array<Vec3, 4> af;
@@ -49,7 +49,8 @@ void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, 
     }
 }
 
-// The same blocks evaluated as fem.sim writes them: K's column (j, d) is -W dP g_i with
+// The same blocks column by column, as fem.sim wrote them before it took the closed form:
+// K's column (j, d) is -W dP g_i with
 // dP = mu dF + c F^-T dF' F^-T + lambda tr(F^-1 dF) F^-T, dF = e_d g_j' (--sim-form).
 void add_stiffness_as_sim(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r,
                           const Mat3& Finv, double c, double mu, double lambda) {

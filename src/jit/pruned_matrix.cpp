@@ -13,44 +13,36 @@ bool all_zero(const double* b) {
   return m == 0.0;  // a NaN makes m NaN, and the block is kept
 }
 
-// Rows with N x N blocks; n is the run-time size when N is 0.
+// Rows with N x N blocks; n is the run-time size when N is 0. One pass: each block is
+// copied (by columns: a compiled product reads block column j as one vector) to the next free
+// place, which moves on only when the block holds a non-zero.
 template <int N>
 void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v, size_t rows,
            int n) {
-  const int bs = N ? N * N : n * n;
-  // Pass 1: which blocks stay, and the arrays' sizes.
-  p.keep.resize(static_cast<size_t>(rp[rows]));
-  size_t kept = 0;
-  for (int32_t k = 0; k < rp[rows]; ++k) {
-    const double* blk = v + static_cast<size_t>(k) * bs;
-    bool zero;
-    if constexpr (N != 0) {
-      zero = all_zero<N * N>(blk);
-    } else {
-      zero = true;
-      for (int i = 0; i < bs && zero; ++i) zero = blk[i] == 0.0;
-    }
-    p.keep[k] = !zero;
-    kept += !zero;
-  }
-  p.cols.resize(kept);
-  p.values.resize(kept * bs);
-  // Pass 2: copy, each block by columns (a compiled product reads block column j as one
-  // vector).
+  const int m = N ? N : n;
+  const int bs = m * m;
+  const size_t blocks = static_cast<size_t>(rp[rows]);
+  p.cols.resize(blocks);
+  p.values.resize(blocks * bs);
   int32_t* cols = p.cols.data();
   double* out = p.values.data();
   int32_t at = 0;
   p.row_ptr[0] = 0;
   for (size_t r = 0; r < rows; ++r) {
     for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
-      if (!p.keep[k]) continue;
       const double* blk = v + static_cast<size_t>(k) * bs;
-      cols[at] = ci[k];
       double* o = out + static_cast<size_t>(at) * bs;
-      const int m = N ? N : n;
       for (int j = 0; j < m; ++j)
         for (int i = 0; i < m; ++i) o[j * m + i] = blk[i * m + j];
-      ++at;
+      cols[at] = ci[k];
+      bool zero;
+      if constexpr (N != 0) {
+        zero = all_zero<N * N>(blk);
+      } else {
+        zero = true;
+        for (int i = 0; i < bs && zero; ++i) zero = blk[i] == 0.0;
+      }
+      at += zero ? 0 : 1;
     }
     p.row_ptr[r + 1] = at;
   }

@@ -13,9 +13,10 @@ namespace simit::jit {
 
 struct PrunedMatrix {
   std::vector<int32_t> row_ptr, cols;
-  std::vector<double> values;   // each block column-major (square blocks only)
+  // Each block column-major (square blocks only); the arrays are sized for every block of the
+  // full pattern and hold `kept` of them.
+  std::vector<double> values;
   int64_t kept = 0, total = 0;  // blocks
-  std::vector<uint8_t> keep;     // per block of the full pattern (scratch)
 
   // Rebuilds the arrays from `m` (float components), reusing their storage.
   void assign(const runtime::SystemMatrix& m);
