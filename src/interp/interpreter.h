@@ -252,6 +252,7 @@ class Interpreter {
 
   // linalg.cpp: system values in operators and intrinsics
   bool system_binary(const frontend::ast::Binary& b, const Value& l, const Value& r, Value& out);
+  bool scaled_matrix_sum(const frontend::ast::Binary& b, Value& out);
   Value matrix_read(const frontend::ast::TensorRead& r, const Value& m);
   Value solver_intrinsic(const frontend::ast::Call& c, std::vector<Value>& args);
 

@@ -3,6 +3,7 @@
 // checked against a dense matrix assembled here in C++ from the same element data.
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 #include "interp/set_binding.h"
@@ -140,6 +141,67 @@ end
   EXPECT_EQ(vec(r[5]), B.transpose() * v);
   ASSERT_EQ(r[6].kind(), Value::Kind::Int);
   EXPECT_EQ(r[6].as_int(), x.dot(A * x));
+}
+
+// `M - s * K` is computed as one sum over the union pattern (A + (-s) K); it must give the
+// bits of the product taken first, and of the dense reference M - (s K) entry by entry.
+TEST(FloatSystemMatrices, AScaledDifferenceIsTheProductThenTheDifference) {
+  Harness h(R"(
+element N  m : float; end
+element S  k : float; end
+extern nodes : set{N};
+extern springs : set{S}(nodes, nodes);
+func stiff(s : S, e : (N * 2)) -> K : matrix[nodes,nodes](matrix[2,2](float))
+  K(e(0), e(1)) = s.k * [1.0, 0.3; -0.7, 2.0];
+  K(e(1), e(1)) = s.k * [1.0, 0.0; 0.0, -1.0] + [0.0, 0.1; 0.0, 0.0];
+end
+func mass(p : N) -> M : matrix[nodes,nodes](matrix[2,2](float))
+  M(p, p) = p.m * [1.0, 0.0; 0.0, 1.0];
+end
+export func main() -> (A1 : matrix[nodes,nodes](matrix[2,2](float)),
+                       A2 : matrix[nodes,nodes](matrix[2,2](float)),
+                       A3 : matrix[nodes,nodes](matrix[2,2](float)))
+  K = map stiff to springs reduce +;
+  M = map mass to nodes reduce +;
+  h = 0.013;
+  A1 = M - (h * h) * K;
+  A3 = M + K * (h * 7.0);
+  S = (h * h) * K;
+  A2 = M - S;
+end
+)");
+  ASSERT_TRUE(h.ok());
+  Graph g;
+  h.bind("nodes", g.nodes);
+  h.bind("springs", g.springs);
+  for (int i = 0; i < g.n; ++i) g.nodes.field("m").data<double>()[i] = 0.37 + 0.11 * i;
+  for (int e = 0; e < g.springs.size(); ++e) g.springs.field("k").data<double>()[e] = 1.3 + 0.7 * e;
+  auto r = h.run("main");
+  ASSERT_EQ(r.size(), 3u);
+  const runtime::SystemMatrix &a1 = *r[0].matrix(), &a2 = *r[1].matrix(), &a3 = *r[2].matrix();
+  ASSERT_EQ(a1.value_count(), a2.value_count());
+  for (size_t i = 0; i < a1.value_count(); ++i)
+    EXPECT_EQ(std::memcmp(&a1.values()[i], &a2.values()[i], sizeof(double)), 0) << i;
+  // The dense reference, each entry rounded as the contract says: m + (-1) * (s * k).
+  const double s = 0.013 * 0.013, t = 0.013 * 7.0;
+  MatrixXd M = MatrixXd::Zero(2 * g.n, 2 * g.n), K = M;
+  for (int i = 0; i < g.n; ++i)
+    M.block<2, 2>(2 * i, 2 * i) = (0.37 + 0.11 * i) * Eigen::Matrix2d::Identity();
+  for (size_t e = 0; e < g.edges.size(); ++e) {
+    auto [a, b] = g.edges[e];
+    const double k = 1.3 + 0.7 * static_cast<double>(e);
+    Eigen::Matrix2d blk, diag;
+    blk << k * 1.0, k * 0.3, k * -0.7, k * 2.0;
+    diag << k, 0.1, 0.0, -k;
+    K.block<2, 2>(2 * a, 2 * b) += blk;
+    K.block<2, 2>(2 * b, 2 * b) += diag;
+  }
+  const MatrixXd want1 = M - (s * K), want3 = M + (t * K);
+  for (int i = 0; i < 2 * g.n; ++i)
+    for (int j = 0; j < 2 * g.n; ++j) {
+      EXPECT_EQ(a1.component(i, j), want1(i, j)) << i << "," << j;
+      EXPECT_EQ(a3.component(i, j), want3(i, j)) << i << "," << j;
+    }
 }
 
 TEST(NestedBlockMatrices, ProductsMatchTheLogicalDenseMatrix) {
