@@ -66,7 +66,6 @@ JIT the default sweep of all three examples takes a few minutes; with the interp
 """
 import argparse
 import csv
-import glob
 import math
 import os
 import re
@@ -410,9 +409,19 @@ def describe(p):
     return text + ", max rel error %.2e, rms %.2e" % (p["max_rel_error"], p["rms_rel_error"])
 
 
+EXECUTORS = ("interpreter", "jit")
+
+
+def csv_paths(out, name):
+    """The example's CSVs in OUT, one per executor (accuracy_fem_*.csv would also match
+    accuracy_fem_newton_*.csv)."""
+    paths = [os.path.join(out, "accuracy_%s_%s.csv" % (name, e)) for e in EXECUTORS]
+    return [p for p in paths if os.path.exists(p)]
+
+
 def load(out, name):
     rows = []
-    for path in sorted(glob.glob(os.path.join(out, "accuracy_%s_*.csv" % name))):
+    for path in csv_paths(out, name):
         with open(path) as f:
             rows += list(csv.DictReader(line for line in f if not line.startswith("#")))
     return rows
@@ -421,7 +430,7 @@ def load(out, name):
 def frames_of(out, name):
     """The frame counts the example's CSVs say their runs had (the comment on line 1)."""
     counts = set()
-    for path in glob.glob(os.path.join(out, "accuracy_%s_*.csv" % name)):
+    for path in csv_paths(out, name):
         with open(path) as f:
             m = re.search(r"(\d+) frames", f.readline())
         if m:
@@ -640,7 +649,7 @@ def main():
         executors = ([e.strip() for e in args.executor.split(",") if e.strip()]
                      if args.executor else ["jit" if has_jit else "interpreter"])
         for e in executors:
-            if e not in ("interpreter", "jit"):
+            if e not in EXECUTORS:
                 sys.exit("accuracy.py: unknown executor %s (expected interpreter or jit)" % e)
             if e == "jit" and not has_jit:
                 sys.exit("accuracy.py: this simit has no JIT (configure with "
