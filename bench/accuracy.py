@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Speed against error for every example (fem, springs, cloth) and every executor built.
 
-Usage: bench/accuracy.py [--build DIR] [--example fem,springs,cloth] [--executor LIST]
+Usage: bench/accuracy.py [--build DIR] [--example fem,springs,cloth,...] [--executor LIST]
                          [--frames K] [--points LIST] [--precisions LIST] [--repeat N]
                          [--out DIR] [--plot-only] [--table]
 
@@ -24,9 +24,23 @@ sweep's own parameter:
            copy of cloth.sim with those two lines changed. Default substeps 15 .. 400; the
            reference: float64 with 1600 substeps (h = 6.25e-6). Steps above the membrane's
            stability limit blow up; such points are recorded as unstable (no error).
+  fem_newton      tests/hard/base.toml: examples/fem/fem_newton.sim, Stable Neo-Hookean and
+                  Newton (the robust model and integrator) on the hard-case suite's 240-tet
+                  bar. The sweep is Newton's tolerance newton_tol (default 1e-1 .. 1e-8 m/s:
+                  Newton stops when the RMS over the vertices of |dx| / h is at most that),
+                  with the scene's PCG tolerance (relative, 1e-6). The reference: newton_tol
+                  1e-9, PCG to |r|/|b| <= 1e-12, checked to stop below newton_max (200) in
+                  every frame.
+  springs_newton  tests/hard/springs_k1e6.toml: examples/springs/springs_newton.sim, Newton,
+                  k = 1e6 N/m. Same sweep and reference.
+  fem_newton_cg, springs_newton_cg  the same two scenes and reference, sweeping instead the
+                  PCG tolerance cg_tol (relative, default 1e-1 .. 1e-10) at the scene's
+                  newton_tol (1e-6 m/s).
 
 Besides the sweep, each example runs once as it ships (its scene unchanged, float64): the
-"shipped" point of the table and the plots.
+"shipped" point of the table and the plots. The Newton examples also record the Newton
+iterations and line-search halvings per frame (the mean over the frames), and in `capped`
+the frames where Newton stopped at newton_max.
 
 Executors: --executor interpreter,jit (default: jit when this simit has it, else the
 interpreter). The JIT compiles each site at its first execution (--jit-threshold 0), so its
@@ -52,7 +66,6 @@ JIT the default sweep of all three examples takes a few minutes; with the interp
 """
 import argparse
 import csv
-import glob
 import math
 import os
 import re
@@ -86,7 +99,23 @@ EXAMPLES = {
     "cloth": Example("cloth", "examples/cloth/square.toml", "h",
                      ["15", "18", "20", "25", "35", "50", "70", "100", "200", "400"],
                      "time step h (s)"),
+    "fem_newton": Example("fem_newton", "tests/hard/base.toml", "newton_tol",
+                          ["1e-%d" % k for k in range(1, 9)],
+                          "Newton tolerance newton_tol (RMS |dx|/h, m/s)"),
+    "springs_newton": Example("springs_newton", "tests/hard/springs_k1e6.toml", "newton_tol",
+                              ["1e-%d" % k for k in range(1, 9)],
+                              "Newton tolerance newton_tol (RMS |dx|/h, m/s)"),
+    "fem_newton_cg": Example("fem_newton_cg", "tests/hard/base.toml", "pcg_tol",
+                             ["1e-%d" % k for k in range(1, 11)],
+                             "PCG tolerance cg_tol (relative, |r|/|b|)"),
+    "springs_newton_cg": Example("springs_newton_cg", "tests/hard/springs_k1e6.toml",
+                                 "pcg_tol", ["1e-%d" % k for k in range(1, 11)],
+                                 "PCG tolerance cg_tol (relative, |r|/|b|)"),
 }
+# The Newton examples' sweeps: the scene's tensor each one sets, and their reference (as the
+# hard-case suite's, tests/hard/run_suite.py).
+NEWTON_PARAMS = {"newton_tol": "newton_tol", "pcg_tol": "cg_tol"}
+NEWTON_REFERENCE = {"newton_tol": 1e-9, "newton_max": 200, "cg_tol": 1e-12, "cg_max": 100000}
 
 
 def require_matplotlib():
@@ -112,10 +141,10 @@ def substitute(text, pattern, replacement, what):
     return text
 
 
-def make_scene(example, workdir, name, cg_tol=None, cg_max=None, substeps=None):
+def make_scene(example, workdir, name, cg_tol=None, cg_max=None, substeps=None, tensors=None):
     """A copy of the example's scene in WORKDIR with absolute paths and the point's settings.
 
-    None leaves a setting as the scene (or program) has it."""
+    None leaves a setting as the scene (or program) has it; TENSORS sets [tensors] lines."""
     source = os.path.join(ROOT, example.scene)
     base = os.path.dirname(source)
     text = open(source).read()
@@ -143,6 +172,9 @@ def make_scene(example, workdir, name, cg_tol=None, cg_max=None, substeps=None):
     if cg_max is not None:
         text = substitute(text, r"(?m)^cg_max = \S+", "cg_max = %d" % cg_max,
                           "'cg_max = ' line in " + example.scene)
+    for key, value in (tensors or {}).items():
+        text = substitute(text, r"(?m)^%s = \S+" % key, "%s = %r" % (key, value),
+                          "'%s = ' line in %s" % (key, example.scene))
     path = os.path.join(workdir, name + ".toml")
     with open(path, "w") as f:
         f.write(text)
@@ -152,6 +184,10 @@ def make_scene(example, workdir, name, cg_tol=None, cg_max=None, substeps=None):
 def shipped_settings(example):
     """The scene's own cg_tol and cg_max (fem, springs) or the program's h (cloth)."""
     text = open(os.path.join(ROOT, example.scene)).read()
+    if example.param in NEWTON_PARAMS:
+        key = NEWTON_PARAMS[example.param]
+        return {"value": float(re.search(r"(?m)^%s = (\S+)" % key, text).group(1)),
+                "cg_max": None}
     if example.param == "cg_tol":
         tol = float(re.search(r"(?m)^cg_tol = (\S+)", text).group(1))
         cap = int(re.search(r"(?m)^cg_max = (\S+)", text).group(1))
@@ -213,6 +249,21 @@ def reference(simit, executor, example, args, workdir):
                                                   FRAME_TIME / args.ref_substeps), flush=True)
         return got[1], "h = %g (%d substeps)" % (FRAME_TIME / args.ref_substeps,
                                                   args.ref_substeps)
+    if example.param in NEWTON_PARAMS:
+        scene = make_scene(example, workdir, "reference", tensors=NEWTON_REFERENCE)
+        got = run(simit, executor, scene, args.frames, os.path.join(workdir, "reference"), False)
+        if got is None:
+            sys.exit("accuracy.py: the %s reference failed" % example.name)
+        rows, ref, _ = got
+        its = [int(r["newton_iterations"]) for r in rows]
+        worst = max(float(r["cg_residual"]) for r in rows)
+        print("reference: Newton iterations %s, last |r|/|b| at most %.1e" % (its, worst),
+              flush=True)
+        if max(its) >= NEWTON_REFERENCE["newton_max"] or worst > 1e-12:
+            sys.exit("accuracy.py: the %s reference did not converge" % example.name)
+        return ref, ("newton_tol = %g, cg_tol = %g (relative), at most %d Newton iterations "
+                     "a frame" % (NEWTON_REFERENCE["newton_tol"], NEWTON_REFERENCE["cg_tol"],
+                                  max(its)))
     ref_tol = args.ref_tol
     for attempt in range(4):
         scene = make_scene(example, workdir, "reference", cg_tol=ref_tol, cg_max=20000)
@@ -235,6 +286,9 @@ def measure(simit, executor, example, args, workdir, x0, ref, setup_cpu, prec, v
     """One point: runs the scene as SETTING says and compares with the reference."""
     if example.param == "h":
         scene = make_scene(example, workdir, "point", substeps=setting)
+    elif example.param in NEWTON_PARAMS:
+        scene = make_scene(example, workdir, "point",
+                           tensors={NEWTON_PARAMS[example.param]: value})
     else:
         scene = make_scene(example, workdir, "point", cg_tol=value, cg_max=setting)
     # --repeat N: the least of N medians per timing column (load only ever adds time); the
@@ -268,7 +322,15 @@ def measure(simit, executor, example, args, workdir, x0, ref, setup_cpu, prec, v
         "max_rel_error": worst, "rms_rel_error": rms, "max_error_of_motion": of_motion,
         "cpu_ms_per_frame": 1e3 * max(0.0, min(c for _, _, c in timings) - setup_cpu) /
         args.frames})
-    if "cg_iterations" in rows[0]:
+    if "newton_iterations" in rows[0]:
+        # Means: Newton's iterations and halvings vary from frame to frame.
+        newton = [int(r["newton_iterations"]) for r in rows]
+        point.update({"newton_iterations": statistics.mean(newton),
+                      "halvings": statistics.mean(int(r["halvings"]) for r in rows),
+                      "cg_iterations": statistics.mean(int(r["cg_iterations"]) for r in rows),
+                      "capped": sum(1 for i in newton if i >= newton_max(example)),
+                      "rel_residual": float(rows[-1]["cg_residual"])})
+    elif "cg_iterations" in rows[0]:
         its = [int(r["cg_iterations"]) for r in rows]
         point.update({"cg_iterations": statistics.median(its),
                       "capped": sum(1 for i in its if i >= setting),
@@ -276,8 +338,14 @@ def measure(simit, executor, example, args, workdir, x0, ref, setup_cpu, prec, v
     return point
 
 
+def newton_max(example):
+    text = open(os.path.join(ROOT, example.scene)).read()
+    return int(re.search(r"(?m)^newton_max = (\S+)", text).group(1))
+
+
 FIELDS = ["example", "executor", "precision", "param", "value", "cg_max", "substeps", "shipped",
-          "status", "ms_per_frame", "assembly_ms", "solve_ms", "cg_iterations", "capped",
+          "status", "ms_per_frame", "assembly_ms", "solve_ms", "newton_iterations", "halvings",
+          "cg_iterations", "capped",
           "rel_residual", "max_rel_error", "rms_rel_error", "max_error_of_motion",
           "cpu_ms_per_frame"]
 
@@ -331,6 +399,9 @@ def describe(p):
         return head + ": failed (the run stopped: a NaN, for cloth an unstable step)"
     text = "%s: %8.2f ms/frame (assembly %.2f, solve %.2f)" % (
         head, p["ms_per_frame"], p["assembly_ms"], p["solve_ms"])
+    if "newton_iterations" in p:
+        text += ", Newton %.1f it/frame (%.1f halvings)" % (p["newton_iterations"],
+                                                            p["halvings"])
     if "cg_iterations" in p:
         text += ", CG %g it%s, |r|/|b| %.1e" % (
             p["cg_iterations"], " (%d frames capped)" % p["capped"] if p["capped"] else "",
@@ -338,9 +409,19 @@ def describe(p):
     return text + ", max rel error %.2e, rms %.2e" % (p["max_rel_error"], p["rms_rel_error"])
 
 
+EXECUTORS = ("interpreter", "jit")
+
+
+def csv_paths(out, name):
+    """The example's CSVs in OUT, one per executor (accuracy_fem_*.csv would also match
+    accuracy_fem_newton_*.csv)."""
+    paths = [os.path.join(out, "accuracy_%s_%s.csv" % (name, e)) for e in EXECUTORS]
+    return [p for p in paths if os.path.exists(p)]
+
+
 def load(out, name):
     rows = []
-    for path in sorted(glob.glob(os.path.join(out, "accuracy_%s_*.csv" % name))):
+    for path in csv_paths(out, name):
         with open(path) as f:
             rows += list(csv.DictReader(line for line in f if not line.startswith("#")))
     return rows
@@ -349,7 +430,7 @@ def load(out, name):
 def frames_of(out, name):
     """The frame counts the example's CSVs say their runs had (the comment on line 1)."""
     counts = set()
-    for path in glob.glob(os.path.join(out, "accuracy_%s_*.csv" % name)):
+    for path in csv_paths(out, name):
         with open(path) as f:
             m = re.search(r"(\d+) frames", f.readline())
         if m:
@@ -364,7 +445,9 @@ def plot(plt, out, example):
         print("no results for %s in %s: no plot" % (example.name, out))
         return
     floor = 1e-17  # an exact match has no place on a log axis
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    newton = example.param in NEWTON_PARAMS
+    # The Newton examples add a third panel: Newton iterations per frame against the parameter.
+    fig, axes = plt.subplots(1, 3 if newton else 2, figsize=(19 if newton else 13, 5.2))
     styles = {("jit", "float64"): ("C0", "o"), ("jit", "float32"): ("C1", "s"),
               ("interpreter", "float64"): ("C2", "^"), ("interpreter", "float32"): ("C3", "v")}
     for (executor, prec), (color, marker) in styles.items():
@@ -380,19 +463,30 @@ def plot(plt, out, example):
                      color=color, linewidth=0.8, alpha=0.8, label=label)
         axes[1].plot([float(r["value"]) for r in series], err, marker=marker, color=color,
                      label=label)
+        if newton:
+            axes[2].plot([float(r["value"]) for r in series],
+                         [float(r["newton_iterations"]) for r in series], marker=marker,
+                         color=color, label=label)
     labelled = False
     for r in rows:
         if r["shipped"]:
             err = max(float(r["max_rel_error"]), floor)
-            what = ("cg_tol %g, cg_max %s" % (float(r["value"]), r["cg_max"])
-                    if example.param == "cg_tol" else "h %g" % float(r["value"]))
-            for ax, x in ((axes[0], float(r["ms_per_frame"])), (axes[1], float(r["value"]))):
-                ax.plot([x], [err], marker="*", markersize=15, color="k", linestyle="none",
+            if example.param == "cg_tol":
+                what = "cg_tol %g, cg_max %s" % (float(r["value"]), r["cg_max"])
+            elif newton:
+                what = "%s %g" % (NEWTON_PARAMS[example.param], float(r["value"]))
+            else:
+                what = "h %g" % float(r["value"])
+            marks = [(axes[0], float(r["ms_per_frame"]), err), (axes[1], float(r["value"]), err)]
+            if newton:
+                marks.append((axes[2], float(r["value"]), float(r["newton_iterations"])))
+            for ax, x, y in marks:
+                ax.plot([x], [y], marker="*", markersize=15, color="k", linestyle="none",
                         label=None if labelled else "as shipped: %s, float64" % what)
             labelled = True
     unstable = sorted({float(r["value"]) for r in load(out, example.name)
                        if r["status"] != "ok"})
-    if unstable:  # the smallest failed value: where the explicit step stops being stable
+    if unstable and example.param == "h":  # the smallest failed value: where the explicit step stops being stable
         axes[1].axvline(unstable[0], color="grey", linestyle=":", linewidth=1)
         axes[1].text(unstable[0], axes[1].get_ylim()[1],
                      "unstable from h = %.3g " % unstable[0], color="grey", va="top",
@@ -401,8 +495,14 @@ def plot(plt, out, example):
     axes[0].set(xscale="log", yscale="log", xlabel="ms/frame (median)", ylabel=ylabel,
                 title="%s: error against time" % example.name)
     axes[1].set(xscale="log", yscale="log", xlabel=example.label, ylabel=ylabel,
-                title="%s: error against %s" % (example.name, example.param))
-    if example.param == "cg_tol":
+                title="%s: error against %s" % (example.name,
+                                                 NEWTON_PARAMS.get(example.param, example.param)))
+    if newton:
+        axes[2].set(xscale="log", xlabel=example.label, ylabel="Newton iterations per frame",
+                    title="%s: Newton iterations against %s" %
+                    (example.name, NEWTON_PARAMS[example.param]))
+        axes[2].invert_xaxis()
+    if example.param == "cg_tol" or newton:
         axes[1].invert_xaxis()  # tighter tolerances to the right, like longer times on the left
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
@@ -419,6 +519,8 @@ def plot(plt, out, example):
 def table(out, example):
     """The example's results as markdown (--table): per executor, a row per setting, the
     shipped one first, and for each precision ms/frame and the max relative error."""
+    if example.param in NEWTON_PARAMS:
+        return newton_table(out, example)
     rows = load(out, example.name)
     cg = example.param == "cg_tol"
     head = ["executor", example.param, "cg_max" if cg else "substeps"] + \
@@ -458,18 +560,61 @@ def table(out, example):
     return "\n".join(lines)
 
 
+def newton_table(out, example):
+    """--table for the Newton examples: per executor a row per setting, the shipped one
+    first; per precision ms/frame, Newton iterations and halvings per frame, the CG
+    iterations per frame (summed over Newton's) and the error, as a fraction of the object's
+    size and of the reference's motion."""
+    rows = load(out, example.name)
+    head = ["executor", NEWTON_PARAMS[example.param]]
+    for prec in PRECISIONS:
+        head += ["%s %s" % (prec, c) for c in ("ms/frame", "Newton it/frame", "halvings/frame",
+                                                "CG it/frame", "error", "error of motion")]
+    lines = ["| " + " | ".join(head) + " |",
+             "|" + "|".join("---" if i == 0 else "---:" for i in range(len(head))) + "|"]
+    settings = []
+    for r in rows:
+        key = (r["executor"], bool(r["shipped"]), float(r["value"]))
+        if key not in settings:
+            settings.append(key)
+    order = {"jit": 0, "interpreter": 1}
+    settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
+    for executor, shipped, value in settings:
+        cells = [executor, ("**%.3g (shipped)**" if shipped else "%.3g") % value]
+        for prec in PRECISIONS:
+            r = [r for r in rows if r["executor"] == executor and r["precision"] == prec and
+                 bool(r["shipped"]) == shipped and float(r["value"]) == value]
+            if not r:
+                cells += [""] * 6
+            elif r[0]["status"] != "ok":
+                cells += ["failed"] + ["-"] * 5
+            else:
+                r = r[0]
+                ms = float(r["ms_per_frame"])
+                capped = " (capped %s)" % r["capped"] if r["capped"] not in ("", "0") else ""
+                cells += ["%.3g" % ms if ms < 1000 else "%.0f" % ms,
+                          "%.1f%s" % (float(r["newton_iterations"]), capped),
+                          "%.1f" % float(r["halvings"]), "%.0f" % float(r["cg_iterations"]),
+                          "%.2e" % float(r["max_rel_error"]),
+                          "%.2e" % float(r["max_error_of_motion"])]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--build", default=os.path.join(ROOT, "build"),
                    help="the build folder with tools/simit; default build")
     p.add_argument("--example", default="fem,springs,cloth",
-                   help="examples, comma-separated (default fem,springs,cloth)")
+                   help="examples, comma-separated (default fem,springs,cloth; also "
+                        "fem_newton, springs_newton, fem_newton_cg, springs_newton_cg)")
     p.add_argument("--executor", default=None,
                    help="interpreter, jit or both, comma-separated (default: jit if built)")
     p.add_argument("--frames", type=int, default=10, help="frames per run, K (default 10)")
     p.add_argument("--points", default=None,
-                   help="the sweep: CG tolerances (fem, springs) or substeps per frame "
-                        "(cloth), comma-separated; default per example")
+                   help="the sweep: CG tolerances (fem, springs, *_newton_cg), Newton "
+                        "tolerances (*_newton) or substeps per frame (cloth), comma-separated; "
+                        "default per example")
     p.add_argument("--precisions", default="float64,float32")
     p.add_argument("--repeat", type=int, default=1,
                    help="runs per point; each timing is the least of their medians (default 1)")
@@ -504,7 +649,7 @@ def main():
         executors = ([e.strip() for e in args.executor.split(",") if e.strip()]
                      if args.executor else ["jit" if has_jit else "interpreter"])
         for e in executors:
-            if e not in ("interpreter", "jit"):
+            if e not in EXECUTORS:
                 sys.exit("accuracy.py: unknown executor %s (expected interpreter or jit)" % e)
             if e == "jit" and not has_jit:
                 sys.exit("accuracy.py: this simit has no JIT (configure with "
