@@ -131,6 +131,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
   map_ = ctx;
   map_depth_ = depth_ + 1;
   try {
+    const bool offer = options_.sites && !trap_->armed();
     // The results exist (zero) even when the set is empty.
     ctx->values.resize(f.results.size());
     setup(0);
@@ -160,18 +161,31 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
       runtime::PatternPtr pattern =
           patterns_.assembled(*ctx->target->set, set_of(t.dims[0]), set_of(t.dims[1]));
       const runtime::BlockDims bd = runtime::block_dims(block);
-      slot = Value::of_matrix(result_matrix(plan.results[ctx->blocks.size() - 1], pattern, bd.rows,
-                                            bd.cols, component_of(t.component())));
+      AssemblyPlan::Result& pr = plan.results[ctx->blocks.size() - 1];
+      if (offer && pr.hook_allocates && pr.pattern == pattern) {
+        pr.is_matrix = true;
+        slot = Value::of_matrix(nullptr);
+        continue;
+      }
+      slot = Value::of_matrix(
+          result_matrix(pr, pattern, bd.rows, bd.cols, component_of(t.component())));
     }
     --depth_;
     ++plan.runs;
-    const bool offer = options_.sites && !trap_->armed();
     SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at};
     if (offer && options_.sites->run_site(call)) {
       map_ = saved;
       map_depth_ = saved_depth;
       return;
     }
+    // Declined: the results the hook was to make are made here.
+    for (size_t i = 0; i < ctx->values.size(); ++i)
+      if (ctx->is_matrix[i] && !ctx->grid && !ctx->values[i].matrix()) {
+        const runtime::BlockDims bd = runtime::block_dims(ctx->blocks[i]);
+        ctx->values[i] = Value::of_matrix(
+            result_matrix(plan.results[i], plan.results[i].pattern, bd.rows, bd.cols,
+                          component_of(f.results[i].var->type->component())));
+      }
     // After the first element only the element and its endpoint tuple change: nothing
     // between elements touches the frame's references (calls run one level deeper).
     bool reuse = f.generics.empty();

@@ -38,6 +38,10 @@ struct AssemblyPlan {
     runtime::PatternPtr pattern;  // matrices over edge sets: shared by all their matrices
     // The matrix this site produced last: reused (zeroed) when nothing else holds it.
     std::shared_ptr<runtime::SystemMatrix> last;
+    // Set by a site hook that fills this matrix on a pattern of its own (the JIT's specialised
+    // pattern): when the site is offered, the interpreter leaves the result null, and makes
+    // it (zero, on `pattern`) only if the hook declines.
+    bool hook_allocates = false;
   };
   const frontend::ast::Assembly* site = nullptr;
   const frontend::ast::FuncDecl* func = nullptr;

@@ -150,6 +150,9 @@ struct Trace {
   std::vector<Stmt> body;
   std::vector<ErrorSite> errors;
   bool writes_fields = false;  // some Store (an apply with inout fields)
+  // The error a matrix write reports when its table entry is -1: the block is not in the
+  // pattern the controller specialised the result to (-1: no matrix results).
+  int outside_error = -1;
   bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
 };
 

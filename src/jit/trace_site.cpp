@@ -1344,6 +1344,10 @@ TracedSite Tracer::run() {
              f.results[i].name});
     }
     frames_.push_back(std::move(top));
+    if (std::any_of(trace_.pairs.begin(), trace_.pairs.end(), [](int p) { return p > 0; })) {
+      trace_.errors.push_back({site.func_span, "a write outside the specialised pattern"});
+      trace_.outside_error = static_cast<int>(trace_.errors.size() - 1);
+    }
     exec_block(f.body);
     if (fold_)
       if (auto check = folding.close(trace_.errors, site.func_span))

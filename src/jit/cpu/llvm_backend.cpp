@@ -294,6 +294,17 @@ void Emitter::stmt(const Stmt& s) {
             table = static_cast<int>(i);
         llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
         tag(pos, table);
+        if (t_->outside_error >= 0) {
+          // -1: the block was left out of the pattern the controller specialised to.
+          auto* outside = llvm::BasicBlock::Create(ctx_, "outside", fn_);
+          auto* inside = llvm::BasicBlock::Create(ctx_, "inside", fn_);
+          b_.CreateCondBr(b_.CreateICmpSLT(pos, b_.getInt32(0)), outside, inside,
+                          llvm::MDBuilder(ctx_).createUnlikelyBranchWeights());
+          b_.SetInsertPoint(outside);
+          b_.CreateStore(element_, failed_);
+          b_.CreateRet(b_.getInt32(t_->outside_error + 1));
+          b_.SetInsertPoint(inside);
+        }
         at = address(s.slot, pos, s.comp);
       } else {
         at = address(s.slot, expr(*s.index), s.comp);
