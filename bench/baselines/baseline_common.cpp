@@ -195,13 +195,13 @@ double Stopwatch::lap_ms() {
   return ms;
 }
 
-void FrameLog::frame(int index, double first_ms, double second_ms, int iterations,
-                     double residual) {
+void FrameLog::frame(int index, double first_ms, double second_ms, double energy,
+                     std::optional<CgResult> cg) {
   ms.push_back({first_ms, second_ms});
   std::printf("frame %d: %s %.3f ms, %s %.3f ms", index, first_label.c_str(), first_ms,
               second_label.c_str(), second_ms);
-  if (iterations >= 0) std::printf(", cg %d iterations, residual %.3e", iterations, residual);
-  std::printf("\n");
+  if (cg) std::printf(", cg %d iterations, residual %.3e", cg->iterations, cg->residual);
+  std::printf(", energy %.17g\n", energy);
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -106,12 +107,14 @@ class Stopwatch {
 };
 
 // One line per frame and, at the end, the median and mean (the machine's load shows in
-// single frames; the median damps it).
+// single frames; the median damps it). The line ends with the frame's total energy, printed
+// to round-trip precision so that tests can compare it with the .sim program's.
 struct FrameLog {
   std::string first_label, second_label;  // what the two timings measure
   std::vector<std::array<double, 2>> ms;
-  void frame(int index, double first_ms, double second_ms, int iterations = -1,
-             double residual = 0.0);
+  // "frame N: FIRST a ms, SECOND b ms[, cg K iterations, residual R], energy E"
+  void frame(int index, double first_ms, double second_ms, double energy,
+             std::optional<CgResult> cg = std::nullopt);
   void summary() const;
 };
 

@@ -29,18 +29,20 @@ struct HingeRest {
   double theta0, w;
 };
 
-// Signed dihedral angle of hinge (a, b, c, d), triangles (a, b, c) and (b, a, d), and its
-// gradient per point (Bridson et al. 2003).
-double dihedral(const Vec3s& x, const simit::runtime::Hinge& hg, std::array<Vec3, 4>& g) {
+// Signed dihedral angle of hinge (a, b, c, d), triangles (a, b, c) and (b, a, d), and, unless
+// g is null (the energy needs only the angle), its gradient per point (Bridson et al. 2003).
+double dihedral(const Vec3s& x, const simit::runtime::Hinge& hg, std::array<Vec3, 4>* g) {
   const Vec3 &a = x[hg[0]], &b = x[hg[1]], &c = x[hg[2]], &d = x[hg[3]];
   const Vec3 e = b - a;
   const double le = e.norm();
   const Vec3 n1 = e.cross(c - a), n2 = (a - b).cross(d - b);
-  const Vec3 q1 = n1 / n1.squaredNorm(), q2 = n2 / n2.squaredNorm();
-  g[2] = -le * q1;
-  g[3] = -le * q2;
-  g[0] = -(((c - b).dot(e) / le) * q1 + ((d - b).dot(e) / le) * q2);
-  g[1] = ((c - a).dot(e) / le) * q1 + ((d - a).dot(e) / le) * q2;
+  if (g) {
+    const Vec3 q1 = n1 / n1.squaredNorm(), q2 = n2 / n2.squaredNorm();
+    (*g)[2] = -le * q1;
+    (*g)[3] = -le * q2;
+    (*g)[0] = -(((c - b).dot(e) / le) * q1 + ((d - b).dot(e) / le) * q2);
+    (*g)[1] = ((c - a).dot(e) / le) * q1 + ((d - a).dot(e) / le) * q2;
+  }
   return std::atan2(n1.cross(n2).dot(e) / le, n1.dot(n2));
 }
 
@@ -85,25 +87,32 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 3; ++i) m[t[i]] += density * face_rest[k].area / 3.0;
   }
   std::vector<HingeRest> hinge_rest(nh);
-  std::array<Vec3, 4> g;
   for (int k = 0; k < nh; ++k) {
     const auto& hg = hinges[k];
     const Vec3 e = x[hg[1]] - x[hg[0]];
     const double areas =
         0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() + e.cross(x[hg[3]] - x[hg[1]]).norm());
-    hinge_rest[k] = {dihedral(x, hg, g), 3.0 * kb * e.squaredNorm() / areas};
+    hinge_rest[k] = {dihedral(x, hg, nullptr), 3.0 * kb * e.squaredNorm() / areas};
   }
   std::printf("cloth %dx%d: %d points, %d faces, %d hinges\n", side, side, n, nf, nh);
 
+  // Face k's deformation gradient and Green strain E = (F'F - I)/2.
+  auto deformation = [&](int k) {
+    const auto& t = faces[k];
+    Mat32 ds;
+    ds << x[t[1]] - x[t[0]], x[t[2]] - x[t[0]];
+    return Mat32(ds * face_rest[k].B);
+  };
+  auto green_strain = [](const Mat32& F) {
+    return Eigen::Matrix2d(0.5 * (F.transpose() * F - Eigen::Matrix2d::Identity()));
+  };
   // Adds the membrane and bending forces into f (zero on entry).
   auto add_forces = [&]() {
     for (int k = 0; k < nf; ++k) {
       const auto& t = faces[k];
       const FaceRest& r = face_rest[k];
-      Mat32 ds;
-      ds << x[t[1]] - x[t[0]], x[t[2]] - x[t[0]];
-      const Mat32 F = ds * r.B;
-      const Eigen::Matrix2d E = 0.5 * (F.transpose() * F - Eigen::Matrix2d::Identity());
+      const Mat32 F = deformation(k);
+      const Eigen::Matrix2d E = green_strain(F);
       const Eigen::Matrix2d S =
           (lambda_s * E.trace()) * Eigen::Matrix2d::Identity() + (2.0 * mu_s) * E;
       const Mat32 H = -r.area * (F * S * r.B.transpose());
@@ -114,12 +123,32 @@ int main(int argc, char** argv) {
     std::array<Vec3, 4> grad;
     for (int k = 0; k < nh; ++k) {
       const auto& hg = hinges[k];
-      const double theta = dihedral(x, hg, grad);
+      const double theta = dihedral(x, hg, &grad);
       const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
       for (int i = 0; i < 4; ++i) f[hg[i]] += s * grad[i];
     }
   };
   auto acceleration = [&](int i) { return pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity); };
+  // cloth.sim's energy statistic: area (lambda/2 tr(E)^2 + mu tr(E^2)) per face,
+  // w (theta - theta0)^2 per hinge, kinetic and gravitational per point. Summed directly:
+  // cloth.sim spreads each element's term over its corners only because its statistic is one
+  // vector over the points.
+  auto total_energy = [&]() {
+    double energy = 0.0;
+    for (int k = 0; k < nf; ++k) {
+      const Eigen::Matrix2d E = green_strain(deformation(k));
+      const double trE = E.trace();
+      // tr(E^2) is the sum of squares: E is symmetric.
+      energy += face_rest[k].area * (0.5 * lambda_s * trE * trE + mu_s * E.squaredNorm());
+    }
+    for (int k = 0; k < nh; ++k) {
+      const double bend = dihedral(x, hinges[k], nullptr) - hinge_rest[k].theta0;
+      energy += hinge_rest[k].w * bend * bend;
+    }
+    for (int i = 0; i < n; ++i)
+      energy += 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
+    return energy;
+  };
 
   std::fill(f.begin(), f.end(), Vec3::Zero());
   add_forces();
@@ -145,7 +174,11 @@ int main(int argc, char** argv) {
       }
       integrate_ms += clock.lap_ms();
     }
-    log.frame(frame, force_ms, integrate_ms);
+    // The frame's positions and velocities are final here: the next frame's first position
+    // update comes first in the loop.
+    const double energy = total_energy();
+    integrate_ms += clock.lap_ms();
+    log.frame(frame, force_ms, integrate_ms, energy);
   }
   log.summary();
   return finish(options, x) ? 0 : 1;

@@ -67,6 +67,25 @@ void add_stiffness_as_sim(BlockCsr& a, const std::array<int, 16>& k, const TetRe
   }
 }
 
+// fem.sim's energy statistic: Neo-Hookean W psi(F) per tet with
+// psi = mu/2 (tr(F'F) - 3) - mu log J + lambda/2 (log J)^2, kinetic and gravitational per
+// vertex. Summed directly: fem.sim spreads each tet's term over its corners only because its
+// statistic is one vector over the vertices.
+double total_energy(const simit::runtime::Mesh& mesh, const std::vector<TetRest>& rest,
+                    const Vec3s& x, const Vec3s& v, const std::vector<double>& m, double mu,
+                    double lambda) {
+  double energy = 0.0;
+  for (size_t e = 0; e < rest.size(); ++e) {
+    const Mat3 F = edge_matrix(x, mesh.tets[e]) * rest[e].B;
+    const double logJ = std::log(F.determinant());
+    const double psi = 0.5 * mu * (F.squaredNorm() - 3.0) - mu * logJ + 0.5 * lambda * logJ * logJ;
+    energy += rest[e].W * psi;
+  }
+  for (size_t i = 0; i < x.size(); ++i)
+    energy += 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
+  return energy;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -147,7 +166,8 @@ int main(int argc, char** argv) {
     const double assembly_ms = clock.lap_ms();
     const CgResult result = cg.solve(a, b, v, cg_tol, cg_max);
     for (int i = 0; i < n; ++i) x[i] += h * v[i];
-    log.frame(frame, assembly_ms, clock.lap_ms(), result.iterations, result.residual);
+    const double energy = total_energy(mesh, rest, x, v, m, mu, lambda);
+    log.frame(frame, assembly_ms, clock.lap_ms(), energy, result);
   }
   log.summary();
   return finish(options, x) ? 0 : 1;

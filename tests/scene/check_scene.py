@@ -2,20 +2,29 @@
 """Runs a scene through `simit run` and checks what it wrote (a ctest; stdlib only).
 
 check_scene.py SIMIT SCENE OUTDIR FRAMES [--baseline EXE MESH] [--baseline-arg A]... [--rtol R]
+               [--energy-rtol ER] [--energy-atol EA]
 
 Runs SCENE for FRAMES frames into OUTDIR, then checks: the .pvd lists frames 0..FRAMES, every
 .vtu it names exists, has the mesh's point count and only finite point coordinates; the
 last frame's points equal the --final-csv positions. With --baseline, runs EXE --csv FILE
 MESH FRAMES (a hand-written baseline) and compares its final positions with simit's to
 relative tolerance R (|a - b| <= R * max|b| per coordinate); each --baseline-arg is passed
-to EXE before its other arguments (e.g. --cg-tol 1e-24).
+to EXE before its other arguments (e.g. --cg-tol 1e-24). It also compares the total energy
+of every frame: the baseline prints it on its frame lines ("frame N: ..., energy E") and
+simit writes the program's `energy` statistic to the scene's [output] csv; they must agree
+to |a - b| <= ER * |b| + EA (defaults 1e-9 and 0). A scene without an [output] csv has no
+energies to compare: the check says so and leaves them out. EA is for totals that are a near
+cancellation (the falling cloth's kinetic and gravitational energy), where |b| measures the
+cancellation rather than the size of the terms that were rounded.
 """
+import csv
 import math
 import os
 import re
 import struct
 import subprocess
 import sys
+import tomllib
 
 
 def fail(msg):
@@ -48,6 +57,47 @@ def read_csv(path):
     return [tuple(float(v) for v in r.split(",")) for r in rows[1:]]
 
 
+def stats_csv_name(scene):
+    with open(scene, "rb") as f:
+        return tomllib.load(f).get("output", {}).get("csv")
+
+
+def simit_energies(scene, outdir):
+    """The energy column of the per-frame statistics CSV that SCENE's [output] csv names."""
+    with open(os.path.join(outdir, stats_csv_name(scene))) as f:
+        rows = list(csv.DictReader(f))
+    if rows and "energy" not in rows[0]:
+        fail("%s has no energy column" % name)
+    return [float(r["energy"]) for r in rows]
+
+
+FRAME_ENERGY = re.compile(r"^frame (\d+): .*, energy (\S+)$")
+
+
+def baseline_energies(stdout):
+    """The energies of the baseline's frame lines, in frame order."""
+    found = [m for m in map(FRAME_ENERGY.match, stdout.splitlines()) if m]
+    if [int(m.group(1)) for m in found] != list(range(1, len(found) + 1)):
+        fail("the baseline's frame lines are not frames 1, 2, ... in order")
+    return [float(m.group(2)) for m in found]
+
+
+def compare_energies(simit_e, base_e, frames, rtol, atol):
+    if len(simit_e) != frames or len(base_e) != frames:
+        fail("energies of %d frames expected: simit wrote %d, the baseline printed %d"
+             % (frames, len(simit_e), len(base_e)))
+    worst_abs = worst_rel = 0.0
+    for k, (a, b) in enumerate(zip(simit_e, base_e)):
+        bound = rtol * abs(b) + atol
+        if not abs(a - b) <= bound:
+            fail("frame %d: simit's energy %.17g, the baseline's %.17g (|a - b| = %.3e > %.3e)"
+                 % (k + 1, a, b, abs(a - b), bound))
+        worst_abs = max(worst_abs, abs(a - b))
+        worst_rel = max(worst_rel, abs(a - b) / abs(b) if b else 0.0)
+    print("energy over %d frames: max |simit - baseline| = %.3e, relative %.3e "
+          "(tolerance %.1e relative + %.1e)" % (frames, worst_abs, worst_rel, rtol, atol))
+
+
 def main():
     args = sys.argv[1:]
     baseline = None
@@ -64,6 +114,15 @@ def main():
     if "--rtol" in args:
         i = args.index("--rtol")
         rtol = float(args[i + 1])
+        del args[i:i + 2]
+    energy_rtol, energy_atol = 1e-9, 0.0
+    if "--energy-rtol" in args:
+        i = args.index("--energy-rtol")
+        energy_rtol = float(args[i + 1])
+        del args[i:i + 2]
+    if "--energy-atol" in args:
+        i = args.index("--energy-atol")
+        energy_atol = float(args[i + 1])
         del args[i:i + 2]
     simit, scene, outdir, frames = args[0], args[1], args[2], int(args[3])
     os.makedirs(outdir, exist_ok=True)
@@ -93,7 +152,9 @@ def main():
         base_csv = os.path.join(outdir, "baseline.csv")
         cmd = [exe] + baseline_args + ["--csv", base_csv, mesh, str(frames)]
         print(" ".join(cmd), flush=True)
-        if subprocess.call(cmd) != 0:
+        run = subprocess.run(cmd, stdout=subprocess.PIPE, text=True)
+        print(run.stdout, end="", flush=True)
+        if run.returncode != 0:
             fail("the baseline failed")
         ref = read_csv(base_csv)
         if len(ref) != len(final):
@@ -103,6 +164,11 @@ def main():
         print("max |simit - baseline| / max|baseline| = %.3e (tolerance %.1e)" % (worst, rtol))
         if not worst <= rtol:
             fail("simit and the baseline differ")
+        if not stats_csv_name(scene):
+            print("energy: not compared, %s writes no statistics ([output] csv)" % scene)
+            return
+        compare_energies(simit_energies(scene, outdir), baseline_energies(run.stdout), frames,
+                         energy_rtol, energy_atol)
 
 
 main()
