@@ -162,6 +162,7 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
           patterns_.assembled(*ctx->target->set, set_of(t.dims[0]), set_of(t.dims[1]));
       const runtime::BlockDims bd = runtime::block_dims(block);
       AssemblyPlan::Result& pr = plan.results[ctx->blocks.size() - 1];
+      pr.block = block;
       if (offer && pr.hook_allocates && pr.pattern == pattern) {
         pr.is_matrix = true;
         slot = Value::of_matrix(nullptr);

@@ -11,6 +11,7 @@
 #include "interp/runtime_error.h"
 #include "jit/decompose_call.h"
 #include "jit/pruned_matrix.h"
+#include "jit/specialise.h"
 
 namespace simit::jit {
 
@@ -21,6 +22,15 @@ struct TraceController::Entry {
   TracedSite traced;
   std::unique_ptr<Kernel> kernel;
   TraceStats stats;
+  // Per result: its specialised pattern (jit/specialise.h) and the last matrix made on it
+  // (reused, zeroed, when the program has dropped it); `off` once a write fell outside.
+  struct Special {
+    std::optional<SpecialisedPattern> pattern;
+    std::shared_ptr<runtime::SystemMatrix> last;
+    bool off = false;
+  };
+  std::vector<Special> special;
+  int outside = 0;  // calls stopped by a write outside a specialised pattern
 };
 
 struct TraceController::SiteState {
@@ -140,7 +150,7 @@ std::string element_note(const interp::SiteCall& call, int element) {
 
 void zero_results(interp::SiteCall& call) {
   for (Value& r : call.results) {
-    if (r.kind() == Value::Kind::Matrix && r.matrix()) r.matrix()->set_zero();
+    if (r.kind() == Value::Kind::Matrix && r.matrix()) r.matrix()->set_zero();  // null: made later
     if (r.is_tensor()) {
       runtime::Tensor& t = r.tensor();
       if (t.kind() == runtime::ComponentKind::Float) t.fill(0, t.size(), 0.0);
@@ -233,8 +243,55 @@ bool TraceController::run_site(interp::SiteCall& call) {
   return done;
 }
 
+// The matrix results: on the specialised pattern where there is one, otherwise on the full
+// one (made here when the interpreter left it to the hook). Returns the tables to use.
+std::vector<const int32_t*> TraceController::prepare_results(Entry& e, interp::SiteCall& call) {
+  e.special.resize(call.results.size());
+  std::vector<const int32_t*> tables(call.results.size(), nullptr);
+  for (size_t i = 0; i < call.results.size(); ++i) {
+    interp::AssemblyPlan::Result& r = call.plan.results[i];
+    if (!r.is_matrix || !r.pattern) continue;
+    Entry::Special& s = e.special[i];
+    const runtime::BlockDims bd = runtime::block_dims(r.block);
+    const bool special = s.pattern && s.pattern->full == r.pattern;
+    const runtime::PatternPtr& pattern = special ? s.pattern->pattern : r.pattern;
+    if (special || !call.results[i].matrix()) {
+      if (s.last && s.last.use_count() == 1 && s.last->shared_pattern() == pattern) {
+        s.last->set_zero();
+      } else {
+        s.last = std::make_shared<runtime::SystemMatrix>(pattern, bd.rows, bd.cols,
+                                                         runtime::ComponentKind::Float);
+      }
+      call.results[i] = Value::of_matrix(s.last);
+    }
+    tables[i] = special ? s.pattern->table.data() : r.pattern->assembly().table.data();
+  }
+  return tables;
+}
+
+// After a run on the full pattern: specialise each matrix result whose zero blocks are worth
+// leaving out.
+void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
+  const Trace& t = *e.traced.trace;
+  if (options_.check || t.writes_fields || t.outside_error < 0 || options_.float32) return;
+  for (size_t i = 0; i < call.results.size(); ++i) {
+    interp::AssemblyPlan::Result& r = call.plan.results[i];
+    Entry::Special& s = e.special[i];
+    if (!r.is_matrix || s.off || (s.pattern && s.pattern->full == r.pattern)) continue;
+    const Value& v = call.results[i];
+    if (!v.matrix() || v.matrix()->shared_pattern() != r.pattern) continue;
+    s.pattern = specialise(*v.matrix(), kSpecialiseAtMost);
+    if (!s.pattern) {
+      s.off = true;  // nearly every block is written: nothing to gain
+      continue;
+    }
+    r.hook_allocates = true;
+  }
+}
+
 bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   const Trace& t = *e.traced.trace;
+  const std::vector<const int32_t*> tables = prepare_results(e, call);
   std::vector<void*> arrays(t.arrays.size(), nullptr);
   // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
   // pointers read afterwards then see the copy.
@@ -263,10 +320,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
             return false;
           break;
         }
-        case ArraySlot::Kind::Table:
-          arrays[i] =
-              const_cast<int32_t*>(call.plan.results[a.index].pattern->assembly().table.data());
-          break;
+        case ArraySlot::Kind::Table: arrays[i] = const_cast<int32_t*>(tables[a.index]); break;
       }
     }
   std::vector<double> scalars;
@@ -283,9 +337,29 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     const int32_t rc = e.kernel->fn(arrays.data(), scalars.data(), endpoints, begin, end, &failed);
     if (rc != 0) {
       const ErrorSite& err = t.errors[static_cast<size_t>(rc - 1)];
+      if (rc - 1 == t.outside_error) {
+        // A block left out of a specialised pattern was written: the full patterns from now
+        // on, and the interpreter makes and fills them this time.
+        ++e.outside;
+        for (size_t i = 0; i < call.results.size(); ++i) {
+          Entry::Special& s = e.special[i];
+          if (!s.pattern) continue;
+          s.pattern.reset();
+          s.last.reset();
+          s.off = true;
+          call.plan.results[i].hook_allocates = false;
+          call.results[i] = Value::of_matrix(nullptr);
+        }
+        zero_results(call);
+        return false;
+      }
       if (!t.writes_fields) {
         // Nothing but the results changed: the interpreter runs the site again from zero
-        // and reports the error in its own words, with its call stack.
+        // and reports the error in its own words, with its call stack (on full patterns).
+        for (size_t i = 0; i < call.results.size(); ++i)
+          if (call.plan.results[i].is_matrix && call.results[i].matrix() &&
+              call.results[i].matrix()->shared_pattern() != call.plan.results[i].pattern)
+            call.results[i] = Value::of_matrix(nullptr);
         zero_results(call);
         return false;
       }
@@ -300,6 +374,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
       throw interp::Interrupted(call.at, "interrupted");
     }
   }
+  specialise_results(e, call);
   return true;
 }
 
@@ -618,7 +693,27 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter&
 std::vector<TraceStats> TraceController::stats() const {
   std::vector<TraceStats> out;
   for (const auto& [site, s] : sites_)
-    for (const auto& [key, e] : s->kernels) out.push_back(e->stats);
+    for (const auto& [key, e] : s->kernels) {
+      out.push_back(e->stats);
+      for (size_t i = 0; i < e->special.size(); ++i) {
+        const Entry::Special& sp = e->special[i];
+        char note[160];
+        if (sp.pattern) {
+          std::snprintf(note, sizeof note,
+                        "; result %zu specialised to %.1f%% of its blocks (%lld of %lld, built in "
+                        "%.2f ms)",
+                        i,
+                        100.0 * static_cast<double>(sp.pattern->kept) /
+                            static_cast<double>(std::max<int64_t>(sp.pattern->total, 1)),
+                        static_cast<long long>(sp.pattern->kept),
+                        static_cast<long long>(sp.pattern->total), sp.pattern->build_ms);
+          out.back().note += note;
+        }
+      }
+      if (e->outside > 0)
+        out.back().note += "; a write outside the specialised pattern: full patterns since (" +
+                           std::to_string(e->outside) + " call" + (e->outside > 1 ? "s" : "") + ")";
+    }
   for (const auto& [loop, s] : loops_)
     for (const auto& e : s->entries) out.push_back(e->stats);
   return out;

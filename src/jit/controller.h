@@ -71,6 +71,8 @@ class TraceController : public interp::SiteHook {
   LoopEntry* loop_entry_for(const frontend::ast::While& loop, interp::Interpreter& in);
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
+  std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call);
+  void specialise_results(Entry& e, interp::SiteCall& call);
 
   struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit
   bool check_site(Entry& e, interp::SiteCall& call);

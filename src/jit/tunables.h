@@ -22,6 +22,9 @@ inline constexpr int kChunkElements = 16384;
 inline constexpr int kOptLevel = 2;
 inline constexpr size_t kLargeTrace = 4000;
 inline constexpr int kLargeTraceOptLevel = 1;
+// A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
+// keeps at most this fraction of them.
+inline constexpr double kSpecialiseAtMost = 0.9;
 // Products by zeros known while tracing fold away (jit/zero_fold.h).
 inline constexpr bool kFoldZeros = true;
 
