@@ -286,6 +286,7 @@ void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
       continue;
     }
     r.hook_allocates = true;
+    r.last.reset();  // the full matrix lives on only while the program holds this call's result
   }
 }
 
