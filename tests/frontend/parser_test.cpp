@@ -456,7 +456,8 @@ TEST(ParserStatements, AssignmentsAndExpressionStatements) {
 }
 
 TEST(ParserStatements, ErrorStatementTakesPrintsArgumentsAndIsAKeyword) {
-  auto p = parse_ok("func f(x : float)\n  if x < 0.0\n    error \"x = \", x, \" < 0\";\n  end\nend\n");
+  auto p =
+      parse_ok("func f(x : float)\n  if x < 0.0\n    error \"x = \", x, \" < 0\";\n  end\nend\n");
   const auto* e = p->body()[0]->as<If>()->branches[0][0]->as<Print>();
   ASSERT_NE(e, nullptr);
   EXPECT_TRUE(e->is_error());
@@ -464,8 +465,9 @@ TEST(ParserStatements, ErrorStatementTakesPrintsArgumentsAndIsAKeyword) {
   EXPECT_EQ(e->args.size(), 3u);
   EXPECT_EQ(e->span.start().line, 3);
   EXPECT_EQ(e->span.start().column, 5);
-  EXPECT_EQ(print_source(*p->program).find("    error \"x = \", x, \" < 0\";\n") != std::string::npos,
-            true);
+  EXPECT_EQ(
+      print_source(*p->program).find("    error \"x = \", x, \" < 0\";\n") != std::string::npos,
+      true);
   // Like print, at least one argument; and `error` is no longer a name.
   EXPECT_EQ(first_error_at("func f()\n  error;\nend"), "2:8");
   EXPECT_EQ(first_error_at("func f()\n  var error = 1;\nend"), "2:7");
