@@ -706,7 +706,7 @@ TEST(Jit, ErrorStatementsAreReportedInTheInterpretersWords) {
     std::istringstream lines(jit.stats);
     bool map_seen = false;
     for (std::string line; std::getline(lines, line);)
-      if (line.find("checked (line 7)") != std::string::npos) {
+      if (line.find("checked (line 22)") != std::string::npos) {
         map_seen = true;
         EXPECT_EQ(line.find("interpreted"), std::string::npos) << jit.stats;
       }
