@@ -432,11 +432,16 @@ struct ForSet : Stmt {
   const Variable* domain_var = nullptr;  // the set or generic parameter
 };
 
+// `print`, `println` and `error` (docs/error_statement.md) share their argument list: an
+// error statement formats its message exactly as println would print it, then stops the run.
 struct Print : Stmt {
   SIMIT_NODE_KIND(Print)
+  enum class Mode { Print, Println, Error };
   explicit Print(SourceSpan s) : Stmt(kKind, s) {}
-  bool newline = false;
+  Mode mode = Mode::Print;
   std::vector<ExprPtr> args;
+  bool newline() const { return mode != Mode::Print; }
+  bool is_error() const { return mode == Mode::Error; }
 };
 
 struct Apply : Stmt {

@@ -325,7 +325,8 @@ class Dumper {
       case NodeKind::ForRange: return for_range(*s.as<ForRange>());
       case NodeKind::ForSet: return for_set(*s.as<ForSet>());
       case NodeKind::Print: {
-        line(s.as<Print>()->newline ? "Print newline" : "Print", s.span);
+        static const char* const names[] = {"Print", "Print newline", "Print error"};
+        line(names[static_cast<int>(s.as<Print>()->mode)], s.span);
         Nest n(*this);
         return exprs(s.as<Print>()->args);
       }

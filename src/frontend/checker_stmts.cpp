@@ -274,11 +274,16 @@ void Checker::check_for_set(ast::ForSet& f) {
   scopes_.pop();
 }
 
+// An error statement's arguments follow print's rules: its message is what println prints.
 void Checker::check_print(ast::Print& p) {
+  const bool err = p.is_error();
   for (auto& a : p.args) {
-    TypeRef t = a ? check_value(*a, "a print argument") : nullptr;
+    TypeRef t = a ? check_value(*a, err ? "an error argument" : "a print argument") : nullptr;
     if (t && !t->is_tensor())
-      error(SemanticKind::Type, a->span, "cannot print an expression of type " + quoted(*t));
+      error(SemanticKind::Type, a->span,
+            std::string(err ? "cannot show an expression of type " + quoted(*t) +
+                                  " in an error message"
+                            : "cannot print an expression of type " + quoted(*t)));
   }
 }
 

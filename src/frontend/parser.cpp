@@ -129,6 +129,7 @@ bool starts_statement(TokenKind k) {
     case TokenKind::KwFor:
     case TokenKind::KwPrint:
     case TokenKind::KwPrintln:
+    case TokenKind::KwError:
     case TokenKind::KwApply: return true;
     default: return false;
   }

@@ -55,7 +55,8 @@ StmtPtr Parser::parse_stmt() {
     case TokenKind::KwDo: return parse_do_while();
     case TokenKind::KwFor: return parse_for();
     case TokenKind::KwPrint:
-    case TokenKind::KwPrintln: return parse_print();
+    case TokenKind::KwPrintln:
+    case TokenKind::KwError: return parse_print();
     case TokenKind::KwApply: return parse_apply();
     case TokenKind::Semicolon: advance(); return nullptr;  // the empty statement
     default: return parse_expr_or_assign();
@@ -210,11 +211,15 @@ StmtPtr Parser::parse_for_range(size_t start, const Token& var) {
   return stmt;
 }
 
-// print_stmt = ( "print" | "println" ) expr { "," expr } ";" ;
+// print_stmt = ( "print" | "println" | "error" ) expr { "," expr } ";" ;
 StmtPtr Parser::parse_print() {
   size_t start = pos_;
   auto stmt = std::make_unique<Print>(peek().span);
-  stmt->newline = advance().kind == TokenKind::KwPrintln;
+  switch (advance().kind) {
+    case TokenKind::KwPrintln: stmt->mode = Print::Mode::Println; break;
+    case TokenKind::KwError: stmt->mode = Print::Mode::Error; break;
+    default: stmt->mode = Print::Mode::Print; break;
+  }
   do {
     stmt->args.push_back(parse_expr());
   } while (accept(TokenKind::Comma));

@@ -354,7 +354,8 @@ class SourcePrinter {
       }
       case NodeKind::Print: {
         const auto* p = s.as<Print>();
-        return line((p->newline ? "println " : "print ") + list(p->args) + ";");
+        static const char* const keywords[] = {"print ", "println ", "error "};
+        return line(keywords[static_cast<int>(p->mode)] + list(p->args) + ";");
       }
       case NodeKind::Apply: return line("apply " + assembly(s.as<Apply>()->assembly) + ";");
       default: return line("?;");

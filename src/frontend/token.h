@@ -18,8 +18,9 @@ namespace simit::frontend {
   X(KwMap, "map") X(KwTo, "to") X(KwReduce, "reduce") X(KwThrough, "through")         \
   X(KwApply, "apply") X(KwIf, "if") X(KwElif, "elif") X(KwElse, "else")               \
   X(KwWhile, "while") X(KwDo, "do") X(KwFor, "for") X(KwIn, "in") X(KwEnd, "end")     \
-  X(KwPrint, "print") X(KwPrintln, "println") X(KwAnd, "and") X(KwOr, "or")           \
-  X(KwNot, "not") X(KwXor, "xor") X(KwTrue, "true") X(KwFalse, "false")               \
+  X(KwPrint, "print") X(KwPrintln, "println") X(KwError, "error")                     \
+  X(KwAnd, "and") X(KwOr, "or") X(KwNot, "not") X(KwXor, "xor") X(KwTrue, "true")     \
+  X(KwFalse, "false")                                                                 \
   X(KwWith, "with") X(KwReturn, "return") X(KwNew, "new") X(KwDelete, "delete")
 
 #define SIMIT_PUNCT_TOKENS(X)                                                         \

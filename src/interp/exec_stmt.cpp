@@ -1,5 +1,6 @@
 // Statement execution: one dispatch over the statement kinds, and the trap point.
 #include <iostream>
+#include <sstream>
 
 #include "interp/frame.h"
 #include "interp/hook.h"
@@ -191,14 +192,18 @@ void Interpreter::exec_for_set(const ast::ForSet& s) {
   }
 }
 
+// An error statement builds its whole message first, so that an argument that fails to
+// evaluate reports its own error and nothing is half-printed.
 void Interpreter::exec_print(const ast::Print& p) {
-  std::ostream& out = options_.out ? *options_.out : std::cout;
+  std::ostringstream message;
+  std::ostream& out = p.is_error() ? message : options_.out ? *options_.out : std::cout;
   for (const auto& arg : p.args) {
     Value v = eval_root(*arg);
     const Type& t = *arg->type;
     print_value(out, v, t.kind == Type::Kind::Tensor && t.dims.size() == 1 && t.row);
   }
-  if (p.newline) out << "\n";
+  if (p.is_error()) fail(p.span, message.str());
+  if (p.newline()) out << "\n";
 }
 
 }  // namespace simit::interp

@@ -84,8 +84,10 @@ class SystemTracer {
         for (const auto& t : a->targets) expr(*t);
         expr(*a->value);
       } else {
-        give_up(s->span,
-                std::string(ast::node_kind_name(s->kind)) + " statements in a compiled loop");
+        // An error statement stays interpreted: only the interpreter can format its message.
+        const auto* p = s->as<ast::Print>();
+        give_up(s->span, std::string(p && p->is_error() ? "error" : ast::node_kind_name(s->kind)) +
+                             " statements in a compiled loop");
       }
     }
     // Vectors first assigned in the loop borrow the shape of a vector of the same type.

@@ -398,6 +398,7 @@ class Tracer {
   void exec_if(const ast::If& s);
   void exec_if_from(const ast::If& s, size_t first);
   void exec_for(const ast::ForRange& s);
+  void exec_error(const SourceSpan& at);
   void assign(const ast::Expr& target, Sym value, const SourceSpan& at);
   void bind(const ast::Variable& v, Sym value, const SourceSpan& at);
   void assign_result(const ast::TensorRead& r, const ast::TensorRead* component, Sym value,
@@ -419,6 +420,7 @@ class Tracer {
   std::unordered_set<int> loose_locals_;  // locals set to a loose value (jit/zero_fold.h)
   bool fold_ = false, fold_failed_ = false;
   int next_block_ = 1;
+  SourceSpan error_at_;  // the first error statement traced
   std::map<std::tuple<int, int, int>, CachedLoad> loads_;
   size_t statements_ = 0;
   int inline_depth_ = 0;
@@ -995,9 +997,26 @@ void Tracer::exec(const ast::Stmt& s) {
     }
     case ast::NodeKind::If: return exec_if(static_cast<const ast::If&>(s));
     case ast::NodeKind::ForRange: return exec_for(static_cast<const ast::ForRange&>(s));
+    case ast::NodeKind::Print:
+      if (static_cast<const ast::Print&>(s).is_error()) return exec_error(s.span);
+      break;
     default: break;
   }
   give_up(s.span, std::string(ast::node_kind_name(s.kind)) + " statements are not compiled");
+}
+
+// An error statement is a check that always fails: the controller then runs the site again in
+// the interpreter, which formats the message and reports it with its call stack. Its arguments
+// are not traced, since compiled code never shows them.
+void Tracer::exec_error(const SourceSpan& at) {
+  if (!error_at_.valid()) error_at_ = at;
+  trace_.errors.push_back({at, "an error statement (reported by the interpreter)"});
+  Stmt check;
+  check.kind = StmtKind::Check;
+  check.value = iconst(0, Ty::Bool);
+  check.error = static_cast<int>(trace_.errors.size() - 1);
+  check.span = at;
+  emit(std::move(check));
 }
 
 void Tracer::exec_for(const ast::ForRange& s) {
@@ -1349,6 +1368,10 @@ TracedSite Tracer::run() {
       trace_.outside_error = static_cast<int>(trace_.errors.size() - 1);
     }
     exec_block(f.body);
+    // A failed check makes the interpreter run the site again, which must not see the
+    // fields this trace has already written.
+    if (error_at_.valid() && trace_.writes_fields)
+      give_up(error_at_, "error statements in an apply with inout fields are not compiled");
     if (fold_)
       if (auto check = folding.close(trace_.errors, site.func_span))
         trace_.body.push_back(std::move(*check));

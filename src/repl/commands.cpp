@@ -35,13 +35,13 @@ const CommandHelp kCommands[] = {
     {"quit", ":quit", "leave (Ctrl-D too)"},
 };
 
-// The intrinsics, from the frontend's own list, and the print statements.
+// The intrinsics, from the frontend's own list, and the print and error statements.
 const char* const kIntrinsics[] = {
 #define SIMIT_INTRINSIC_NAME(id, name) name,
     SIMIT_INTRINSICS(SIMIT_INTRINSIC_NAME)
 #undef SIMIT_INTRINSIC_NAME
         "print",
-    "println"};
+    "println", "error"};
 
 const char* const kHelpIntro =
     "Enter declarations (element, extern, func, const) or statements; an expression without a\n"

@@ -450,9 +450,27 @@ TEST(ParserStatements, AssignmentsAndExpressionStatements) {
   EXPECT_TRUE(map->reduce);
   EXPECT_TRUE(b[3]->as<ExprStmt>()->expr->is<Map>());
   EXPECT_EQ(b[4]->as<Print>()->args.size(), 2u);
-  EXPECT_TRUE(b[5]->as<Print>()->newline);
+  EXPECT_TRUE(b[5]->as<Print>()->newline());
   EXPECT_EQ(first_error_at("func f()\n  a, b = b, a;\nend"), "2:11");
   EXPECT_EQ(first_error_at("func f()\n  print \"a\" \"\\n\";\nend"), "2:13");
+}
+
+TEST(ParserStatements, ErrorStatementTakesPrintsArgumentsAndIsAKeyword) {
+  auto p =
+      parse_ok("func f(x : float)\n  if x < 0.0\n    error \"x = \", x, \" < 0\";\n  end\nend\n");
+  const auto* e = p->body()[0]->as<If>()->branches[0][0]->as<Print>();
+  ASSERT_NE(e, nullptr);
+  EXPECT_TRUE(e->is_error());
+  EXPECT_TRUE(e->newline());
+  EXPECT_EQ(e->args.size(), 3u);
+  EXPECT_EQ(e->span.start().line, 3);
+  EXPECT_EQ(e->span.start().column, 5);
+  EXPECT_EQ(
+      print_source(*p->program).find("    error \"x = \", x, \" < 0\";\n") != std::string::npos,
+      true);
+  // Like print, at least one argument; and `error` is no longer a name.
+  EXPECT_EQ(first_error_at("func f()\n  error;\nend"), "2:8");
+  EXPECT_EQ(first_error_at("func f()\n  var error = 1;\nend"), "2:7");
 }
 
 TEST(ParserStatements, MapAndApply) {

@@ -233,6 +233,38 @@ TEST(Print, TensorLayouts) {
             "(0)(0) 0\n(0)(1) 0\n(1)(0) 3\n(1)(1) 4");
 }
 
+// An error statement formats its message as println would, writes nothing to the output and
+// stops before the next statement.
+TEST(ErrorStatement, StopsWithThePrintedTextAsItsMessage) {
+  auto c = compile(
+      "func p(n : int)\n"
+      "  println \"before\";\n"
+      "  if n > 2\n"
+      "    error \"n = \", n, \", v = \", [1.5, -2.0], \", w =\\n\", [1.0, 2.0]';\n"
+      "  end\n"
+      "  println \"after\";\n"
+      "end\n",
+      "err.sim");
+  std::ostringstream out;
+  Options o;
+  o.out = &out;
+  Interpreter in(*c->program, o);
+  in.call(func(*c, "p"), {Value::of_int(1)});
+  EXPECT_EQ(out.str(), "before\nafter\n");
+  out.str("");
+  try {
+    in.call(func(*c, "p"), {Value::of_int(3)});
+    FAIL() << "expected a run-time error";
+  } catch (const RuntimeError& e) {
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.where().start().column, 5);
+    EXPECT_EQ(e.message(), "n = 3, v = 1.5 -2, w =\n1\n2");
+    EXPECT_EQ(e.render(),
+              "err.sim:4:5: runtime error: n = 3, v = 1.5 -2, w =\n1\n2\n  in p (err.sim:4)\n");
+  }
+  EXPECT_EQ(out.str(), "before\n");
+}
+
 class CountingHook : public StatementHook {
  public:
   void before_statement(const frontend::ast::Stmt& stmt, const frontend::ast::FuncDecl& func,

@@ -679,6 +679,113 @@ TEST(Jit, CheckFiniteIsCompiledAndStopsWhereTheInterpreterStops) {
       << messages[1][1];
 }
 
+// Error statements: a map compiles one as a check that always fails, so the interpreter runs
+// the site again and reports it; an apply that writes fields stays interpreted.
+const char* const kErrorStatements = R"(element P
+  a : float;
+  b : float;
+end
+extern ps : set{P};
+
+func checked(p : P) -> r : vector[ps](float)
+  if p.a < 0.0
+    error "a = ", p.a, " < 0";
+  end
+  r(p) = 2.0 * p.a;
+end
+
+func guarded(inout p : P)
+  p.b = 3.0 * p.a;
+  if p.a < 0.0
+    error "a = ", p.a, " < 0 in an apply";
+  end
+end
+
+export func map_it() -> (r : vector[ps](float))
+  r = map checked to ps reduce +;
+end
+
+export func apply_it()
+  apply guarded to ps;
+end
+)";
+
+struct ErrorRun {
+  std::string messages[2];
+  std::vector<double> r, b;
+  std::string stats;
+};
+
+ErrorRun run_errors(ExecutorKind kind, bool bad) {
+  auto compiled = CompiledProgram::from_source("errors.sim", kErrorStatements);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set ps("ps");
+  ps.add_many(5);
+  ps.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < 5; ++i) ps.field(0).at<double>(i)[0] = bad && i == 3 ? -1.5 : 0.25 * i;
+  EngineOptions o;
+  o.executor = kind;
+  o.jit.threshold = 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  ErrorRun run;
+  for (int f = 0; f < 2; ++f) {
+    try {
+      std::vector<Value> res = engine.call(*compiled->find_func(f ? "apply_it" : "map_it"), {});
+      if (!f) run.r.assign(res[0].tensor().floats(), res[0].tensor().floats() + 5);
+    } catch (const interp::RuntimeError& e) {
+      run.messages[f] = e.render();
+    }
+  }
+  for (int i = 0; i < 5; ++i) run.b.push_back(ps.field(1).at<double>(i)[0]);
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  run.stats = os.str();
+  return run;
+}
+
+TEST(Jit, ErrorStatementsAreReportedInTheInterpretersWords) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  for (bool bad : {false, true}) {
+    const ErrorRun in = run_errors(ExecutorKind::Interpreter, bad);
+    const ErrorRun jit = run_errors(ExecutorKind::Jit, bad);
+    for (int f = 0; f < 2; ++f) EXPECT_EQ(in.messages[f], jit.messages[f]) << f;
+    EXPECT_EQ(in.r, jit.r);
+    EXPECT_EQ(in.b, jit.b);
+    // The map is compiled; the apply is not, and says why.
+    std::istringstream lines(jit.stats);
+    bool map_seen = false;
+    for (std::string line; std::getline(lines, line);)
+      if (line.find("checked (line 22)") != std::string::npos) {
+        map_seen = true;
+        EXPECT_EQ(line.find("interpreted"), std::string::npos) << jit.stats;
+      }
+    EXPECT_TRUE(map_seen) << jit.stats;
+    EXPECT_NE(jit.stats.find("interpreted: error statements in an apply with inout fields are "
+                             "not compiled (line 17)"),
+              std::string::npos)
+        << jit.stats;
+    if (!bad) {
+      EXPECT_EQ(jit.r, (std::vector<double>{0.0, 0.5, 1.0, 1.5, 2.0}));
+      EXPECT_EQ(jit.b, (std::vector<double>{0.0, 0.75, 1.5, 2.25, 3.0}));
+      EXPECT_EQ(jit.messages[0], "");
+      EXPECT_EQ(jit.messages[1], "");
+      continue;
+    }
+    EXPECT_EQ(jit.messages[0],
+              "errors.sim:9:5: runtime error: a = -1.5 < 0\n"
+              "  in checked (errors.sim:9), mapping over element 3 of set 'ps'\n"
+              "  in map_it (errors.sim:22)\n");
+    EXPECT_EQ(jit.messages[1],
+              "errors.sim:17:5: runtime error: a = -1.5 < 0 in an apply\n"
+              "  in guarded (errors.sim:17), mapping over element 3 of set 'ps'\n"
+              "  in apply_it (errors.sim:26)\n");
+    // The apply stopped at element 3, which had already written its b.
+    EXPECT_EQ(jit.b, (std::vector<double>{0.0, 0.75, 1.5, -4.5, 0.0}));
+  }
+}
+
 // ---------------------------------------------------------------------------
 // Zero folding (jit/zero_fold.h)
 

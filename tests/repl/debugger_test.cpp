@@ -35,9 +35,9 @@ const char* const kFileB =
 
 class DebugRun {
  public:
-  explicit DebugRun(std::vector<std::string> script)
+  explicit DebugRun(std::vector<std::string> script, const char* file_b = kFileB)
       : script_(script.begin(), script.end()),
-        c_(frontend::compile_source("<repl>", std::string(kFileA) + kFileB)),
+        c_(frontend::compile_source("<repl>", std::string(kFileA) + file_b)),
         debugger_(out_, out_, [this](const std::string&) -> std::optional<std::string> {
           if (script_.empty()) return std::nullopt;
           std::string line = script_.front();
@@ -136,6 +136,34 @@ TEST(Debugger, BreaksAndReportsInTheRealFilesOfAConcatenatedSource) {
       "r = 0.0\n"
       "s = 9.0\n"
       "> continue\n";
+  EXPECT_EQ(s.output(), want);
+}
+
+// The debugger stops on an error statement like any other; continuing raises the error.
+TEST(Debugger, StepsOntoAnErrorStatement) {
+  const char* const file_b =
+      "% b.sim\n"                                   // b.sim:1
+      "export func main(a : float) -> r : float\n"  // b.sim:2
+      "  r = sq(a);\n"                              // b.sim:3
+      "  if r > 4.0\n"                              // b.sim:4
+      "    error \"r = \", r, \" > 4\";\n"          // b.sim:5
+      "  end\n"                                     // b.sim:6
+      "end\n";                                      // b.sim:7
+  DebugRun s({"break b.sim:4", "run", "step", "print r", "continue"}, file_b);
+  EXPECT_TRUE(std::isnan(s.run_until_done()));
+  EXPECT_FALSE(s.killed());
+  const std::string want =
+      "> break b.sim:4\n"
+      "Breakpoint 1 at main, b.sim:4\n"
+      "> run\n"
+      "Breakpoint 1, main at b.sim:4\n"
+      "4\t  if r > 4.0\n"
+      "> step\n"
+      "5\t    error \"r = \", r, \" > 4\";\n"
+      "> print r\n"
+      "r = 9.0\n"
+      "> continue\n"
+      "[r = 9 > 4]\n";
   EXPECT_EQ(s.output(), want);
 }
 
