@@ -135,6 +135,16 @@ class Emitter {
   // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
   void loop(Value* begin, Value* end, const std::function<void(Value*)>& body);
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  // Unless `ok` (expected true), the kernel returns error + 1 with the element in *failed.
+  void fail_unless(Value* ok, int error, const char* what) {
+    auto* fail = llvm::BasicBlock::Create(ctx_, std::string(what) + ".fail", fn_);
+    auto* cont = llvm::BasicBlock::Create(ctx_, std::string(what) + ".ok", fn_);
+    b_.CreateCondBr(ok, cont, fail, llvm::MDBuilder(ctx_).createLikelyBranchWeights());
+    b_.SetInsertPoint(fail);
+    b_.CreateStore(element_, failed_);
+    b_.CreateRet(b_.getInt32(error + 1));
+    b_.SetInsertPoint(cont);
+  }
   // The op's body for the `group` components of one run starting at `first` (an i64), its
   // sums taken over the run alone and then added to their totals.
   void run_of(const VectorOp& op, Value* first, int group);
@@ -294,17 +304,9 @@ void Emitter::stmt(const Stmt& s) {
             table = static_cast<int>(i);
         llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
         tag(pos, table);
-        if (t_->outside_error >= 0) {
-          // -1: the block was left out of the pattern the controller specialised to.
-          auto* outside = llvm::BasicBlock::Create(ctx_, "outside", fn_);
-          auto* inside = llvm::BasicBlock::Create(ctx_, "inside", fn_);
-          b_.CreateCondBr(b_.CreateICmpSLT(pos, b_.getInt32(0)), outside, inside,
-                          llvm::MDBuilder(ctx_).createUnlikelyBranchWeights());
-          b_.SetInsertPoint(outside);
-          b_.CreateStore(element_, failed_);
-          b_.CreateRet(b_.getInt32(t_->outside_error + 1));
-          b_.SetInsertPoint(inside);
-        }
+        // -1: the block was left out of the pattern the controller specialised to.
+        if (t_->outside_error >= 0)
+          fail_unless(b_.CreateICmpSGE(pos, b_.getInt32(0)), t_->outside_error, "outside");
         at = address(s.slot, pos, s.comp);
       } else {
         at = address(s.slot, expr(*s.index), s.comp);
@@ -334,17 +336,7 @@ void Emitter::stmt(const Stmt& s) {
       return;
     }
     case StmtKind::Decompose: return decompose(s);
-    case StmtKind::Check: {
-      Value* ok = expr(*s.value);
-      auto* fail = llvm::BasicBlock::Create(ctx_, "fail", fn_);
-      auto* cont = llvm::BasicBlock::Create(ctx_, "ok", fn_);
-      b_.CreateCondBr(ok, cont, fail, llvm::MDBuilder(ctx_).createLikelyBranchWeights());
-      b_.SetInsertPoint(fail);
-      b_.CreateStore(element_, failed_);
-      b_.CreateRet(b_.getInt32(s.error + 1));
-      b_.SetInsertPoint(cont);
-      return;
-    }
+    case StmtKind::Check: return fail_unless(expr(*s.value), s.error, "check");
   }
 }
 
@@ -364,14 +356,7 @@ void Emitter::decompose(const Stmt& s) {
   Value* rc = b_.CreateCall(
       ft, callee,
       {b_.getInt32(s.fn), b_.getInt32(s.n), b_.getInt32(t_ && t_->float32 ? 1 : 0), in, out});
-  auto* fail = llvm::BasicBlock::Create(ctx_, "decompose.fail", fn_);
-  auto* cont = llvm::BasicBlock::Create(ctx_, "decompose.ok", fn_);
-  b_.CreateCondBr(b_.CreateICmpEQ(rc, b_.getInt32(0)), cont, fail,
-                  llvm::MDBuilder(ctx_).createLikelyBranchWeights());
-  b_.SetInsertPoint(fail);
-  b_.CreateStore(element_, failed_);
-  b_.CreateRet(b_.getInt32(s.error + 1));
-  b_.SetInsertPoint(cont);
+  fail_unless(b_.CreateICmpEQ(rc, b_.getInt32(0)), s.error, "decompose");
   for (size_t i = 0; i < s.outs.size(); ++i) {
     Value* v = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, out, i));
     const int l = s.outs[i];
