@@ -516,6 +516,25 @@ def plot(plt, out, example):
     print("wrote %s" % path)
 
 
+
+def table_head(head):
+    """A markdown table's header and alignment rows (the first column left, numbers right)."""
+    return ["| " + " | ".join(head) + " |",
+            "|" + "|".join("---" if i == 0 else "---:" for i in range(len(head))) + "|"]
+
+
+def table_settings(rows):
+    """The (executor, shipped, value) settings of the rows: the JIT first, then the
+    interpreter; the shipped setting first within each, then by decreasing value."""
+    settings = []
+    for r in rows:
+        key = (r["executor"], bool(r["shipped"]), float(r["value"]))
+        if key not in settings:
+            settings.append(key)
+    order = {"jit": 0, "interpreter": 1}
+    settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
+    return settings
+
 def table(out, example):
     """The example's results as markdown (--table): per executor, a row per setting, the
     shipped one first, and for each precision ms/frame and the max relative error."""
@@ -526,15 +545,8 @@ def table(out, example):
     head = ["executor", example.param, "cg_max" if cg else "substeps"] + \
         (["CG it/frame", "rel. resid."] if cg else []) + \
         ["float64 ms/frame", "float64 error", "float32 ms/frame", "float32 error"]
-    lines = ["| " + " | ".join(head) + " |",
-             "|" + "|".join("---" if i == 0 else "---:" for i in range(len(head))) + "|"]
-    settings = []
-    for r in rows:
-        key = (r["executor"], bool(r["shipped"]), float(r["value"]))
-        if key not in settings:
-            settings.append(key)
-    order = {"jit": 0, "interpreter": 1}
-    settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
+    lines = table_head(head)
+    settings = table_settings(rows)
     for executor, shipped, value in settings:
         by_prec = {r["precision"]: r for r in rows if r["executor"] == executor and
                    bool(r["shipped"]) == shipped and float(r["value"]) == value}
@@ -570,15 +582,8 @@ def newton_table(out, example):
     for prec in PRECISIONS:
         head += ["%s %s" % (prec, c) for c in ("ms/frame", "Newton it/frame", "halvings/frame",
                                                 "CG it/frame", "error", "error of motion")]
-    lines = ["| " + " | ".join(head) + " |",
-             "|" + "|".join("---" if i == 0 else "---:" for i in range(len(head))) + "|"]
-    settings = []
-    for r in rows:
-        key = (r["executor"], bool(r["shipped"]), float(r["value"]))
-        if key not in settings:
-            settings.append(key)
-    order = {"jit": 0, "interpreter": 1}
-    settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
+    lines = table_head(head)
+    settings = table_settings(rows)
     for executor, shipped, value in settings:
         cells = [executor, ("**%.3g (shipped)**" if shipped else "%.3g") % value]
         for prec in PRECISIONS:
