@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "frontend/source.h"
 #include "jit/loop_ir.h"
@@ -21,6 +22,18 @@ struct GiveUp {
 }
 
 inline ExprRef make(Expr e) { return std::make_shared<const Expr>(std::move(e)); }
+
+// An operation node as it is (no folding, no looseness: jit/zero_fold.h).
+inline ExprRef node(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops,
+                    const frontend::SourceSpan& at = {}) {
+  Expr e;
+  e.kind = k;
+  e.ty = ty;
+  e.op = op;
+  e.ops = std::move(ops);
+  e.span = at;
+  return make(std::move(e));
+}
 
 inline ExprRef fconst(double v) {
   Expr e;

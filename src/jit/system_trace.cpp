@@ -18,15 +18,6 @@ using interp::Value;
 
 namespace {
 
-ExprRef node(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops, const SourceSpan& at) {
-  Expr e;
-  e.kind = k;
-  e.ty = ty;
-  e.op = op;
-  e.ops = std::move(ops);
-  e.span = at;
-  return make(std::move(e));
-}
 ExprRef local(int l, Ty ty) {
   Expr e;
   e.kind = ExprKind::Local;

@@ -18,15 +18,6 @@ bool exact_positive_zero(const ExprRef& e) {
   return is_zero(e) && !e->loose && !std::signbit(e->f);
 }
 
-ExprRef raw(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops) {
-  Expr e;
-  e.kind = k;
-  e.ty = ty;
-  e.op = op;
-  e.ops = std::move(ops);
-  return make(std::move(e));
-}
-
 }  // namespace
 
 ExprRef ZeroFold::loosened(const ExprRef& e) {
@@ -135,13 +126,13 @@ std::optional<Stmt> ZeroFold::close(std::vector<ErrorSite>& errors,
   if (l.factors.empty()) return std::nullopt;
   ExprRef sum;
   for (const ExprRef& x : l.factors) {
-    ExprRef d = raw(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Sub), {x, x});
-    sum = sum ? raw(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, d}) : d;
+    ExprRef d = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Sub), {x, x});
+    sum = sum ? node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, d}) : d;
   }
   errors.push_back({at, "a factor of a product folded to zero is not finite"});
   Stmt s;
   s.kind = StmtKind::Check;
-  s.value = raw(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Eq), {sum, fconst(0.0)});
+  s.value = node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Eq), {sum, fconst(0.0)});
   s.error = static_cast<int>(errors.size() - 1);
   s.span = at;
   return s;
