@@ -27,6 +27,7 @@ class Kernel {
   KernelFn fn = nullptr;
   SystemFn system = nullptr;
   double compile_ms = 0.0;
+  int lanes = 1;        // elements computed at once (a map kernel in SIMD lanes)
   std::string llvm_ir;  // the optimised module, when asked for (`--dump=llvm`)
 };
 

@@ -217,6 +217,8 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
         give_up("interpreted: " + error);
       } else {
         e->stats.status = "compiled";
+        if (e->kernel->lanes > 1)
+          e->stats.note = "; " + std::to_string(e->kernel->lanes) + " elements at once";
         e->stats.compile_ms = e->kernel->compile_ms;
         if (options_.dump && options_.dump_loop_ir) print(*options_.dump, t);
         if (options_.dump && options_.dump_llvm) *options_.dump << e->kernel->llvm_ir;

@@ -25,6 +25,9 @@ inline constexpr int kLargeTraceOptLevel = 1;
 // A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
 // keeps at most this fraction of them.
 inline constexpr double kSpecialiseAtMost = 0.9;
+// Elements a map kernel computes at once, one per SIMD lane (4 binary64 lanes: AVX2); their
+// writes, branches and checks still run element by element (1 turns lanes off).
+inline constexpr int kLanes = 4;
 // Products by zeros known while tracing fold away (jit/zero_fold.h).
 inline constexpr bool kFoldZeros = true;
 

@@ -891,5 +891,115 @@ TEST(Jit, ProductsByKnownZerosFoldWhereTheyCannotChangeAValue) {
   }
 }
 
+// Map kernels compute four elements at once, one per SIMD lane, then run each element's writes,
+// branches and checks in order. Eleven springs: two full groups and one of three; the
+// branches differ between lanes of one group, and the results are the interpreter's bits.
+const char* const kLanes = R"(element P
+  x : vector[3](float);
+  fixed : bool;
+end
+element S
+  k : float;
+end
+extern ps : set{P};
+extern ss : set{S}(ps, ps);
+
+func pull(s : S, p : (P * 2)) -> (f : vector[ps](vector[3](float)), K : matrix[ps,ps](matrix[3,3](float)))
+  d = p(1).x - p(0).x;
+  l = norm(d);
+  t = (s.k * (l - 1.0) / l) * d;
+  if not p(0).fixed
+    f(p(0)) = t;
+    K(p(0), p(0)) = (s.k / l) * (d * d');
+  end
+  if not p(1).fixed
+    f(p(1)) = -t;
+    K(p(1), p(1)) = (s.k / (l * l)) * (d * d');
+  end
+  if not (p(0).fixed or p(1).fixed)
+    K(p(0), p(1)) = -exp(-l) * (d * d');
+  end
+end
+
+func ratio(s : S, p : (P * 2)) -> r : vector[ss](float)
+  r(s) = log(s.k) * p(1).x(0);
+end
+
+export func both() -> (f : vector[ps](vector[3](float)), K : matrix[ps,ps](matrix[3,3](float)))
+  f, K = map pull to ss reduce +;
+end
+
+export func ratios() -> r : vector[ss](float)
+  r = map ratio to ss reduce +;
+end
+)";
+
+struct LaneRun {
+  std::vector<Value> results;
+  std::string stats, error;
+};
+
+LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1) {
+  auto compiled = CompiledProgram::from_source("lanes.sim", kLanes);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set ps("ps"), ss("ss", {&ps, &ps});
+  const int n = 12;
+  ps.add_many(n);
+  ps.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+  ps.add_field("fixed", runtime::FieldType{runtime::ComponentKind::Bool, {}, false});
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) ps.field(0).at<double>(i)[k] = 0.3 + 0.71 * i - 0.13 * k * i;
+    ps.field(1).at<bool>(i)[0] = i % 5 == 2;  // lanes of one group take different branches
+  }
+  std::vector<int32_t> ends;
+  for (int i = 0; i + 1 < n; ++i) ends.insert(ends.end(), {i, (5 * i + 3) % n});
+  ss.add_edges(ends);
+  ss.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i + 1 < n; ++i) ss.field(0).at<double>(i)[0] = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
+  EngineOptions o;
+  o.executor = kind;
+  o.jit.threshold = 0;
+  o.check_finite = zero_at >= 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  engine.bind_set(*compiled->find_extern("ss"), ss);
+  LaneRun run;
+  try {
+    for (int call = 0; call < 2; ++call) run.results = engine.call(*compiled->find_func(function), {});
+  } catch (const interp::RuntimeError& e) {
+    run.error = e.render();
+  }
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  run.stats = os.str();
+  return run;
+}
+
+TEST(Jit, MapKernelsComputeFourElementsAtOnceWithTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const LaneRun in = run_lanes(ExecutorKind::Interpreter, "both");
+  const LaneRun jit = run_lanes(ExecutorKind::Jit, "both");
+  ASSERT_EQ(in.results.size(), 2u);
+  ASSERT_EQ(jit.results.size(), 2u);
+  expect_same(in.results[0], jit.results[0], "f");
+  expect_same(in.results[1], jit.results[1], "K");
+  EXPECT_NE(in.results[0].tensor().floats()[0], 0.0);
+  EXPECT_NE(jit.stats.find("pull (line 33)"), std::string::npos) << jit.stats;
+  EXPECT_NE(jit.stats.find("4 elements at once"), std::string::npos) << jit.stats;
+  EXPECT_EQ(jit.stats.find("interpreted"), std::string::npos) << jit.stats;
+}
+
+// A check that fails in one lane only (spring 6: lane 2 of the second group) stops the call
+// at that element: the interpreter, running the site again, reports it in its own words.
+TEST(Jit, ACheckFailingInOneLaneStopsAtItsElement) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const LaneRun in = run_lanes(ExecutorKind::Interpreter, "ratios", 6);
+  const LaneRun jit = run_lanes(ExecutorKind::Jit, "ratios", 6);
+  EXPECT_NE(in.error.find("lanes.sim:29:10: runtime error"), std::string::npos) << in.error;
+  EXPECT_NE(in.error.find("element 6 of set 'ss'"), std::string::npos) << in.error;
+  EXPECT_EQ(in.error, jit.error);
+  EXPECT_NE(jit.stats.find("4 elements at once"), std::string::npos) << jit.stats;
+}
+
 }  // namespace
 }  // namespace simit::jit

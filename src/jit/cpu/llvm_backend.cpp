@@ -5,6 +5,7 @@
 #include <functional>
 #include <mutex>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
 #include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
@@ -128,8 +129,22 @@ class Emitter {
     Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), b_.getInt64(comp));
     return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
   }
-  Value* math(const Expr& e);
+  Value* math(const Expr& e, const std::vector<Value*>& args);
+  llvm::Type* like(llvm::Type* scalar, Value* like);
+  Value* combine(const Expr& e, const std::vector<Value*>& args);
   Value* expr(const Expr& e);
+  Value* load(const Expr& e, Value* index);
+  // Element e's index and its endpoints become the values Element and Endpoint read.
+  void visit(Value* e);
+  // Lanes (a map kernel computing kLanes elements at once; see lanes_fit).
+  void run_lanes(Value* first, Value* end);
+  Value* lanes(const Expr& e);
+  Value* lanes_uncached(const Expr& e);
+  void lanes_block(const std::vector<Stmt>& body);
+  void count_roots(const std::vector<Stmt>& body);
+  void spill(const Expr& e);
+  Value* load_root(Ty t, int index);
+  void flush_pending(int first);
   void block(const std::vector<Stmt>& body);
   void stmt(const Stmt& s);
   // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
@@ -151,6 +166,10 @@ class Emitter {
   void load_arrays(Value* arrays);
 
   void decompose(const Stmt& s);
+  Value* assemble_base(const Stmt& s);
+  void assemble(const Stmt* s, int n);
+  int assemble_run(const std::vector<Stmt>& body, size_t i);
+  Value* root_address(int row);
 
   const Trace* t_ = nullptr;
   const SystemTrace* st_ = nullptr;
@@ -164,6 +183,21 @@ class Emitter {
   std::vector<Value*> ssa_;  // values of the locals set once
   Value* element_ = nullptr;
   Value* failed_ = nullptr;
+  Value* endpoint_table_ = nullptr;
+  // Lanes: each expression's value for every lane (memoised by node: traces share nodes),
+  // the locals', and each lane's element and endpoints.
+  std::unordered_map<const Expr*, Value*> vmemo_;
+  std::vector<Value*> vlocal_, element_lane_;
+  std::vector<std::vector<Value*>> endpoint_lane_;
+  // The values the element-by-element statements read (conditions, written values), stored
+  // per lane in one buffer per type: root -> its row.
+  std::unordered_map<const Expr*, int> roots_;
+  std::unordered_set<const Expr*> spilled_;
+  int root_rows_[3] = {0, 0, 0};
+  Value* root_buffer_[3] = {nullptr, nullptr, nullptr};
+  Value* lane_ = nullptr;  // the lane whose statements are being emitted (i64), or null
+  uint64_t root_stride_ = 0;     // float rows per lane in the buffer (a multiple of 4)
+  std::vector<Value*> pending_;  // float roots computed, not yet stored
   HostCalls host_;
   // A map that writes only its results: result memory and everything it reads are disjoint,
   // and saying so lets LLVM keep table entries and field values in registers across the
@@ -177,10 +211,8 @@ class Emitter {
   }
 };
 
-Value* Emitter::math(const Expr& e) {
+Value* Emitter::math(const Expr& e, const std::vector<Value*>& args) {
   const auto f = static_cast<MathFn>(e.op);
-  std::vector<Value*> args;
-  for (const ExprRef& o : e.ops) args.push_back(expr(*o));
   switch (f) {
     case MathFn::Sqrt: return b_.CreateUnaryIntrinsic(llvm::Intrinsic::sqrt, args[0]);
     case MathFn::Abs: return b_.CreateUnaryIntrinsic(llvm::Intrinsic::fabs, args[0]);
@@ -203,50 +235,49 @@ Value* Emitter::math(const Expr& e) {
     fn->setDoesNotThrow();
     fn->setDoesNotAccessMemory();  // errno is never read back
   }
-  llvm::CallInst* call = b_.CreateCall(callee, args);
-  // The C library's result, not LLVM's idea of it: no folding into other operations.
-  call->addFnAttr(llvm::Attribute::NoBuiltin);
-  return call;
+  auto call = [&](const std::vector<Value*>& a) {
+    llvm::CallInst* c = b_.CreateCall(callee, a);
+    // The C library's result, not LLVM's idea of it: no folding into other operations.
+    c->addFnAttr(llvm::Attribute::NoBuiltin);
+    return c;
+  };
+  if (!args[0]->getType()->isVectorTy()) return call(args);
+  // Lanes: the same library call once per lane.
+  Value* out = llvm::PoisonValue::get(args[0]->getType());
+  for (unsigned l = 0; l < static_cast<unsigned>(kLanes); ++l) {
+    std::vector<Value*> a;
+    for (Value* v : args) a.push_back(b_.CreateExtractElement(v, l));
+    out = b_.CreateInsertElement(out, call(a), l);
+  }
+  return out;
 }
 
-Value* Emitter::expr(const Expr& e) {
+// `scalar` with as many lanes as `like` has (none for a scalar).
+llvm::Type* Emitter::like(llvm::Type* scalar, Value* like) {
+  if (auto* v = llvm::dyn_cast<llvm::FixedVectorType>(like->getType()))
+    return llvm::FixedVectorType::get(scalar, v->getNumElements());
+  return scalar;
+}
+
+// The operators on evaluated operands: scalars, or vectors of one element per lane.
+Value* Emitter::combine(const Expr& e, const std::vector<Value*>& args) {
   switch (e.kind) {
-    case ExprKind::Const:
-      if (e.ty == Ty::F64) return llvm::ConstantFP::get(b_.getDoubleTy(), e.f);
-      if (e.ty == Ty::I32) return b_.getInt32(static_cast<uint32_t>(e.i));
-      return b_.getInt1(e.i != 0);
-    case ExprKind::Scalar: {
-      Value* d = scalars_[e.slot];
-      if (e.ty == Ty::F64) return d;
-      if (e.ty == Ty::I32) return b_.CreateFPToSI(d, b_.getInt32Ty());
-      return b_.CreateFCmpUNE(d, llvm::ConstantFP::get(b_.getDoubleTy(), 0.0));
-    }
-    case ExprKind::Element: return element_;
-    case ExprKind::Endpoint: return endpoints_[e.slot];
-    case ExprKind::Load: {
-      const ArraySlot& a = slots_[e.slot];
-      llvm::LoadInst* v = b_.CreateLoad(storage(a), address(e.slot, expr(*e.ops[0]), e.comp));
-      tag(v, e.slot);
-      if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
-      if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
-      return v;
-    }
-    case ExprKind::Local:
-      if (!locals_[e.slot]) return ssa_[e.slot];
-      return b_.CreateLoad(type(e.ty), locals_[e.slot]);
     case ExprKind::Unary: {
-      Value* x = expr(*e.ops[0]);
+      Value* x = args[0];
       switch (static_cast<UnOp>(e.op)) {
-        case UnOp::Neg: return e.ty == Ty::F64 ? b_.CreateFNeg(x) : b_.CreateSub(b_.getInt32(0), x);
+        case UnOp::Neg:
+          return e.ty == Ty::F64 ? b_.CreateFNeg(x)
+                                 : b_.CreateSub(llvm::Constant::getNullValue(x->getType()), x);
         case UnOp::Not: return b_.CreateNot(x);
         case UnOp::Round32:
-          return b_.CreateFPExt(b_.CreateFPTrunc(x, b_.getFloatTy()), b_.getDoubleTy());
-        case UnOp::ToF64: return b_.CreateSIToFP(x, b_.getDoubleTy());
+          return b_.CreateFPExt(b_.CreateFPTrunc(x, like(b_.getFloatTy(), x)),
+                                like(b_.getDoubleTy(), x));
+        case UnOp::ToF64: return b_.CreateSIToFP(x, like(b_.getDoubleTy(), x));
       }
       return x;
     }
     case ExprKind::Binary: {
-      Value *x = expr(*e.ops[0]), *y = expr(*e.ops[1]);
+      Value *x = args[0], *y = args[1];
       const bool f = e.ty == Ty::F64;
       switch (static_cast<BinOp>(e.op)) {
         case BinOp::Add: return f ? b_.CreateFAdd(x, y) : b_.CreateAdd(x, y);
@@ -260,25 +291,64 @@ Value* Emitter::expr(const Expr& e) {
       return x;
     }
     case ExprKind::Compare: {
-      Value *x = expr(*e.ops[0]), *y = expr(*e.ops[1]);
       using P = llvm::CmpInst::Predicate;
       static const P fp[] = {P::FCMP_OEQ, P::FCMP_UNE, P::FCMP_OLT,
                              P::FCMP_OGT, P::FCMP_OLE, P::FCMP_OGE};
       static const P ip[] = {P::ICMP_EQ,  P::ICMP_NE,  P::ICMP_SLT,
                              P::ICMP_SGT, P::ICMP_SLE, P::ICMP_SGE};
-      if (e.ops[0]->ty == Ty::F64) return b_.CreateFCmp(fp[e.op], x, y);
-      return b_.CreateICmp(ip[e.op], x, y);
+      if (e.ops[0]->ty == Ty::F64) return b_.CreateFCmp(fp[e.op], args[0], args[1]);
+      return b_.CreateICmp(ip[e.op], args[0], args[1]);
     }
-    case ExprKind::Select:
-      return b_.CreateSelect(expr(*e.ops[0]), expr(*e.ops[1]), expr(*e.ops[2]));
-    case ExprKind::Math: return math(e);
+    case ExprKind::Select: return b_.CreateSelect(args[0], args[1], args[2]);
+    case ExprKind::Math: return math(e, args);
+    default: return nullptr;
   }
-  return nullptr;
+}
+
+Value* Emitter::expr(const Expr& e) {
+  if (lane_) {
+    auto root = roots_.find(&e);
+    if (root != roots_.end()) return load_root(e.ty, root->second);
+  }
+  switch (e.kind) {
+    case ExprKind::Const:
+      if (e.ty == Ty::F64) return llvm::ConstantFP::get(b_.getDoubleTy(), e.f);
+      if (e.ty == Ty::I32) return b_.getInt32(static_cast<uint32_t>(e.i));
+      return b_.getInt1(e.i != 0);
+    case ExprKind::Scalar: {
+      Value* d = scalars_[e.slot];
+      if (e.ty == Ty::F64) return d;
+      if (e.ty == Ty::I32) return b_.CreateFPToSI(d, b_.getInt32Ty());
+      return b_.CreateFCmpUNE(d, llvm::ConstantFP::get(b_.getDoubleTy(), 0.0));
+    }
+    case ExprKind::Element: return element_;
+    case ExprKind::Endpoint: return endpoints_[e.slot];
+    case ExprKind::Load: return load(e, expr(*e.ops[0]));
+    case ExprKind::Local:
+      if (!locals_[e.slot]) return ssa_[e.slot];
+      return b_.CreateLoad(type(e.ty), locals_[e.slot]);
+    default: {
+      std::vector<Value*> args;
+      for (const ExprRef& o : e.ops) args.push_back(expr(*o));
+      return combine(e, args);
+    }
+  }
+}
+
+// Component e.comp of array e.slot at the (scalar) element index.
+Value* Emitter::load(const Expr& e, Value* index) {
+  const ArraySlot& a = slots_[e.slot];
+  llvm::LoadInst* v = b_.CreateLoad(storage(a), address(e.slot, index, e.comp));
+  tag(v, e.slot);
+  if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
+  if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));
+  return v;
 }
 
 void Emitter::stmt(const Stmt& s) {
   switch (s.kind) {
     case StmtKind::SetLocal:
+      if (lane_) return;  // computed for every lane already (Emitter::lanes_block)
       if (!locals_[s.slot]) {
         ssa_[s.slot] = expr(*s.value);
         return;
@@ -293,33 +363,7 @@ void Emitter::stmt(const Stmt& s) {
       b_.CreateStore(v, address(s.slot, expr(*s.index), s.comp));
       return;
     }
-    case StmtKind::Assemble: {
-      Value* at;
-      if (s.pair >= 0) {
-        // The block's position in the matrix comes from the pattern's per-element table.
-        const int result = slots_[s.slot].index;
-        int table = -1;
-        for (size_t i = 0; i < slots_.size(); ++i)
-          if (slots_[i].kind == ArraySlot::Kind::Table && slots_[i].index == result)
-            table = static_cast<int>(i);
-        llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
-        tag(pos, table);
-        // -1: the block was left out of the pattern the controller specialised to.
-        if (t_->outside_error >= 0)
-          fail_unless(b_.CreateICmpSGE(pos, b_.getInt32(0)), t_->outside_error, "outside");
-        at = address(s.slot, pos, s.comp);
-      } else {
-        at = address(s.slot, expr(*s.index), s.comp);
-      }
-      Value* v = expr(*s.value);
-      if (t_->reduce) {
-        llvm::LoadInst* old = b_.CreateLoad(b_.getDoubleTy(), at);
-        tag(old, s.slot);
-        v = b_.CreateFAdd(old, v);
-      }
-      tag(b_.CreateStore(v, at), s.slot);
-      return;
-    }
+    case StmtKind::Assemble: return assemble(&s, 1);
     case StmtKind::If: {
       Value* c = expr(*s.value);
       auto* then_bb = llvm::BasicBlock::Create(ctx_, "then", fn_);
@@ -338,6 +382,74 @@ void Emitter::stmt(const Stmt& s) {
     case StmtKind::Decompose: return decompose(s);
     case StmtKind::Check: return fail_unless(expr(*s.value), s.error, "check");
   }
+}
+
+// Where the element's block (or vector element) of an Assemble statement starts.
+Value* Emitter::assemble_base(const Stmt& s) {
+  if (s.pair < 0) return address(s.slot, expr(*s.index), 0);
+  // The block's position in the matrix comes from the pattern's per-element table.
+  const int result = slots_[s.slot].index;
+  int table = -1;
+  for (size_t i = 0; i < slots_.size(); ++i)
+    if (slots_[i].kind == ArraySlot::Kind::Table && slots_[i].index == result)
+      table = static_cast<int>(i);
+  llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
+  tag(pos, table);
+  // -1: the block was left out of the pattern the controller specialised to.
+  if (t_->outside_error >= 0)
+    fail_unless(b_.CreateICmpSGE(pos, b_.getInt32(0)), t_->outside_error, "outside");
+  return address(s.slot, pos, 0);
+}
+
+// Statements s[0 .. n-1]: components s[0].comp, s[0].comp + 1, ... of one block, whose values
+// lie side by side in the lanes' buffer when n > 1 (see assemble_run): one base address, and
+// the additions up to four components at a time (lane by lane, the same additions).
+void Emitter::assemble(const Stmt* s, int n) {
+  Value* base = assemble_base(s[0]);
+  llvm::Type* f64 = b_.getDoubleTy();
+  for (int k = 0; k < n;) {
+    const int width = n - k >= 4 ? 4 : n - k >= 2 ? 2 : 1;
+    Value* at = b_.CreateConstInBoundsGEP1_64(f64, base, static_cast<uint64_t>(s[0].comp + k));
+    Value* v;
+    llvm::Type* ty = f64;
+    if (width == 1) {
+      v = expr(*s[k].value);
+    } else {
+      ty = llvm::FixedVectorType::get(f64, static_cast<unsigned>(width));
+      v = b_.CreateAlignedLoad(ty, root_address(roots_.at(s[k].value.get())), llvm::Align(8));
+    }
+    if (t_->reduce) {
+      llvm::LoadInst* old = b_.CreateAlignedLoad(ty, at, llvm::Align(8));
+      tag(old, s[0].slot);
+      v = b_.CreateFAdd(old, v);
+    }
+    tag(b_.CreateAlignedStore(v, at, llvm::Align(8)), s[0].slot);
+    k += width;
+  }
+}
+
+// How many statements from body[i] on add neighbouring components of one block from
+// neighbouring rows of the lanes' buffer (1 outside lanes).
+int Emitter::assemble_run(const std::vector<Stmt>& body, size_t i) {
+  const Stmt& first = body[i];
+  if (!lane_ || first.value->ty != Ty::F64 || !roots_.count(first.value.get())) return 1;
+  const int row = roots_.at(first.value.get());
+  auto same_place = [&](const Stmt& s) {
+    if (s.kind != StmtKind::Assemble || s.slot != first.slot || s.pair != first.pair) return false;
+    if (s.pair >= 0) return true;
+    const Expr &a = *s.index, &b = *first.index;
+    return &a == &b || ((a.kind == ExprKind::Endpoint || a.kind == ExprKind::Element) &&
+                        a.kind == b.kind && a.slot == b.slot);
+  };
+  int n = 1;
+  while (i + static_cast<size_t>(n) < body.size()) {
+    const Stmt& s = body[i + static_cast<size_t>(n)];
+    if (!same_place(s) || s.comp != first.comp + n || s.value->ty != Ty::F64) break;
+    auto r = roots_.find(s.value.get());
+    if (r == roots_.end() || r->second != row + n) break;
+    ++n;
+  }
+  return n;
 }
 
 // The runtime's decomposition through its address: the argument and the results pass through
@@ -367,8 +479,231 @@ void Emitter::decompose(const Stmt& s) {
   }
 }
 
+// Whether a map kernel can compute kLanes elements at once: every value is then an SSA local
+// or an expression of them, evaluated for all lanes with the same IEEE operations lane by
+// lane (library calls once per lane), and everything that acts (the assembly writes, the
+// branches, the checks) runs afterwards element by element in order, so the results, the
+// order of every reduction and the first failing element are the one-element kernel's.
+// Reads are speculative across branches: loads of fields and arguments at the element's own
+// endpoints are always in range, and no operation traps.
+bool lanes_fit(const Trace& t) {
+  if (kLanes <= 1 || t.writes_fields || t.local_mutable.size() < t.locals.size()) return false;
+  for (bool m : t.local_mutable)
+    if (m) return false;
+  std::function<bool(const std::vector<Stmt>&)> fits = [&](const std::vector<Stmt>& body) {
+    for (const Stmt& s : body) {
+      if (s.kind == StmtKind::Store || s.kind == StmtKind::Decompose) return false;
+      if (s.kind == StmtKind::If && !(fits(s.body) && fits(s.orelse))) return false;
+    }
+    return true;
+  };
+  return fits(t.body);
+}
+
+// Values the element-by-element statements compute themselves rather than read back.
+bool trivial(const Expr& e) {
+  return e.kind == ExprKind::Const || e.kind == ExprKind::Scalar ||
+         e.kind == ExprKind::Element || e.kind == ExprKind::Endpoint;
+}
+int ty_index(Ty t) { return static_cast<int>(t); }
+
+void Emitter::visit(Value* e) {
+  element_ = e;
+  endpoints_.clear();
+  if (t_->arity == 0) return;
+  Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_->arity));
+  for (int k = 0; k < t_->arity; ++k)
+    endpoints_.push_back(b_.CreateLoad(
+        b_.getInt32Ty(),
+        b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoint_table_, b_.CreateAdd(base, b_.getInt64(k)))));
+}
+
+// The statements' roots, each given its row in its type's buffer.
+void Emitter::count_roots(const std::vector<Stmt>& body) {
+  auto root = [&](const ExprRef& e) {
+    if (!e || trivial(*e) || roots_.count(e.get())) return;
+    roots_[e.get()] = root_rows_[ty_index(e->ty)]++;
+  };
+  for (const Stmt& s : body) {
+    switch (s.kind) {
+      case StmtKind::Assemble: root(s.value), root(s.index); break;
+      case StmtKind::Check: root(s.value); break;
+      case StmtKind::If:
+        root(s.value);
+        count_roots(s.body);
+        count_roots(s.orelse);
+        break;
+      default: break;
+    }
+  }
+}
+
+// Elements first .. first + kLanes - 1 (those past `end` compute element end - 1 again, and
+// their statements do not run): every value for all lanes, then the statements lane by lane.
+void Emitter::run_lanes(Value* first, Value* end) {
+  llvm::Type* i32 = b_.getInt32Ty();
+  Value* last = b_.CreateSub(end, b_.getInt32(1));
+  element_lane_.clear();
+  endpoint_lane_.assign(static_cast<size_t>(t_->arity), {});
+  for (int l = 0; l < kLanes; ++l) {
+    Value* e = b_.CreateAdd(first, b_.getInt32(static_cast<uint32_t>(l)));
+    if (l > 0) e = b_.CreateSelect(b_.CreateICmpSLT(e, end), e, last);
+    visit(e);
+    element_lane_.push_back(e);
+    for (int k = 0; k < t_->arity; ++k) endpoint_lane_[static_cast<size_t>(k)].push_back(endpoints_[k]);
+  }
+  vmemo_.clear();
+  spilled_.clear();
+  vlocal_.assign(local_types_.size(), nullptr);
+  lanes_block(t_->body);
+  if (!pending_.empty()) flush_pending(root_rows_[0] - static_cast<int>(pending_.size()));
+  Value* left = b_.CreateSub(end, first);
+  Value* count = b_.CreateSelect(b_.CreateICmpSLT(left, b_.getInt32(kLanes)), left,
+                                 b_.getInt32(kLanes));
+  loop(llvm::ConstantInt::get(i32, 0), count, [&](Value* l) {
+    lane_ = b_.CreateSExt(l, b_.getInt64Ty());
+    visit(b_.CreateAdd(first, l));
+    block(t_->body);
+    lane_ = nullptr;
+  });
+}
+
+void Emitter::lanes_block(const std::vector<Stmt>& body) {
+  for (const Stmt& s : body) {
+    switch (s.kind) {
+      case StmtKind::SetLocal: vlocal_[s.slot] = lanes(*s.value); break;
+      case StmtKind::Assemble:
+        spill(*s.value);
+        if (s.index) spill(*s.index);
+        break;
+      case StmtKind::Check: spill(*s.value); break;
+      case StmtKind::If:
+        spill(*s.value);
+        lanes_block(s.body);
+        lanes_block(s.orelse);
+        break;
+      default: break;  // Store, Decompose: not in a trace that runs in lanes
+    }
+  }
+}
+
+// A root's value for every lane goes to the buffer. Integers and truth values lie row by
+// row (row * kLanes + lane); floats lie lane by lane (lane * stride + row), so that one
+// element's block is contiguous and its additions take four components at a time: each four
+// rows are transposed in registers before they are stored.
+void Emitter::spill(const Expr& e) {
+  if (trivial(e) || !spilled_.insert(&e).second) return;
+  Value* v = lanes(e);
+  const int t = ty_index(e.ty);
+  if (e.ty == Ty::F64) {
+    pending_.push_back(v);
+    if (kLanes == 4 && pending_.size() == 4) flush_pending(roots_.at(&e) - 3);
+    return;
+  }
+  if (e.ty == Ty::Bool) v = b_.CreateZExt(v, llvm::FixedVectorType::get(b_.getInt8Ty(), kLanes));
+  llvm::Type* elem = e.ty == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  Value* at = b_.CreateConstInBoundsGEP1_64(elem, root_buffer_[t],
+                                            static_cast<uint64_t>(roots_.at(&e)) * kLanes);
+  b_.CreateAlignedStore(v, at, llvm::Align(8));
+}
+
+// Stores the pending float rows first, first + 1, ...: four of them transposed (one vector
+// per lane), fewer component by component.
+void Emitter::flush_pending(int first) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  auto at = [&](int lane, int row) {
+    return b_.CreateConstInBoundsGEP1_64(
+        f64, root_buffer_[0], static_cast<uint64_t>(lane) * root_stride_ + static_cast<uint64_t>(row));
+  };
+  if (pending_.size() == 4 && kLanes == 4) {
+    Value *v0 = pending_[0], *v1 = pending_[1], *v2 = pending_[2], *v3 = pending_[3];
+    Value* a = b_.CreateShuffleVector(v0, v1, {0, 4, 2, 6});
+    Value* b = b_.CreateShuffleVector(v0, v1, {1, 5, 3, 7});
+    Value* c = b_.CreateShuffleVector(v2, v3, {0, 4, 2, 6});
+    Value* d = b_.CreateShuffleVector(v2, v3, {1, 5, 3, 7});
+    Value* lane[4] = {b_.CreateShuffleVector(a, c, {0, 1, 4, 5}),
+                      b_.CreateShuffleVector(b, d, {0, 1, 4, 5}),
+                      b_.CreateShuffleVector(a, c, {2, 3, 6, 7}),
+                      b_.CreateShuffleVector(b, d, {2, 3, 6, 7})};
+    for (int l = 0; l < 4; ++l) b_.CreateAlignedStore(lane[l], at(l, first), llvm::Align(8));
+  } else {
+    for (size_t r = 0; r < pending_.size(); ++r)
+      for (int l = 0; l < kLanes; ++l)
+        b_.CreateStore(b_.CreateExtractElement(pending_[r], static_cast<uint64_t>(l)),
+                       at(l, first + static_cast<int>(r)));
+  }
+  pending_.clear();
+}
+
+Value* Emitter::root_address(int row) {
+  return b_.CreateInBoundsGEP(
+      b_.getDoubleTy(), root_buffer_[0],
+      b_.CreateAdd(b_.CreateMul(lane_, b_.getInt64(root_stride_)), b_.getInt64(static_cast<uint64_t>(row))));
+}
+
+Value* Emitter::load_root(Ty t, int row) {
+  if (t == Ty::F64) return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
+  llvm::Type* elem = t == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  Value* at = b_.CreateInBoundsGEP(
+      elem, root_buffer_[ty_index(t)],
+      b_.CreateAdd(b_.getInt64(static_cast<uint64_t>(row) * kLanes), lane_));
+  Value* v = b_.CreateLoad(elem, at);
+  return t == Ty::Bool ? b_.CreateICmpNE(v, b_.getInt8(0)) : v;
+}
+
+Value* Emitter::lanes(const Expr& e) {
+  auto it = vmemo_.find(&e);
+  if (it != vmemo_.end()) return it->second;
+  Value* v = lanes_uncached(e);
+  vmemo_.emplace(&e, v);
+  return v;
+}
+
+Value* Emitter::lanes_uncached(const Expr& e) {
+  auto gather = [&](const std::vector<Value*>& per_lane) {
+    Value* v = llvm::PoisonValue::get(llvm::FixedVectorType::get(per_lane[0]->getType(), kLanes));
+    for (int l = 0; l < kLanes; ++l)
+      v = b_.CreateInsertElement(v, per_lane[static_cast<size_t>(l)], static_cast<uint64_t>(l));
+    return v;
+  };
+  switch (e.kind) {
+    case ExprKind::Const:
+    case ExprKind::Scalar: return b_.CreateVectorSplat(kLanes, expr(e));
+    case ExprKind::Element: return gather(element_lane_);
+    case ExprKind::Endpoint: return gather(endpoint_lane_[static_cast<size_t>(e.slot)]);
+    case ExprKind::Load: {
+      const Expr& at = *e.ops[0];
+      std::vector<Value*> index, values;
+      if (at.kind == ExprKind::Element) {
+        index = element_lane_;
+      } else if (at.kind == ExprKind::Endpoint) {
+        index = endpoint_lane_[static_cast<size_t>(at.slot)];
+      } else {
+        Value* v = lanes(at);
+        for (int l = 0; l < kLanes; ++l) index.push_back(b_.CreateExtractElement(v, l));
+      }
+      for (Value* i : index) values.push_back(load(e, i));
+      return gather(values);
+    }
+    case ExprKind::Local: return vlocal_[static_cast<size_t>(e.slot)];
+    default: {
+      std::vector<Value*> args;
+      for (const ExprRef& o : e.ops) args.push_back(lanes(*o));
+      return combine(e, args);
+    }
+  }
+}
+
+
 void Emitter::block(const std::vector<Stmt>& body) {
-  for (const Stmt& s : body) stmt(s);
+  for (size_t i = 0; i < body.size();) {
+    const int n = body[i].kind == StmtKind::Assemble ? assemble_run(body, i) : 1;
+    if (n > 1)
+      assemble(&body[i], n);
+    else
+      stmt(body[i]);
+    i += static_cast<size_t>(n);
+  }
 }
 
 llvm::Function* Emitter::run(const std::string& name) {
@@ -413,16 +748,27 @@ llvm::Function* Emitter::run(const std::string& name) {
   e->addIncoming(begin, entry);
   b_.CreateCondBr(b_.CreateICmpSLT(e, end), body, done);
   b_.SetInsertPoint(body);
-  element_ = e;
-  if (t_->arity > 0) {
-    Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_->arity));
-    for (int k = 0; k < t_->arity; ++k)
-      endpoints_.push_back(b_.CreateLoad(
-          b_.getInt32Ty(),
-          b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoints, b_.CreateAdd(base, b_.getInt64(k)))));
+  endpoint_table_ = endpoints;
+  const bool in_lanes = lanes_fit(*t_);
+  if (in_lanes) {
+    count_roots(t_->body);
+    llvm::IRBuilder<> at_entry(entry, entry->begin());
+    llvm::Type* types[3] = {b_.getDoubleTy(), b_.getInt32Ty(), b_.getInt8Ty()};
+    root_stride_ = static_cast<uint64_t>((root_rows_[0] + 3) / 4 * 4);
+    for (int t = 0; t < 3; ++t) {
+      if (root_rows_[t] == 0) continue;
+      const int rows = t == 0 ? static_cast<int>(root_stride_) : root_rows_[t];
+      llvm::AllocaInst* a = at_entry.CreateAlloca(
+          types[t], b_.getInt32(static_cast<uint32_t>(rows * kLanes)));
+      a->setAlignment(llvm::Align(32));
+      root_buffer_[t] = a;
+    }
+    run_lanes(e, end);
+  } else {
+    visit(e);
+    block(t_->body);
   }
-  block(t_->body);
-  Value* next = b_.CreateAdd(e, b_.getInt32(1));
+  Value* next = b_.CreateAdd(e, b_.getInt32(in_lanes ? kLanes : 1));
   e->addIncoming(next, b_.GetInsertBlock());
   b_.CreateBr(head);
   b_.SetInsertPoint(done);
@@ -626,7 +972,10 @@ class CpuBackend : public Backend {
     auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
       return Emitter(trace, m, host_).run(name);
     });
-    if (k) k->fn = reinterpret_cast<KernelFn>(k->address);
+    if (k) {
+      k->fn = reinterpret_cast<KernelFn>(k->address);
+      k->lanes = lanes_fit(trace) ? kLanes : 1;
+    }
     return k;
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
