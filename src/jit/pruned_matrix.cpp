@@ -1,6 +1,8 @@
 // PrunedMatrix (jit/pruned_matrix.h): one pass over the values, copying the non-zero blocks.
 #include "jit/pruned_matrix.h"
 
+#include <bit>
+
 namespace simit::jit {
 
 namespace {
@@ -23,7 +25,7 @@ void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* 
   const int bs = m * m;
   const size_t blocks = static_cast<size_t>(rp[rows]);
   p.cols.resize(blocks);
-  p.values.resize(blocks * bs);
+  p.values.resize(blocks * bs + (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
   double* out = p.values.data();
   int32_t at = 0;

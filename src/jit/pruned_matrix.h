@@ -14,7 +14,9 @@ namespace simit::jit {
 struct PrunedMatrix {
   std::vector<int32_t> row_ptr, cols;
   // Each block column-major (square blocks only); the arrays are sized for every block of the
-  // full pattern and hold `kept` of them.
+  // full pattern and hold `kept` of them. The values have bit_ceil(n) - n more at the end: a
+  // compiled product reads each n-component column as a vector of bit_ceil(n) lanes, the
+  // last column of the last block reaching into them.
   std::vector<double> values;
   int64_t kept = 0, total = 0;  // blocks
 
