@@ -9,6 +9,7 @@
 
 #include "api/engine.h"
 #include "jit/loop_ir.h"
+#include "jit/pruned_matrix.h"
 
 namespace simit::jit {
 namespace {
@@ -82,6 +83,35 @@ TEST(LoopIr, VerifierRejectsMismatchedTypes) {
   s.value = c(1.0);
   t.body.push_back(s);
   EXPECT_EQ(verify(t), "set local: operand is f64, expected i32");
+}
+
+// ---------------------------------------------------------------------------
+// The compiled products' copy of a matrix
+
+// A solver loop's copy of a matrix drops its zero blocks, holds the others by columns, and is
+// padded so that a 3-component column loads as one 4-lane vector.
+TEST(PrunedMatrix, TheCopyDropsZeroBlocksHoldsColumnsAndIsPadded) {
+  std::vector<int32_t> row_ptr{0}, cols;
+  for (int r = 0; r < 5; ++r) {
+    for (int c = std::max(0, r - 1); c <= std::min(4, r + 1); ++c) cols.push_back(c);
+    row_ptr.push_back(static_cast<int32_t>(cols.size()));
+  }
+  runtime::SystemMatrix k(runtime::MatrixPattern::from_csr(5, 5, row_ptr, cols), 3, 3);
+  for (size_t i = 0; i < k.value_count(); ++i)
+    k.values()[i] = 0.1 * static_cast<double>(i % 17) - 0.7;
+  for (int i = 0; i < 9; ++i) k.block(1)[i] = i == 4 ? -0.0 : 0.0;  // block (0, 1): dropped
+  PrunedMatrix p;
+  p.assign(k);
+  EXPECT_EQ(p.total, 13);
+  EXPECT_EQ(p.kept, 12);
+  EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 4, 7, 10, 12}));
+  EXPECT_EQ(p.cols[0], 0);
+  EXPECT_EQ(p.cols[1], 0);  // row 1 starts with block (1, 0)
+  ASSERT_EQ(p.values.size(), 13u * 9 + 1);
+  // Block (1, 0), by columns: component (i, j) at 3 j + i.
+  const double* b = k.block(2);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(p.values[9 + 3 * j + i], b[3 * i + j]) << i << j;
 }
 
 // ---------------------------------------------------------------------------
