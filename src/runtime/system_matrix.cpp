@@ -211,6 +211,12 @@ PatternUnion unite(const MatrixPattern& a, const MatrixPattern& b) {
   };
   place(a, u.from_a);
   place(b, u.from_b);
+  u.to_a.assign(col_idx.size(), -1);
+  u.to_b.assign(col_idx.size(), -1);
+  for (size_t k = 0; k < u.from_a.size(); ++k)
+    u.to_a[static_cast<size_t>(u.from_a[k])] = static_cast<int32_t>(k);
+  for (size_t k = 0; k < u.from_b.size(); ++k)
+    u.to_b[static_cast<size_t>(u.from_b[k])] = static_cast<int32_t>(k);
   u.pattern = MatrixPattern::from_csr(a.rows(), a.cols(), std::move(row_ptr), std::move(col_idx));
   return u;
 }
@@ -304,6 +310,11 @@ SystemMatrix::SystemMatrix(PatternPtr pattern, int block_rows, int block_cols, C
       throw Fault(std::string("system matrices of ") + component_name(kind) +
                   " components are not supported");
   }
+}
+
+SystemMatrix::SystemMatrix(Unset, PatternPtr pattern, int block_rows, int block_cols)
+    : pattern_(std::move(pattern)), block_rows_(block_rows), block_cols_(block_cols) {
+  values_.resize(static_cast<size_t>(pattern_->nnz()) * block_size());
 }
 
 void SystemMatrix::set_zero() {

@@ -100,10 +100,12 @@ class MatrixPattern {
 
 using PatternPtr = std::shared_ptr<const MatrixPattern>;
 
-// The union of two patterns of one shape, and where each operand's blocks land in it.
+// The union of two patterns of one shape, where each operand's blocks land in it, and for
+// each of its blocks the operands' block there (-1: none).
 struct PatternUnion {
   PatternPtr pattern;
   std::vector<int32_t> from_a, from_b;
+  std::vector<int32_t> to_a, to_b;
 };
 PatternUnion unite(const MatrixPattern& a, const MatrixPattern& b);
 
@@ -149,9 +151,33 @@ class PatternRegistry {
 // the pattern is shared. Scalar (unblocked) matrices have 1 × 1 blocks. Float components are
 // doubles (values()); int and bool components are int32s (ints(); bools are 0 or 1); complex
 // components are complex doubles (complexes()).
+// Leaves new elements of a vector uninitialised (std::vector value-initialises them): for
+// values that are written before they are read.
+template <class T>
+struct UninitialisedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitialisedAllocator<U>;
+  };
+  UninitialisedAllocator() = default;
+  template <class U>
+  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
 class SystemMatrix {
  public:
   SystemMatrix() = default;  // a placeholder without pattern: assign before use
+  // Float values left uninitialised, for whoever writes every one of them (runtime::add).
+  struct Unset {};
+  SystemMatrix(Unset, PatternPtr pattern, int block_rows, int block_cols);
   // All zero; a String kind is a Fault.
   SystemMatrix(PatternPtr pattern, int block_rows = 1, int block_cols = 1,
                ComponentKind kind = ComponentKind::Float);
@@ -208,7 +234,7 @@ class SystemMatrix {
   PatternPtr pattern_;
   int block_rows_ = 1, block_cols_ = 1;
   ComponentKind kind_ = ComponentKind::Float;
-  std::vector<double> values_;
+  std::vector<double, UninitialisedAllocator<double>> values_;
   std::vector<int32_t> ints_;
   std::vector<Complex> complexes_;
 };

@@ -196,6 +196,42 @@ void scatter_scaled(Complex s, const SystemMatrix& m, const std::vector<int32_t>
   }
 }
 
+// out = alpha a + beta b over the union, each block written once, with the bits of zeroing out
+// and scattering alpha a, then beta b, into it: 0.0 + alpha a where a has the block (+0.0
+// where it has none), then + beta b where b has it.
+template <int N>
+void sum_blocks_of(const SystemMatrix& a, const SystemMatrix& b, double alpha, double beta,
+                   const PatternUnion& u, double* out, int n) {
+  const int bs = N ? N : n;
+  const double *va = a.values(), *vb = b.values();
+  const int32_t *ta = u.to_a.data(), *tb = u.to_b.data();
+  const size_t blocks = u.to_a.size();
+  for (size_t k = 0; k < blocks; ++k) {
+    double* o = out + k * static_cast<size_t>(bs);
+    const int32_t ia = ta[k], ib = tb[k];
+    if (ia >= 0) {
+      const double* x = va + static_cast<size_t>(ia) * bs;
+      for (int i = 0; i < bs; ++i) o[i] = 0.0 + alpha * x[i];
+    } else {
+      for (int i = 0; i < bs; ++i) o[i] = 0.0;
+    }
+    if (ib >= 0) {
+      const double* y = vb + static_cast<size_t>(ib) * bs;
+      for (int i = 0; i < bs; ++i) o[i] = o[i] + beta * y[i];
+    }
+  }
+}
+
+void sum_blocks(const SystemMatrix& a, const SystemMatrix& b, double alpha, double beta,
+                const PatternUnion& u, double* out) {
+  switch (a.block_size()) {
+    case 1: return sum_blocks_of<1>(a, b, alpha, beta, u, out, 1);
+    case 4: return sum_blocks_of<4>(a, b, alpha, beta, u, out, 4);
+    case 9: return sum_blocks_of<9>(a, b, alpha, beta, u, out, 9);
+    default: return sum_blocks_of<0>(a, b, alpha, beta, u, out, a.block_size());
+  }
+}
+
 template <class T>
 void scale_values(Complex s, SystemMatrix& a) {
   const Acc<T> f = factor<T>(s);
@@ -308,6 +344,11 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, dou
   std::shared_ptr<const PatternUnion> u =
       registry ? registry->united(a.shared_pattern(), b.shared_pattern())
                : std::make_shared<const PatternUnion>(unite(a.pattern(), b.pattern()));
+  if (a.is_float()) {
+    SystemMatrix out(SystemMatrix::Unset{}, u->pattern, a.block_rows(), a.block_cols());
+    sum_blocks(a, b, alpha, beta, *u, out.values());
+    return out;
+  }
   SystemMatrix out(u->pattern, a.block_rows(), a.block_cols(), a.kind());
   by_kind(a.kind(), [&](auto t) {
     scatter_scaled<decltype(t)>(alpha, a, u->from_a, out);

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+
 #include "runtime/sparse_convert.h"
 #include "runtime_fixtures.h"
 
@@ -101,6 +104,33 @@ TEST_F(TetMatrices, SumOfDifferentPatternsUsesTheUnion) {
   EXPECT_LT(max_diff(to_dense(c), da + dmass), 1e-12);
   SystemMatrix d = add(mass, a, 1.0, -1.0);  // without a registry
   EXPECT_LT(max_diff(to_dense(d), dmass - da), 1e-12);
+}
+
+// A sum over the union writes each block once with the bits of zeroing the result and adding
+// alpha a, then beta b, into it: a negative zero of either operand becomes +0.0.
+TEST_F(TetMatrices, SumsOverTheUnionKeepTheBitsOfAddingIntoZeros) {
+  auto [k, dk] = tet_matrix(verts, verts, 3, 3, 31);
+  SystemMatrix mass(registry.assembled(verts, verts, verts), 3, 3);
+  assemble(mass, verts, random_locals(verts.size(), 3, 3, 32));
+  mass.block(0)[1] = -0.0;
+  const int32_t off = k.pattern().find(0, 1);
+  ASSERT_GE(off, 0);
+  k.block(off)[2] = -0.0;                      // a block of k alone
+  k.block(k.pattern().find(0, 0))[1] = 0.0;  // 0.0 + -0.0 + -0.37 * 0.0: +0.0
+  SystemMatrix sum = add(mass, k, 1.0, -0.37, &registry);
+  // The reference: zeros, then each operand's blocks scaled and added where they land.
+  std::vector<double> want(sum.value_count(), 0.0);
+  for (const auto& [m, f] : {std::pair<const SystemMatrix*, double>{&mass, 1.0}, {&k, -0.37}})
+    for (int r = 0; r < m->rows(); ++r)
+      for (int32_t b = m->pattern().row_ptr()[r]; b < m->pattern().row_ptr()[r + 1]; ++b) {
+        const int32_t at = sum.pattern().find(r, m->pattern().col_idx()[b]);
+        for (int i = 0; i < 9; ++i) want[static_cast<size_t>(at) * 9 + i] += f * m->block(b)[i];
+      }
+  EXPECT_EQ(std::memcmp(want.data(), sum.values(), want.size() * sizeof(double)), 0);
+  EXPECT_FALSE(std::signbit(sum.block(sum.pattern().find(0, 0))[1]));
+  EXPECT_FALSE(std::signbit(sum.block(sum.pattern().find(0, 1))[2]));
+  EXPECT_LT(max_diff(to_dense(sum), to_dense(mass) - 0.37 * to_dense(k)), 1e-12);
+  EXPECT_GT(dk.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST_F(TetMatrices, ScaleAndNegate) {
