@@ -126,7 +126,10 @@ class Emitter {
   // Address of component `comp` of element `index` of array `slot`.
   Value* address(int slot, Value* index, int comp) {
     const ArraySlot& a = slots_[slot];
-    Value* i = b_.CreateSExt(index, b_.getInt64Ty());
+    // The visited element as the i64 it was computed from: LLVM then sees that a pass reads
+    // the component a product has just stored (and keeps it in a register).
+    Value* i = index == element_ && element_wide_ ? element_wide_
+                                                  : b_.CreateSExt(index, b_.getInt64Ty());
     Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), b_.getInt64(comp));
     return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
   }
@@ -183,6 +186,7 @@ class Emitter {
   std::vector<Value*> arrays_, scalars_, locals_, endpoints_;
   std::vector<Value*> ssa_;  // values of the locals set once
   Value* element_ = nullptr;
+  Value* element_wide_ = nullptr;  // element_ as an i64, where a pass computed it so
   Value* failed_ = nullptr;
   Value* endpoint_table_ = nullptr;
   // Lanes: each expression's value for every lane (memoised by node: traces share nodes),
@@ -890,9 +894,11 @@ void Emitter::run_of(const VectorOp& op, Value* first, int group) {
     }
   }
   for (int i = 0; i < group; ++i) {
-    element_ = b_.CreateTrunc(b_.CreateAdd(first, b_.getInt64(i)), b_.getInt32Ty());
+    element_wide_ = b_.CreateAdd(first, b_.getInt64(i));
+    element_ = b_.CreateTrunc(element_wide_, b_.getInt32Ty());
     block(op.body);
   }
+  element_wide_ = nullptr;
   if (runs) {
     for (size_t k = 0; k < op.sums.size(); ++k) {
       Value* part = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
