@@ -1,5 +1,6 @@
 // The CPU code generator: loop IR to LLVM IR, optimised for the host and linked through one
 // ORC session, one resource tracker per kernel (dropping a kernel frees its code).
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -167,6 +168,9 @@ class Emitter {
   // The op's body for the `group` components of one run starting at `first` (an i64), its
   // sums taken over the run alone and then added to their totals.
   void run_of(const VectorOp& op, Value* first, int group);
+  bool pass_in_lanes(const VectorOp& op) const;
+  Value* pass_lanes(const Expr& e, Value* first);
+  void runs_in_lanes(const VectorOp& op, Value* first);
   void load_arrays(Value* arrays);
 
   void decompose(const Stmt& s);
@@ -811,10 +815,21 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   switch (op.kind) {
     case VectorOp::Kind::Scalar: return block(op.body);
     case VectorOp::Kind::Pass:
-      if (op.group > 1 && !op.sums.empty())
-        return loop(
-            b_.getInt64(0), b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group)),
-            [&](Value* e) { run_of(op, b_.CreateMul(e, b_.getInt64(op.group)), op.group); });
+      if (op.group > 1 && !op.sums.empty()) {
+        Value* runs = b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group));
+        Value* begin = b_.getInt64(0);
+        if (pass_in_lanes(op)) {
+          // Four runs at a time in vectors; the runs left over one by one.
+          Value* quads = b_.CreateSDiv(runs, b_.getInt64(kLanes));
+          loop(begin, quads, [&](Value* q) {
+            runs_in_lanes(op, b_.CreateMul(q, b_.getInt64(kLanes * op.group)));
+          });
+          begin = b_.CreateMul(quads, b_.getInt64(kLanes));
+        }
+        return loop(begin, runs, [&](Value* e) {
+          run_of(op, b_.CreateMul(e, b_.getInt64(op.group)), op.group);
+        });
+      }
       return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
         element_ = k;
         block(op.body);
@@ -880,6 +895,111 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
       });
       return;
     }
+  }
+}
+
+// Whether a pass with sums by runs can take four runs at a time in vectors: its statements
+// store components of vectors at the visited component, or add a term to one of its sums, and
+// read only components at the visited component, constants and other scalars.
+bool Emitter::pass_in_lanes(const VectorOp& op) const {
+  if (kLanes != 4) return false;
+  auto is_sum = [&](int slot) {
+    return std::find(op.sums.begin(), op.sums.end(), slot) != op.sums.end();
+  };
+  std::function<bool(const Expr&)> lane_wise = [&](const Expr& e) {
+    switch (e.kind) {
+      case ExprKind::Const: return e.ty == Ty::F64;
+      case ExprKind::Local: return e.ty == Ty::F64 && !is_sum(e.slot);
+      case ExprKind::Load:
+        return e.ty == Ty::F64 && !slots_[static_cast<size_t>(e.slot)].single &&
+               slots_[static_cast<size_t>(e.slot)].components == 1 &&
+               e.ops[0]->kind == ExprKind::Element;
+      case ExprKind::Unary:
+      case ExprKind::Binary:
+      case ExprKind::Math:
+        if (e.ty != Ty::F64) return false;
+        for (const ExprRef& o : e.ops)
+          if (!lane_wise(*o)) return false;
+        return true;
+      default: return false;
+    }
+  };
+  for (const Stmt& s : op.body) {
+    if (s.kind == StmtKind::Store) {
+      const ArraySlot& a = slots_[static_cast<size_t>(s.slot)];
+      if (a.ty != Ty::F64 || a.single || a.components != 1 || s.comp != 0 ||
+          s.index->kind != ExprKind::Element || !lane_wise(*s.value))
+        return false;
+    } else if (s.kind == StmtKind::SetLocal && is_sum(s.slot)) {
+      const Expr& v = *s.value;
+      if (v.kind != ExprKind::Binary || static_cast<BinOp>(v.op) != BinOp::Add ||
+          v.ops[0]->kind != ExprKind::Local || v.ops[0]->slot != s.slot || !lane_wise(*v.ops[1]))
+        return false;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+// A lane-wise expression over the components first .. first + 3 (pass_in_lanes).
+Value* Emitter::pass_lanes(const Expr& e, Value* first) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  auto* vec = llvm::FixedVectorType::get(f64, kLanes);
+  switch (e.kind) {
+    case ExprKind::Const: return llvm::ConstantFP::get(vec, e.f);
+    case ExprKind::Local: return b_.CreateVectorSplat(kLanes, b_.CreateLoad(f64, locals_[e.slot]));
+    case ExprKind::Load: {
+      llvm::LoadInst* v =
+          b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[static_cast<size_t>(e.slot)], first));
+      v->setAlignment(llvm::Align(8));
+      return v;
+    }
+    default: {
+      std::vector<Value*> args;
+      for (const ExprRef& o : e.ops) args.push_back(pass_lanes(*o, first));
+      return combine(e, args);
+    }
+  }
+}
+
+// Four runs of op.group components from component `first` (an i64): each statement for four
+// components at a time, in the statements' order; then each run's part of each sum, its terms
+// added in order, and the parts added to the sum run by run: the order run_of adds them in.
+void Emitter::runs_in_lanes(const VectorOp& op, Value* first) {
+  const int g = op.group;
+  std::vector<std::vector<Value*>> terms(op.sums.size());
+  for (int v = 0; v < g; ++v) {
+    Value* at = b_.CreateAdd(first, b_.getInt64(kLanes * v));
+    for (const Stmt& s : op.body) {
+      if (s.kind == StmtKind::Store) {
+        llvm::StoreInst* st = b_.CreateStore(
+            pass_lanes(*s.value, at),
+            b_.CreateInBoundsGEP(b_.getDoubleTy(), arrays_[static_cast<size_t>(s.slot)], at));
+        st->setAlignment(llvm::Align(8));
+        continue;
+      }
+      const size_t k = static_cast<size_t>(
+          std::find(op.sums.begin(), op.sums.end(), s.slot) - op.sums.begin());
+      terms[k].push_back(pass_lanes(*s.value->ops[1], at));
+    }
+  }
+  for (size_t k = 0; k < op.sums.size(); ++k) {
+    // Every statement adds one term per component; with several statements for one sum the
+    // component's terms follow one another.
+    const size_t per = terms[k].size() / static_cast<size_t>(g);
+    Value* total = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
+    for (int run = 0; run < kLanes; ++run) {
+      Value* part = nullptr;
+      for (int c = run * g; c < (run + 1) * g; ++c)
+        for (size_t t = 0; t < per; ++t) {
+          Value* term = b_.CreateExtractElement(
+              terms[k][static_cast<size_t>(c / kLanes) * per + t], static_cast<uint64_t>(c % kLanes));
+          part = part ? b_.CreateFAdd(part, term) : term;
+        }
+      total = b_.CreateFAdd(total, part);
+    }
+    b_.CreateStore(total, locals_[op.sums[k]]);
   }
 }
 
