@@ -1132,6 +1132,8 @@ void Tracer::bind(const ast::Variable& v, Sym value, const SourceSpan& at) {
   if (auto m = f.merged.find(&v); m != f.merged.end()) {
     if (value.kind != Sym::Kind::Tensor || value.size() != m->second.size())
       give_up(at, "an assignment that changes a variable's shape");
+    // Every component is read before any is written: `t = t'` reads t's own locals.
+    value = settle(std::move(value), at);
     for (size_t i = 0; i < value.size(); ++i) set_local(m->second[i], value.c[i], at);
     Sym& cur = f.vars[&v];
     cur.dims = value.dims;
