@@ -22,6 +22,10 @@ inline constexpr int kChunkElements = 16384;
 inline constexpr int kOptLevel = 2;
 inline constexpr size_t kLargeTrace = 4000;
 inline constexpr int kLargeTraceOptLevel = 1;
+// A large trace that runs in lanes skips LLVM's IR pipeline (0): its IR already computes
+// every value once and keeps no local in memory, and the pipeline took a quarter of its
+// compile time for no measurable speed (the fem stiffness: 77 ms to 58).
+inline constexpr int kLargeLanesTraceOptLevel = 0;
 // A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
 // keeps at most this fraction of them.
 inline constexpr double kSpecialiseAtMost = 0.9;

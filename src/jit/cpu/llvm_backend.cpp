@@ -1100,7 +1100,10 @@ class CpuBackend : public Backend {
   CpuBackend(Session& s, const HostCalls& host) : s_(s), host_(host) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
-    const int level = node_count(trace) > kLargeTrace ? kLargeTraceOptLevel : kOptLevel;
+    const bool large = node_count(trace) > kLargeTrace;
+    const int level = !large              ? kOptLevel
+                      : lanes_fit(trace) ? kLargeLanesTraceOptLevel
+                                         : kLargeTraceOptLevel;
     auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
       return Emitter(trace, m, host_).run(name);
     });
@@ -1140,7 +1143,7 @@ class CpuBackend : public Backend {
       error = "LLVM rejected the generated code: " + bs.str();
       return nullptr;
     }
-    optimise(*mod, s_.target(), level);
+    if (level > 0) optimise(*mod, s_.target(), level);
     std::string ir;
     if (keep_ir) {
       llvm::raw_string_ostream os(ir);
