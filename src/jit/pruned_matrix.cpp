@@ -25,7 +25,8 @@ void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* 
   const int bs = m * m;
   const size_t blocks = static_cast<size_t>(rp[rows]);
   p.cols.resize(blocks);
-  p.values.resize(blocks * bs + (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
+  p.values.resize(blocks * bs +
+                  (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
   double* out = p.values.data();
   int32_t at = 0;

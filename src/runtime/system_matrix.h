@@ -75,7 +75,9 @@ class MatrixPattern {
 
   bool has_assembly_index() const { return edges_id_ != 0; }
   // Whether the assembly index belongs to `edges` (the pattern was assembled through it).
-  bool assembled_through(const Set& edges) const { return edges_id_ != 0 && edges.id() == edges_id_; }
+  bool assembled_through(const Set& edges) const {
+    return edges_id_ != 0 && edges.id() == edges_id_;
+  }
   const AssemblyIndex& assembly() const { return assembly_; }
   // Block position for a write K(row_element, col_element) inside the mapped call on
   // `element` of `edges` (the set this pattern was assembled through), or -1 when the pair is

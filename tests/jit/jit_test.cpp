@@ -985,7 +985,8 @@ LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1) {
   for (int i = 0; i + 1 < n; ++i) ends.insert(ends.end(), {i, (5 * i + 3) % n});
   ss.add_edges(ends);
   ss.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
-  for (int i = 0; i + 1 < n; ++i) ss.field(0).at<double>(i)[0] = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
+  for (int i = 0; i + 1 < n; ++i)
+    ss.field(0).at<double>(i)[0] = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
   EngineOptions o;
   o.executor = kind;
   o.jit.threshold = 0;
@@ -995,7 +996,8 @@ LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1) {
   engine.bind_set(*compiled->find_extern("ss"), ss);
   LaneRun run;
   try {
-    for (int call = 0; call < 2; ++call) run.results = engine.call(*compiled->find_func(function), {});
+    for (int call = 0; call < 2; ++call)
+      run.results = engine.call(*compiled->find_func(function), {});
   } catch (const interp::RuntimeError& e) {
     run.error = e.render();
   }

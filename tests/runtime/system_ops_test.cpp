@@ -115,7 +115,7 @@ TEST_F(TetMatrices, SumsOverTheUnionKeepTheBitsOfAddingIntoZeros) {
   mass.block(0)[1] = -0.0;
   const int32_t off = k.pattern().find(0, 1);
   ASSERT_GE(off, 0);
-  k.block(off)[2] = -0.0;                      // a block of k alone
+  k.block(off)[2] = -0.0;                    // a block of k alone
   k.block(k.pattern().find(0, 0))[1] = 0.0;  // 0.0 + -0.0 + -0.37 * 0.0: +0.0
   SystemMatrix sum = add(mass, k, 1.0, -0.37, &registry);
   // The reference: zeros, then each operand's blocks scaled and added where they land.

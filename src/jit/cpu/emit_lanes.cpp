@@ -1,0 +1,229 @@
+// Map kernels in SIMD lanes: every value for kLanes elements at once, then each element's
+// statements in order (jit/cpu/emitter.h, docs/jit.md "Four elements at once").
+#include <functional>
+
+#include "jit/cpu/emitter.h"
+
+namespace simit::jit::cpu {
+
+// Whether a map kernel can compute kLanes elements at once: every value is then an SSA local
+// or an expression of them, evaluated for all lanes with the same IEEE operations lane by
+// lane (library calls once per lane), and everything that acts (the assembly writes, the
+// branches, the checks) runs afterwards element by element in order, so the results, the
+// order of every reduction and the first failing element are the one-element kernel's.
+// Reads are speculative across branches: loads of fields and arguments at the element's own
+// endpoints are always in range, and no operation traps.
+bool lanes_fit(const Trace& t) {
+  if (kLanes <= 1 || t.writes_fields || t.local_mutable.size() < t.locals.size()) return false;
+  for (bool m : t.local_mutable)
+    if (m) return false;
+  std::function<bool(const std::vector<Stmt>&)> fits = [&](const std::vector<Stmt>& body) {
+    for (const Stmt& s : body) {
+      if (s.kind == StmtKind::Store || s.kind == StmtKind::Decompose) return false;
+      if (s.kind == StmtKind::If && !(fits(s.body) && fits(s.orelse))) return false;
+    }
+    return true;
+  };
+  return fits(t.body);
+}
+
+namespace {
+
+// Values the element-by-element statements compute themselves rather than read back.
+bool trivial(const Expr& e) {
+  return e.kind == ExprKind::Const || e.kind == ExprKind::Scalar || e.kind == ExprKind::Element ||
+         e.kind == ExprKind::Endpoint;
+}
+int ty_index(Ty t) { return static_cast<int>(t); }
+
+}  // namespace
+
+void Emitter::visit(Value* e) {
+  element_ = e;
+  endpoints_.clear();
+  if (t_->arity == 0) return;
+  Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_->arity));
+  for (int k = 0; k < t_->arity; ++k)
+    endpoints_.push_back(
+        b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoint_table_,
+                                                            b_.CreateAdd(base, b_.getInt64(k)))));
+}
+
+// The statements' roots, each given its row in its type's buffer.
+void Emitter::count_roots(const std::vector<Stmt>& body) {
+  auto root = [&](const ExprRef& e) {
+    if (!e || trivial(*e) || roots_.count(e.get())) return;
+    roots_[e.get()] = root_rows_[ty_index(e->ty)]++;
+  };
+  for (const Stmt& s : body) {
+    switch (s.kind) {
+      case StmtKind::Assemble: root(s.value), root(s.index); break;
+      case StmtKind::Check: root(s.value); break;
+      case StmtKind::If:
+        root(s.value);
+        count_roots(s.body);
+        count_roots(s.orelse);
+        break;
+      default: break;
+    }
+  }
+}
+
+// Elements first .. first + kLanes - 1 (those past `end` compute element end - 1 again, and
+// their statements do not run): every value for all lanes, then the statements lane by lane.
+void Emitter::run_lanes(Value* first, Value* end) {
+  llvm::Type* i32 = b_.getInt32Ty();
+  Value* last = b_.CreateSub(end, b_.getInt32(1));
+  element_lane_.clear();
+  endpoint_lane_.assign(static_cast<size_t>(t_->arity), {});
+  for (int l = 0; l < kLanes; ++l) {
+    Value* e = b_.CreateAdd(first, b_.getInt32(static_cast<uint32_t>(l)));
+    if (l > 0) e = b_.CreateSelect(b_.CreateICmpSLT(e, end), e, last);
+    visit(e);
+    element_lane_.push_back(e);
+    for (int k = 0; k < t_->arity; ++k)
+      endpoint_lane_[static_cast<size_t>(k)].push_back(endpoints_[k]);
+  }
+  vmemo_.clear();
+  spilled_.clear();
+  vlocal_.assign(local_types_.size(), nullptr);
+  lanes_block(t_->body);
+  if (!pending_.empty()) flush_pending(root_rows_[0] - static_cast<int>(pending_.size()));
+  Value* left = b_.CreateSub(end, first);
+  Value* count =
+      b_.CreateSelect(b_.CreateICmpSLT(left, b_.getInt32(kLanes)), left, b_.getInt32(kLanes));
+  loop(llvm::ConstantInt::get(i32, 0), count, [&](Value* l) {
+    lane_ = b_.CreateSExt(l, b_.getInt64Ty());
+    visit(b_.CreateAdd(first, l));
+    block(t_->body);
+    lane_ = nullptr;
+  });
+}
+
+void Emitter::lanes_block(const std::vector<Stmt>& body) {
+  for (const Stmt& s : body) {
+    switch (s.kind) {
+      case StmtKind::SetLocal: vlocal_[s.slot] = lanes(*s.value); break;
+      case StmtKind::Assemble:
+        spill(*s.value);
+        if (s.index) spill(*s.index);
+        break;
+      case StmtKind::Check: spill(*s.value); break;
+      case StmtKind::If:
+        spill(*s.value);
+        lanes_block(s.body);
+        lanes_block(s.orelse);
+        break;
+      default: break;  // Store, Decompose: not in a trace that runs in lanes
+    }
+  }
+}
+
+// A root's value for every lane goes to the buffer. Integers and truth values lie row by
+// row (row * kLanes + lane); floats lie lane by lane (lane * stride + row), so that one
+// element's block is contiguous and its additions take four components at a time: each four
+// rows are transposed in registers before they are stored.
+void Emitter::spill(const Expr& e) {
+  if (trivial(e) || !spilled_.insert(&e).second) return;
+  Value* v = lanes(e);
+  const int t = ty_index(e.ty);
+  if (e.ty == Ty::F64) {
+    pending_.push_back(v);
+    if (kLanes == 4 && pending_.size() == 4) flush_pending(roots_.at(&e) - 3);
+    return;
+  }
+  if (e.ty == Ty::Bool) v = b_.CreateZExt(v, llvm::FixedVectorType::get(b_.getInt8Ty(), kLanes));
+  llvm::Type* elem = e.ty == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  Value* at = b_.CreateConstInBoundsGEP1_64(elem, root_buffer_[t],
+                                            static_cast<uint64_t>(roots_.at(&e)) * kLanes);
+  b_.CreateAlignedStore(v, at, llvm::Align(8));
+}
+
+// Stores the pending float rows first, first + 1, ...: four of them transposed (one vector
+// per lane), fewer component by component.
+void Emitter::flush_pending(int first) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  auto at = [&](int lane, int row) {
+    return b_.CreateConstInBoundsGEP1_64(
+        f64, root_buffer_[0],
+        static_cast<uint64_t>(lane) * root_stride_ + static_cast<uint64_t>(row));
+  };
+  if (pending_.size() == 4 && kLanes == 4) {
+    Value *v0 = pending_[0], *v1 = pending_[1], *v2 = pending_[2], *v3 = pending_[3];
+    Value* a = b_.CreateShuffleVector(v0, v1, {0, 4, 2, 6});
+    Value* b = b_.CreateShuffleVector(v0, v1, {1, 5, 3, 7});
+    Value* c = b_.CreateShuffleVector(v2, v3, {0, 4, 2, 6});
+    Value* d = b_.CreateShuffleVector(v2, v3, {1, 5, 3, 7});
+    Value* lane[4] = {
+        b_.CreateShuffleVector(a, c, {0, 1, 4, 5}), b_.CreateShuffleVector(b, d, {0, 1, 4, 5}),
+        b_.CreateShuffleVector(a, c, {2, 3, 6, 7}), b_.CreateShuffleVector(b, d, {2, 3, 6, 7})};
+    for (int l = 0; l < 4; ++l) b_.CreateAlignedStore(lane[l], at(l, first), llvm::Align(8));
+  } else {
+    for (size_t r = 0; r < pending_.size(); ++r)
+      for (int l = 0; l < kLanes; ++l)
+        b_.CreateStore(b_.CreateExtractElement(pending_[r], static_cast<uint64_t>(l)),
+                       at(l, first + static_cast<int>(r)));
+  }
+  pending_.clear();
+}
+
+Value* Emitter::root_address(int row) {
+  return b_.CreateInBoundsGEP(b_.getDoubleTy(), root_buffer_[0],
+                              b_.CreateAdd(b_.CreateMul(lane_, b_.getInt64(root_stride_)),
+                                           b_.getInt64(static_cast<uint64_t>(row))));
+}
+
+Value* Emitter::load_root(Ty t, int row) {
+  if (t == Ty::F64) return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
+  llvm::Type* elem = t == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  Value* at =
+      b_.CreateInBoundsGEP(elem, root_buffer_[ty_index(t)],
+                           b_.CreateAdd(b_.getInt64(static_cast<uint64_t>(row) * kLanes), lane_));
+  Value* v = b_.CreateLoad(elem, at);
+  return t == Ty::Bool ? b_.CreateICmpNE(v, b_.getInt8(0)) : v;
+}
+
+Value* Emitter::lanes(const Expr& e) {
+  auto it = vmemo_.find(&e);
+  if (it != vmemo_.end()) return it->second;
+  Value* v = lanes_uncached(e);
+  vmemo_.emplace(&e, v);
+  return v;
+}
+
+Value* Emitter::lanes_uncached(const Expr& e) {
+  auto gather = [&](const std::vector<Value*>& per_lane) {
+    Value* v = llvm::PoisonValue::get(llvm::FixedVectorType::get(per_lane[0]->getType(), kLanes));
+    for (int l = 0; l < kLanes; ++l)
+      v = b_.CreateInsertElement(v, per_lane[static_cast<size_t>(l)], static_cast<uint64_t>(l));
+    return v;
+  };
+  switch (e.kind) {
+    case ExprKind::Const:
+    case ExprKind::Scalar: return b_.CreateVectorSplat(kLanes, expr(e));
+    case ExprKind::Element: return gather(element_lane_);
+    case ExprKind::Endpoint: return gather(endpoint_lane_[static_cast<size_t>(e.slot)]);
+    case ExprKind::Load: {
+      const Expr& at = *e.ops[0];
+      std::vector<Value*> index, values;
+      if (at.kind == ExprKind::Element) {
+        index = element_lane_;
+      } else if (at.kind == ExprKind::Endpoint) {
+        index = endpoint_lane_[static_cast<size_t>(at.slot)];
+      } else {
+        Value* v = lanes(at);
+        for (int l = 0; l < kLanes; ++l) index.push_back(b_.CreateExtractElement(v, l));
+      }
+      for (Value* i : index) values.push_back(load(e, i));
+      return gather(values);
+    }
+    case ExprKind::Local: return vlocal_[static_cast<size_t>(e.slot)];
+    default: {
+      std::vector<Value*> args;
+      for (const ExprRef& o : e.ops) args.push_back(lanes(*o));
+      return combine(e, args);
+    }
+  }
+}
+
+}  // namespace simit::jit::cpu

@@ -1,0 +1,291 @@
+// Solver loops: a system trace's vector operations as loops, the sparse products over the
+// solver's column copy, and the passes with sums by runs (jit/cpu/emitter.h).
+#include <algorithm>
+#include <bit>
+#include <functional>
+
+#include "jit/cpu/emitter.h"
+
+namespace simit::jit::cpu {
+
+void Emitter::loop(Value* begin, Value* end, const std::function<void(Value*)>& body) {
+  llvm::BasicBlock* pre = b_.GetInsertBlock();
+  auto* head = llvm::BasicBlock::Create(ctx_, "loop", fn_);
+  auto* inside = llvm::BasicBlock::Create(ctx_, "loop.body", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "loop.done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  llvm::PHINode* i = b_.CreatePHI(begin->getType(), 2);
+  i->addIncoming(begin, pre);
+  b_.CreateCondBr(b_.CreateICmpSLT(i, end), inside, done);
+  b_.SetInsertPoint(inside);
+  body(i);
+  i->addIncoming(b_.CreateAdd(i, llvm::ConstantInt::get(begin->getType(), 1)), b_.GetInsertBlock());
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+}
+
+// One op of a system trace. A product runs row block by row block: each component's sum
+// over the row's blocks in pattern order, then the fused body for each component of the row.
+void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
+  switch (op.kind) {
+    case VectorOp::Kind::Scalar: return block(op.body);
+    case VectorOp::Kind::Pass:
+      if (op.group > 1 && !op.sums.empty()) {
+        Value* runs = b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group));
+        Value* begin = b_.getInt64(0);
+        if (pass_in_lanes(op)) {
+          // Four runs at a time in vectors; the runs left over one by one.
+          Value* quads = b_.CreateSDiv(runs, b_.getInt64(kLanes));
+          loop(begin, quads, [&](Value* q) {
+            runs_in_lanes(op, b_.CreateMul(q, b_.getInt64(kLanes * op.group)));
+          });
+          begin = b_.CreateMul(quads, b_.getInt64(kLanes));
+        }
+        return loop(begin, runs, [&](Value* e) {
+          run_of(op, b_.CreateMul(e, b_.getInt64(op.group)), op.group);
+        });
+      }
+      return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
+        element_ = k;
+        block(op.body);
+      });
+    case VectorOp::Kind::SpMV: {
+      const int bs = op.block;
+      llvm::Type* i64 = b_.getInt64Ty();
+      llvm::Type* f64 = b_.getDoubleTy();
+      // The row's bs sums are the lanes of one vector: block column j (stored contiguously,
+      // the controller transposes the blocks) times x_j, summed over j lane by lane, is the
+      // block's part, added to the row's sums (docs/arithmetic.md). The part needs no +0.0
+      // start: a row sum starts at +0.0 and so is never -0.0, and a part that differs only
+      // in the sign of a zero then adds the same.
+      // Each column is read as one vector of `width` lanes (a power of two): a 3 x 3 block's
+      // column j is loaded with the next block's first value (or the copy's padding, see
+      // PrunedMatrix) in lane 3, which is computed and never read, so a load is one
+      // instruction rather than three.
+      const unsigned width = std::bit_ceil(static_cast<unsigned>(bs));
+      auto* vec = llvm::FixedVectorType::get(f64, width);
+      Value* sums;
+      {
+        llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
+        sums = entry.CreateAlloca(vec);
+      }
+      loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
+        b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
+        Value* lo = b_.CreateSExt(
+            b_.CreateLoad(b_.getInt32Ty(),
+                          b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+            i64);
+        Value* hi =
+            b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
+                                        b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
+                                                             b_.CreateAdd(r, b_.getInt64(1)))),
+                          i64);
+        loop(lo, hi, [&](Value* k) {
+          Value* col = b_.CreateSExt(
+              b_.CreateLoad(b_.getInt32Ty(),
+                            b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
+              i64);
+          Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
+          Value* xc = b_.CreateMul(col, b_.getInt64(bs));
+          Value* part = nullptr;
+          for (int j = 0; j < bs; ++j) {
+            llvm::LoadInst* a =
+                b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                        b_.CreateAdd(blk, b_.getInt64(j * bs))));
+            a->setAlignment(llvm::Align(8));
+            Value* x = b_.CreateLoad(
+                f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
+            Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
+            part = part ? b_.CreateFAdd(part, term) : term;
+          }
+          b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
+        });
+        Value* row = b_.CreateMul(r, b_.getInt64(bs));
+        Value* total = b_.CreateLoad(vec, sums);
+        for (int i = 0; i < bs; ++i)
+          b_.CreateStore(
+              b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
+              b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
+        run_of(op, row, bs);
+      });
+      return;
+    }
+  }
+}
+
+// Whether a pass with sums by runs can take four runs at a time in vectors: its statements
+// store components of vectors at the visited component, or add a term to one of its sums, and
+// read only components at the visited component, constants and other scalars.
+bool Emitter::pass_in_lanes(const VectorOp& op) const {
+  if (kLanes != 4) return false;
+  auto is_sum = [&](int slot) {
+    return std::find(op.sums.begin(), op.sums.end(), slot) != op.sums.end();
+  };
+  std::function<bool(const Expr&)> lane_wise = [&](const Expr& e) {
+    switch (e.kind) {
+      case ExprKind::Const: return e.ty == Ty::F64;
+      case ExprKind::Local: return e.ty == Ty::F64 && !is_sum(e.slot);
+      case ExprKind::Load:
+        return e.ty == Ty::F64 && !slots_[static_cast<size_t>(e.slot)].single &&
+               slots_[static_cast<size_t>(e.slot)].components == 1 &&
+               e.ops[0]->kind == ExprKind::Element;
+      case ExprKind::Unary:
+      case ExprKind::Binary:
+      case ExprKind::Math:
+        if (e.ty != Ty::F64) return false;
+        for (const ExprRef& o : e.ops)
+          if (!lane_wise(*o)) return false;
+        return true;
+      default: return false;
+    }
+  };
+  for (const Stmt& s : op.body) {
+    if (s.kind == StmtKind::Store) {
+      const ArraySlot& a = slots_[static_cast<size_t>(s.slot)];
+      if (a.ty != Ty::F64 || a.single || a.components != 1 || s.comp != 0 ||
+          s.index->kind != ExprKind::Element || !lane_wise(*s.value))
+        return false;
+    } else if (s.kind == StmtKind::SetLocal && is_sum(s.slot)) {
+      const Expr& v = *s.value;
+      if (v.kind != ExprKind::Binary || static_cast<BinOp>(v.op) != BinOp::Add ||
+          v.ops[0]->kind != ExprKind::Local || v.ops[0]->slot != s.slot || !lane_wise(*v.ops[1]))
+        return false;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+// A lane-wise expression over the components first .. first + 3 (pass_in_lanes).
+Value* Emitter::pass_lanes(const Expr& e, Value* first) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  auto* vec = llvm::FixedVectorType::get(f64, kLanes);
+  switch (e.kind) {
+    case ExprKind::Const: return llvm::ConstantFP::get(vec, e.f);
+    case ExprKind::Local: return b_.CreateVectorSplat(kLanes, b_.CreateLoad(f64, locals_[e.slot]));
+    case ExprKind::Load: {
+      llvm::LoadInst* v = b_.CreateLoad(
+          vec, b_.CreateInBoundsGEP(f64, arrays_[static_cast<size_t>(e.slot)], first));
+      v->setAlignment(llvm::Align(8));
+      return v;
+    }
+    default: {
+      std::vector<Value*> args;
+      for (const ExprRef& o : e.ops) args.push_back(pass_lanes(*o, first));
+      return combine(e, args);
+    }
+  }
+}
+
+// Four runs of op.group components from component `first` (an i64): each statement for four
+// components at a time, in the statements' order; then each run's part of each sum, its terms
+// added in order, and the parts added to the sum run by run: the order run_of adds them in.
+void Emitter::runs_in_lanes(const VectorOp& op, Value* first) {
+  const int g = op.group;
+  std::vector<std::vector<Value*>> terms(op.sums.size());
+  for (int v = 0; v < g; ++v) {
+    Value* at = b_.CreateAdd(first, b_.getInt64(kLanes * v));
+    for (const Stmt& s : op.body) {
+      if (s.kind == StmtKind::Store) {
+        llvm::StoreInst* st = b_.CreateStore(
+            pass_lanes(*s.value, at),
+            b_.CreateInBoundsGEP(b_.getDoubleTy(), arrays_[static_cast<size_t>(s.slot)], at));
+        st->setAlignment(llvm::Align(8));
+        continue;
+      }
+      const size_t k =
+          static_cast<size_t>(std::find(op.sums.begin(), op.sums.end(), s.slot) - op.sums.begin());
+      terms[k].push_back(pass_lanes(*s.value->ops[1], at));
+    }
+  }
+  for (size_t k = 0; k < op.sums.size(); ++k) {
+    // Every statement adds one term per component; with several statements for one sum the
+    // component's terms follow one another.
+    const size_t per = terms[k].size() / static_cast<size_t>(g);
+    Value* total = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
+    for (int run = 0; run < kLanes; ++run) {
+      Value* part = nullptr;
+      for (int c = run * g; c < (run + 1) * g; ++c)
+        for (size_t t = 0; t < per; ++t) {
+          Value* term = b_.CreateExtractElement(terms[k][static_cast<size_t>(c / kLanes) * per + t],
+                                                static_cast<uint64_t>(c % kLanes));
+          part = part ? b_.CreateFAdd(part, term) : term;
+        }
+      total = b_.CreateFAdd(total, part);
+    }
+    b_.CreateStore(total, locals_[op.sums[k]]);
+  }
+}
+
+// A sum's run part needs no +0.0 start either: its total starts at +0.0 (see the product).
+void Emitter::run_of(const VectorOp& op, Value* first, int group) {
+  std::vector<Value*> totals;
+  const bool runs = group > 1 && !op.sums.empty();
+  if (runs) {
+    for (int s : op.sums) {
+      totals.push_back(b_.CreateLoad(b_.getDoubleTy(), locals_[s]));
+      b_.CreateStore(llvm::ConstantFP::get(b_.getDoubleTy(), -0.0), locals_[s]);
+    }
+  }
+  for (int i = 0; i < group; ++i) {
+    element_wide_ = b_.CreateAdd(first, b_.getInt64(i));
+    element_ = b_.CreateTrunc(element_wide_, b_.getInt32Ty());
+    block(op.body);
+  }
+  element_wide_ = nullptr;
+  if (runs) {
+    for (size_t k = 0; k < op.sums.size(); ++k) {
+      Value* part = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
+      b_.CreateStore(b_.CreateFAdd(totals[k], part), locals_[op.sums[k]]);
+    }
+  }
+}
+
+// int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes): the program's
+// scalars in and out through `scalars`, the while loop in between.
+llvm::Function* Emitter::run_system(const std::string& name) {
+  llvm::Type* ptr = b_.getPtrTy();
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr}, false);
+  fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
+  auto arg = fn_->arg_begin();
+  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg;
+  auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
+  b_.SetInsertPoint(entry);
+  load_arrays(arrays);
+  for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
+  llvm::Type* f64 = b_.getDoubleTy();
+  for (int i = 0; i < st_->scalars; ++i) {
+    Value* d = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+    const Ty t = local_types_[i];
+    Value* v = t == Ty::F64   ? d
+               : t == Ty::I32 ? b_.CreateFPToSI(d, b_.getInt32Ty())
+                              : b_.CreateFCmpUNE(d, llvm::ConstantFP::get(f64, 0.0));
+    b_.CreateStore(v, locals_[i]);
+  }
+  std::vector<Value*> sizes;
+  for (size_t i = 0; i < st_->sizes.size(); ++i)
+    sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
+                                  b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
+  auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
+  auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  b_.CreateCondBr(expr(*st_->condition), body, done);
+  b_.SetInsertPoint(body);
+  for (const VectorOp& op : st_->body) vector_op(op, sizes);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+  for (int i = 0; i < st_->scalars; ++i) {
+    const Ty t = local_types_[i];
+    Value* v = b_.CreateLoad(type(t), locals_[i]);
+    Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
+    b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+  }
+  b_.CreateRet(b_.getInt32(0));
+  return fn_;
+}
+
+}  // namespace simit::jit::cpu
