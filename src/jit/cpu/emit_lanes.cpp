@@ -36,6 +36,11 @@ bool trivial(const Expr& e) {
 }
 int ty_index(Ty t) { return static_cast<int>(t); }
 
+// How a root of type t lies in its buffer (truth values as bytes).
+llvm::Type* root_type(IRBuilder<>& b, Ty t) {
+  return t == Ty::F64 ? b.getDoubleTy() : t == Ty::I32 ? b.getInt32Ty() : b.getInt8Ty();
+}
+
 }  // namespace
 
 void Emitter::visit(Value* e) {
@@ -66,6 +71,24 @@ void Emitter::count_roots(const std::vector<Stmt>& body) {
         break;
       default: break;
     }
+  }
+}
+
+// The roots' rows and their buffers, in the function's entry block (float rows padded to a
+// multiple of four for the transposed stores).
+void Emitter::allocate_roots() {
+  count_roots(t_->body);
+  llvm::BasicBlock& entry = fn_->getEntryBlock();
+  llvm::IRBuilder<> at_entry(&entry, entry.begin());
+  root_stride_ = static_cast<uint64_t>((root_rows_[0] + 3) / 4 * 4);
+  for (Ty ty : {Ty::F64, Ty::I32, Ty::Bool}) {
+    const int t = ty_index(ty);
+    if (root_rows_[t] == 0) continue;
+    const int rows = ty == Ty::F64 ? static_cast<int>(root_stride_) : root_rows_[t];
+    llvm::AllocaInst* a =
+        at_entry.CreateAlloca(root_type(b_, ty), b_.getInt32(static_cast<uint32_t>(rows * kLanes)));
+    a->setAlignment(llvm::Align(32));
+    root_buffer_[t] = a;
   }
 }
 
@@ -133,7 +156,7 @@ void Emitter::spill(const Expr& e) {
     return;
   }
   if (e.ty == Ty::Bool) v = b_.CreateZExt(v, llvm::FixedVectorType::get(b_.getInt8Ty(), kLanes));
-  llvm::Type* elem = e.ty == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  llvm::Type* elem = root_type(b_, e.ty);
   Value* at = b_.CreateConstInBoundsGEP1_64(elem, root_buffer_[t],
                                             static_cast<uint64_t>(roots_.at(&e)) * kLanes);
   b_.CreateAlignedStore(v, at, llvm::Align(8));
@@ -175,7 +198,7 @@ Value* Emitter::root_address(int row) {
 
 Value* Emitter::load_root(Ty t, int row) {
   if (t == Ty::F64) return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
-  llvm::Type* elem = t == Ty::I32 ? b_.getInt32Ty() : b_.getInt8Ty();
+  llvm::Type* elem = root_type(b_, t);
   Value* at =
       b_.CreateInBoundsGEP(elem, root_buffer_[ty_index(t)],
                            b_.CreateAdd(b_.getInt64(static_cast<uint64_t>(row) * kLanes), lane_));

@@ -305,9 +305,7 @@ llvm::Function* Emitter::run(const std::string& name) {
     results_ = llvm::MDNode::get(ctx_, {md.createAnonymousAliasScope(domain, "results")});
   }
   // Everything invariant over the elements is read once, before the loop.
-  for (size_t i = 0; i < slots_.size(); ++i)
-    arrays_.push_back(
-        b_.CreateLoad(ptr, b_.CreateConstInBoundsGEP1_64(ptr, arrays, i), slots_[i].name));
+  load_arrays(arrays);
   for (size_t i = 0; i < t_->scalars.size(); ++i)
     scalars_.push_back(b_.CreateLoad(b_.getDoubleTy(),
                                      b_.CreateConstInBoundsGEP1_64(b_.getDoubleTy(), scalars, i)));
@@ -330,18 +328,7 @@ llvm::Function* Emitter::run(const std::string& name) {
   endpoint_table_ = endpoints;
   const bool in_lanes = lanes_fit(*t_);
   if (in_lanes) {
-    count_roots(t_->body);
-    llvm::IRBuilder<> at_entry(entry, entry->begin());
-    llvm::Type* types[3] = {b_.getDoubleTy(), b_.getInt32Ty(), b_.getInt8Ty()};
-    root_stride_ = static_cast<uint64_t>((root_rows_[0] + 3) / 4 * 4);
-    for (int t = 0; t < 3; ++t) {
-      if (root_rows_[t] == 0) continue;
-      const int rows = t == 0 ? static_cast<int>(root_stride_) : root_rows_[t];
-      llvm::AllocaInst* a =
-          at_entry.CreateAlloca(types[t], b_.getInt32(static_cast<uint32_t>(rows * kLanes)));
-      a->setAlignment(llvm::Align(32));
-      root_buffer_[t] = a;
-    }
+    allocate_roots();
     run_lanes(e, end);
   } else {
     visit(e);

@@ -78,6 +78,7 @@ class Emitter {
   Value* lanes(const Expr& e);
   Value* lanes_uncached(const Expr& e);
   void lanes_block(const std::vector<Stmt>& body);
+  void allocate_roots();
   void count_roots(const std::vector<Stmt>& body);
   void spill(const Expr& e);
   Value* load_root(Ty t, int index);
