@@ -1,6 +1,7 @@
 // The trace controller (jit/controller.h): hot counting, keys, the kernel cache, calls.
 #include "jit/controller.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -12,6 +13,7 @@
 #include "jit/decompose_call.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
+#include "jit/write_guard.h"
 
 namespace simit::jit {
 
@@ -22,15 +24,25 @@ struct TraceController::Entry {
   TracedSite traced;
   std::unique_ptr<Kernel> kernel;
   TraceStats stats;
-  // Per result: its specialised pattern (jit/specialise.h) and the last matrix made on it
-  // (reused, zeroed, when the program has dropped it); `off` once a write fell outside.
+  // Per result: its specialised pattern (jit/specialise.h), the last matrix made on it
+  // (reused, zeroed, when the program has dropped it), the pattern the guard dropped (reused
+  // when the blocks recorded again are the same), and while a call records its blocks, a
+  // byte per block of the full pattern. `off`: full patterns for good.
   struct Special {
-    std::optional<SpecialisedPattern> pattern;
+    std::optional<SpecialisedPattern> pattern, dropped;
     std::shared_ptr<runtime::SystemMatrix> last;
+    std::vector<uint8_t> marks;
     bool off = false;
   };
   std::vector<Special> special;
-  int outside = 0;  // calls stopped by a write outside a specialised pattern
+  // What decides the blocks written (computed on first use), and their state when the
+  // blocks were recorded (jit/write_guard.h).
+  std::optional<WriteDeciders> deciders;
+  WriteGuard guard;
+  int64_t guard_calls = 0, guard_failures = 0;
+  double guard_ms = 0.0;
+  bool failed_last = false;  // the guard failed on the previous call
+  std::string full_why;      // why the results stay on full patterns, for --jit-stats
 };
 
 struct TraceController::SiteState {
@@ -271,22 +283,89 @@ std::vector<const int32_t*> TraceController::prepare_results(Entry& e, interp::S
   return tables;
 }
 
-// After a run on the full pattern: specialise each matrix result whose zero blocks are worth
-// leaving out.
-void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
+// Before a call: the guard of the specialised results (drops them when the inputs that
+// decide the writes changed), and the results whose blocks this call records.
+void TraceController::guard_results(Entry& e, interp::SiteCall& call,
+                                    const std::vector<double>& scalars) {
   const Trace& t = *e.traced.trace;
-  if (options_.check || t.writes_fields || t.outside_error < 0 || options_.float32) return;
+  if (options_.check || t.writes_fields || options_.float32) return;
+  if (!e.deciders) {
+    e.deciders = write_deciders(t);
+    if (!e.deciders->unguardable.empty()) e.full_why = e.deciders->unguardable;
+    // Endpoints of one set read the same field through slots of their own: compare it once.
+    std::vector<int> fields;
+    std::vector<const runtime::Field*> seen;
+    for (int slot : e.deciders->fields) {
+      const ArraySlot& a = t.arrays[static_cast<size_t>(slot)];
+      const runtime::Field* f = &runtime::member_set(call.target, a.member).field(a.index);
+      if (std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
+      seen.push_back(f);
+      fields.push_back(slot);
+    }
+    e.deciders->fields = std::move(fields);
+  }
+  if (!e.deciders->unguardable.empty()) return;
+  e.special.resize(call.results.size());
+  bool specialised = false;
+  for (const Entry::Special& s : e.special) specialised = specialised || s.pattern;
+  if (specialised) {
+    const auto start = std::chrono::steady_clock::now();
+    const bool holds = e.guard.holds(*e.deciders, t, call.target, scalars);
+    e.guard_ms +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    ++e.guard_calls;
+    if (!holds) drop_specialised(e, call);
+    e.failed_last = !holds;
+  }
+  bool record = false;
   for (size_t i = 0; i < call.results.size(); ++i) {
-    interp::AssemblyPlan::Result& r = call.plan.results[i];
+    const interp::AssemblyPlan::Result& r = call.plan.results[i];
     Entry::Special& s = e.special[i];
-    if (!r.is_matrix || s.off || (s.pattern && s.pattern->full == r.pattern)) continue;
-    const Value& v = call.results[i];
-    if (!v.matrix() || v.matrix()->shared_pattern() != r.pattern) continue;
-    s.pattern = specialise(*v.matrix(), kSpecialiseAtMost);
-    if (!s.pattern) {
+    if (!r.is_matrix || !r.pattern || s.off || !r.pattern->has_assembly_index() ||
+        (s.pattern && s.pattern->full == r.pattern))
+      continue;
+    s.marks.assign(static_cast<size_t>(r.pattern->nnz()), 0);
+    record = true;
+  }
+  if (record) e.guard.record(*e.deciders, t, call.target, scalars);
+}
+
+// The guard failed: this call and the next assemble on the full patterns, and record their
+// blocks; failing on two calls in a row means the deciding inputs change with every call,
+// and the results stay on full patterns.
+void TraceController::drop_specialised(Entry& e, interp::SiteCall& call) {
+  ++e.guard_failures;
+  for (size_t i = 0; i < e.special.size(); ++i) {
+    Entry::Special& s = e.special[i];
+    if (!s.pattern) continue;
+    s.dropped = std::move(s.pattern);
+    s.pattern.reset();
+    s.last.reset();
+    s.off = e.failed_last;
+    call.plan.results[i].hook_allocates = false;
+  }
+  if (e.failed_last) e.full_why = "the inputs that decide the writes changed on two calls in a row";
+}
+
+// After a call that recorded its blocks: specialise each result whose unwritten blocks are
+// worth leaving out.
+void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
+  for (size_t i = 0; i < e.special.size(); ++i) {
+    Entry::Special& s = e.special[i];
+    if (s.marks.empty()) continue;
+    interp::AssemblyPlan::Result& r = call.plan.results[i];
+    std::optional<SpecialisedPattern> p = specialise(r.pattern, s.marks, kSpecialiseAtMost);
+    s.marks.clear();
+    if (!p) {
       s.off = true;  // nearly every block is written: nothing to gain
+      if (e.full_why.empty()) e.full_why = "nearly every block is written";
       continue;
     }
+    // The same blocks as before the guard failed: the same pattern, so that what was derived
+    // from it (sums over the union, the solver's copies) stays valid.
+    if (s.dropped && same_blocks(*s.dropped, *p)) p = std::move(s.dropped);
+    s.dropped.reset();
+    s.pattern = std::move(p);
     r.hook_allocates = true;
     r.last.reset();  // the full matrix lives on only while the program holds this call's result
   }
@@ -294,6 +373,12 @@ void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
 
 bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   const Trace& t = *e.traced.trace;
+  std::vector<double> scalars;
+  for (const ScalarSource& s : e.traced.scalar_sources)
+    scalars.push_back(component(
+        s.partial >= 0 ? call.partial_args[s.partial] : call.interpreter.global(*s.global),
+        s.component));
+  guard_results(e, call, scalars);
   const std::vector<const int32_t*> tables = prepare_results(e, call);
   std::vector<void*> arrays(t.arrays.size(), nullptr);
   // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
@@ -324,13 +409,15 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           break;
         }
         case ArraySlot::Kind::Table: arrays[i] = const_cast<int32_t*>(tables[a.index]); break;
+        case ArraySlot::Kind::Marks: {
+          const size_t r = static_cast<size_t>(a.index);
+          arrays[i] = r < e.special.size() && !e.special[r].marks.empty()
+                          ? e.special[r].marks.data()
+                          : nullptr;
+          break;
+        }
       }
     }
-  std::vector<double> scalars;
-  for (const ScalarSource& s : e.traced.scalar_sources)
-    scalars.push_back(component(
-        s.partial >= 0 ? call.partial_args[s.partial] : call.interpreter.global(*s.global),
-        s.component));
   const int32_t* endpoints = call.target.endpoints();
   const int n = call.target.size();
   interp::Trap& trap = call.interpreter.trap();
@@ -340,22 +427,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     const int32_t rc = e.kernel->fn(arrays.data(), scalars.data(), endpoints, begin, end, &failed);
     if (rc != 0) {
       const ErrorSite& err = t.errors[static_cast<size_t>(rc - 1)];
-      if (rc - 1 == t.outside_error) {
-        // A block left out of a specialised pattern was written: the full patterns from now
-        // on, and the interpreter makes and fills them this time.
-        ++e.outside;
-        for (size_t i = 0; i < call.results.size(); ++i) {
-          Entry::Special& s = e.special[i];
-          if (!s.pattern) continue;
-          s.pattern.reset();
-          s.last.reset();
-          s.off = true;
-          call.plan.results[i].hook_allocates = false;
-          call.results[i] = Value::of_matrix(nullptr);
-        }
-        zero_results(call);
-        return false;
-      }
+      for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing
       if (!t.writes_fields) {
         // Nothing but the results changed: the interpreter runs the site again from zero
         // and reports the error in its own words, with its call stack (on full patterns).
@@ -713,9 +785,20 @@ std::vector<TraceStats> TraceController::stats() const {
           out.back().note += note;
         }
       }
-      if (e->outside > 0)
-        out.back().note += "; a write outside the specialised pattern: full patterns since (" +
-                           std::to_string(e->outside) + " call" + (e->outside > 1 ? "s" : "") + ")";
+      if (e->guard_calls > 0) {
+        char note[200];
+        std::snprintf(note, sizeof note,
+                      "; guard: %zu field version%s and %zu scalar%s compared per call, %.0f ns "
+                      "per call",
+                      e->deciders->fields.size(), e->deciders->fields.size() == 1 ? "" : "s",
+                      e->deciders->scalars.size(), e->deciders->scalars.size() == 1 ? "" : "s",
+                      1e6 * e->guard_ms / static_cast<double>(e->guard_calls));
+        out.back().note += note;
+      }
+      if (e->guard_failures > 0)
+        out.back().note += "; the guard failed on " + std::to_string(e->guard_failures) + " call" +
+                           (e->guard_failures > 1 ? "s" : "") + " (blocks recorded again)";
+      if (!e->full_why.empty()) out.back().note += "; full patterns: " + e->full_why;
     }
   for (const auto& [loop, s] : loops_)
     for (const auto& e : s->entries) out.push_back(e->stats);

@@ -72,6 +72,8 @@ class TraceController : public interp::SiteHook {
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
   std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call);
+  void guard_results(Entry& e, interp::SiteCall& call, const std::vector<double>& scalars);
+  void drop_specialised(Entry& e, interp::SiteCall& call);
   void specialise_results(Entry& e, interp::SiteCall& call);
 
   struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit

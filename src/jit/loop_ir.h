@@ -118,6 +118,7 @@ struct ArraySlot {
     Vector,  // a partial argument that is a global vector (one block per element)
     Result,  // result `index`'s components (a global vector or a matrix's values)
     Table,   // result `index`'s per-element block table (AssemblyIndex::table)
+    Marks,   // result `index`'s marks, a byte per block, or null (see jit/write_guard.h)
   };
   Kind kind = Kind::Field;
   int member = 0;       // Field
@@ -150,9 +151,6 @@ struct Trace {
   std::vector<Stmt> body;
   std::vector<ErrorSite> errors;
   bool writes_fields = false;  // some Store (an apply with inout fields)
-  // The error a matrix write reports when its table entry is -1: the block is not in the
-  // pattern the controller specialised the result to (-1: no matrix results).
-  int outside_error = -1;
   bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
 };
 

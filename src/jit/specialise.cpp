@@ -5,24 +5,20 @@
 
 namespace simit::jit {
 
-std::optional<SpecialisedPattern> specialise(const runtime::SystemMatrix& m, double max_kept) {
+std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
+                                             const std::vector<uint8_t>& marks, double max_kept) {
   const auto start = std::chrono::steady_clock::now();
-  const runtime::MatrixPattern& p = m.pattern();
-  if (!p.has_assembly_index() || !p.canonical() || !m.is_float()) return std::nullopt;
-  const int bs = m.block_size();
-  const double* v = m.values();
+  const runtime::MatrixPattern& p = *full;
   const int64_t total = p.nnz();
+  if (!p.has_assembly_index() || !p.canonical() || static_cast<int64_t>(marks.size()) != total)
+    return std::nullopt;
   std::vector<int32_t> position(static_cast<size_t>(total), -1);
   int32_t kept = 0;
-  for (int64_t k = 0; k < total; ++k) {
-    bool zero = true;
-    // A NaN compares unequal to zero: its block is kept.
-    for (int i = 0; i < bs && zero; ++i) zero = v[k * bs + i] == 0.0;
-    if (!zero) position[static_cast<size_t>(k)] = kept++;
-  }
+  for (int64_t k = 0; k < total; ++k)
+    if (marks[static_cast<size_t>(k)]) position[static_cast<size_t>(k)] = kept++;
   if (static_cast<double>(kept) > max_kept * static_cast<double>(total)) return std::nullopt;
   SpecialisedPattern s;
-  s.full = m.shared_pattern();
+  s.full = full;
   s.kept = kept;
   s.total = total;
   std::vector<int32_t> row_ptr(static_cast<size_t>(p.rows()) + 1, 0), col_idx;
@@ -41,6 +37,10 @@ std::optional<SpecialisedPattern> specialise(const runtime::SystemMatrix& m, dou
   s.build_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return s;
+}
+
+bool same_blocks(const SpecialisedPattern& a, const SpecialisedPattern& b) {
+  return a.full == b.full && a.kept == b.kept && a.table == b.table;
 }
 
 }  // namespace simit::jit

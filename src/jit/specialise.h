@@ -1,14 +1,14 @@
 // Specialised result patterns: a map's matrix result assembled on a pattern of only the
-// blocks its element function writes, measured on a compiled run (docs/jit.md).
+// blocks its element function writes, recorded on a compiled run (docs/jit.md).
 //
 // A map over tets assembles into the pattern of every pair of a tet's vertices, but the fem
-// stiffness writes no block that touches a pinned vertex: on the bunny 55% of the blocks stay
-// zero. Zeroing them, adding them into M - h^2 K and streaming them through every product of
-// the solve costs time and memory for nothing. After a compiled run on the full pattern, the
-// controller keeps the blocks that hold a non-zero component (or a NaN) and remaps the
-// pattern's per-element table onto them, -1 for each block left out. Later runs assemble on
-// the kept pattern; a write whose table entry is -1 (the conditions changed: a vertex
-// unpinned) stops the kernel, and the site runs again on the full pattern, for good.
+// stiffness writes no block that touches a pinned vertex: on the bunny 55% of the blocks are
+// never written. Zeroing them, adding them into M - h^2 K and streaming them through every
+// product of the solve costs time and memory for nothing. A compiled run on the full pattern
+// marks each block it writes; the controller keeps those, remaps the pattern's per-element
+// table onto them (-1 for each block left out, which no write reaches while the inputs that
+// decide the writes are unchanged: jit/write_guard.h), and later runs assemble on the kept
+// pattern.
 #pragma once
 
 #include <cstdint>
@@ -28,8 +28,11 @@ struct SpecialisedPattern {
   double build_ms = 0.0;
 };
 
-// The specialisation of `m` (assembled on a pattern with an assembly index) to its blocks that
-// are not all zero, or nothing when it would keep more than `max_kept` of them.
-std::optional<SpecialisedPattern> specialise(const runtime::SystemMatrix& m, double max_kept);
+// The specialisation of `full` (a pattern with an assembly index) to its blocks marked
+// written (a byte per block), or nothing when it would keep more than `max_kept` of them.
+std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
+                                             const std::vector<uint8_t>& marks, double max_kept);
+// Whether two specialisations keep the same blocks of the same pattern.
+bool same_blocks(const SpecialisedPattern& a, const SpecialisedPattern& b);
 
 }  // namespace simit::jit

@@ -1360,15 +1360,13 @@ TracedSite Tracer::run() {
         trace_.pairs[i] = static_cast<int>(in_.patterns[i]->assembly().pairs());
         array({ArraySlot::Kind::Table, 0, static_cast<int>(i), Ty::I32, false, false,
                trace_.pairs[i], f.results[i].name + ".table"});
+        array({ArraySlot::Kind::Marks, 0, static_cast<int>(i), Ty::Bool, false, true, 1,
+               f.results[i].name + ".marks"});
       }
       array({ArraySlot::Kind::Result, 0, static_cast<int>(i), Ty::F64, false, true, 1,
              f.results[i].name});
     }
     frames_.push_back(std::move(top));
-    if (std::any_of(trace_.pairs.begin(), trace_.pairs.end(), [](int p) { return p > 0; })) {
-      trace_.errors.push_back({site.func_span, "a write outside the specialised pattern"});
-      trace_.outside_error = static_cast<int>(trace_.errors.size() - 1);
-    }
     exec_block(f.body);
     // A failed check makes the interpreter run the site again, which must not see the
     // fields this trace has already written.

@@ -83,11 +83,13 @@ void Field::reallocate(size_t capacity) {
     std::memset(fresh.get() + keep, 0, capacity - keep);
   }
   buffer_ = std::move(fresh);
+  ++write_version_;
   capacity_ = capacity;
   bytes_ = std::min(bytes_, capacity);
 }
 
 std::byte* Field::mutable_bytes() {
+  ++write_version_;
   if (buffer_.use_count() > 1) reallocate(bytes_);
   return buffer_.get();
 }
@@ -101,6 +103,7 @@ void Field::resize(size_t elements) {
   }
   if (n > bytes_) std::memset(buffer_.get() + bytes_, 0, n - bytes_);
   bytes_ = n;
+  ++write_version_;
 }
 
 void Field::reserve(size_t elements) {
@@ -364,6 +367,7 @@ void Set::assign_field(int field_number, const Tensor& value) {
     if (value.shared_buffer() == f.buffer_) return;  // `S.f = S.f`
     f.buffer_ = value.shared_buffer();
     f.bytes_ = f.capacity_ = bytes;
+    ++f.write_version_;
     return;
   }
   if (bytes) std::memcpy(f.mutable_bytes(), value.ints(), bytes);
@@ -375,6 +379,7 @@ Tensor Set::take_field(int field_number) {
   if (!f.type().single) {
     f.buffer_.reset();
     f.bytes_ = f.capacity_ = 0;
+    ++f.write_version_;
   }
   return out;
 }

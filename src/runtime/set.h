@@ -75,6 +75,9 @@ class Field {
   // else (a tensor read from the field) shares it now.
   const std::shared_ptr<std::byte[]>& buffer() const { return buffer_; }
   bool shared() const { return buffer_.use_count() > 1; }
+  // Counts the mutable accesses (and the arrays adopted or dropped), whether or not they
+  // changed a value: a cache derived from the field's values is valid while it is unchanged.
+  uint64_t write_version() const { return write_version_; }
 
  private:
   friend class Set;
@@ -100,6 +103,7 @@ class Field {
   std::shared_ptr<std::byte[]> buffer_;
   size_t bytes_ = 0;     // in use
   size_t capacity_ = 0;  // allocated
+  uint64_t write_version_ = 0;
 };
 
 enum class SetKind : uint8_t { Vertex, Edge, Grid };

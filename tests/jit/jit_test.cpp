@@ -10,6 +10,7 @@
 #include "api/engine.h"
 #include "jit/loop_ir.h"
 #include "jit/pruned_matrix.h"
+#include "jit/write_guard.h"
 
 namespace simit::jit {
 namespace {
@@ -72,6 +73,80 @@ TEST(LoopIr, VerifierRejectsALocalReadBeforeItIsSetOnEveryPath) {
   EXPECT_EQ(verify(t), "local %0 read before it is set");
   t.body[0].orelse.push_back(set);  // now both paths set it
   EXPECT_EQ(verify(t), "");
+}
+
+ExprRef node(ExprKind kind, Ty ty, int slot, std::vector<ExprRef> ops = {}) {
+  Expr e;
+  e.kind = kind;
+  e.ty = ty;
+  e.slot = slot;
+  e.ops = std::move(ops);
+  return std::make_shared<const Expr>(e);
+}
+ExprRef load(int slot, Ty ty) {
+  return node(ExprKind::Load, ty, slot, {node(ExprKind::Element, Ty::I32, 0)});
+}
+Stmt set_local(int slot, ExprRef value) {
+  Stmt s;
+  s.kind = StmtKind::SetLocal;
+  s.slot = slot;
+  s.value = std::move(value);
+  return s;
+}
+Stmt if_then(ExprRef cond, std::vector<Stmt> body, std::vector<Stmt> orelse = {}) {
+  Stmt s;
+  s.kind = StmtKind::If;
+  s.value = std::move(cond);
+  s.body = std::move(body);
+  s.orelse = std::move(orelse);
+  return s;
+}
+Stmt assemble(ExprRef value) {
+  Stmt s;
+  s.kind = StmtKind::Assemble;
+  s.slot = 3;
+  s.pair = 0;
+  s.value = std::move(value);
+  return s;
+}
+
+// The inputs that decide a map's matrix writes: what the conditions around them read,
+// through locals assigned under other conditions; not what the written values read.
+TEST(WriteGuard, TheDecidersAreWhatTheConditionsAroundTheWritesRead) {
+  Trace t;
+  t.arrays = {{ArraySlot::Kind::Field, 1, 3, Ty::Bool, false, false, 1, "pinned"},
+              {ArraySlot::Kind::Field, 1, 0, Ty::F64, false, false, 3, "x"},
+              {ArraySlot::Kind::Vector, 0, 0, Ty::F64, false, false, 3, "p"},
+              {ArraySlot::Kind::Result, 0, 0, Ty::F64, false, true, 9, "K"},
+              {ArraySlot::Kind::Table, 0, 0, Ty::I32, false, false, 1, "K.table"}};
+  t.scalars = {Ty::F64};
+  t.locals = {Ty::F64, Ty::Bool};
+  t.local_mutable = {false, true};
+  ExprRef pinned = load(0, Ty::Bool), x = load(1, Ty::F64);
+  // %1 = pinned ? false : true (assigned in branches: control-dependent on `pinned`).
+  t.body.push_back(set_local(0, x));
+  Expr no;
+  no.ty = Ty::Bool;
+  t.body.push_back(if_then(pinned, {set_local(1, std::make_shared<const Expr>(no))},
+                           {set_local(1, node(ExprKind::Unary, Ty::Bool, 0, {pinned}))}));
+  t.body.push_back(
+      if_then(node(ExprKind::Local, Ty::Bool, 1), {assemble(node(ExprKind::Local, Ty::F64, 0))}));
+  WriteDeciders d = write_deciders(t);
+  EXPECT_EQ(d.fields, std::vector<int>{0});
+  EXPECT_TRUE(d.scalars.empty());
+  EXPECT_EQ(d.unguardable, "");
+  // A write under a condition on the scalar argument, inside one on x.
+  ExprRef positive =
+      node(ExprKind::Compare, Ty::Bool, 0, {node(ExprKind::Scalar, Ty::F64, 0), c(0.0)});
+  t.body.push_back(if_then(node(ExprKind::Compare, Ty::Bool, 0, {x, c(1.0)}),
+                           {if_then(positive, {assemble(c(1.0))})}));
+  d = write_deciders(t);
+  EXPECT_EQ(d.fields, (std::vector<int>{0, 1}));
+  EXPECT_EQ(d.scalars, std::vector<int>{0});
+  // A condition on a global vector: no write version to guard it with.
+  t.body.push_back(if_then(node(ExprKind::Compare, Ty::Bool, 0, {load(2, Ty::F64), c(0.0)}),
+                           {assemble(c(2.0))}));
+  EXPECT_EQ(write_deciders(t).unguardable, "the writes depend on 'p', which has no write version");
 }
 
 TEST(LoopIr, VerifierRejectsMismatchedTypes) {
@@ -352,9 +427,11 @@ TEST(Jit, CompiledSitesComputeTheInterpretersBits) {
 }
 
 // The stiffness writes no block of the pinned vertex 0: after its first compiled run its
-// result keeps only the written blocks; unpinning the vertex makes a write fall outside,
-// and the site goes back to the full pattern with the interpreter's values throughout.
-TEST(Jit, MatrixResultsAreSpecialisedToTheBlocksWrittenUntilAWriteFallsOutside) {
+// result keeps only the written blocks, guarded by the version of `pinned` (the only field
+// its write conditions read); unpinning the vertex fails the guard, the blocks are recorded
+// again, and now that every block is written the site stays on the full pattern, with the
+// interpreter's values throughout.
+TEST(Jit, MatrixResultsAreSpecialisedToTheBlocksWrittenWhileTheirDecidingFieldsAreUnchanged) {
   if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
   Program in(ExecutorKind::Interpreter), jit(ExecutorKind::Jit);
   in.call("init");
@@ -374,7 +451,9 @@ TEST(Jit, MatrixResultsAreSpecialisedToTheBlocksWrittenUntilAWriteFallsOutside) 
   }
   std::string stats = jit.stats();
   EXPECT_NE(stats.find("result 0 specialised to"), std::string::npos) << stats;
-  EXPECT_EQ(stats.find("outside the specialised pattern"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("guard: 1 field version and 0 scalars compared per call"), std::string::npos)
+      << stats;
+  EXPECT_EQ(stats.find("the guard failed"), std::string::npos) << stats;
   in.mesh.verts.field(3).at<bool>(0)[0] = false;
   jit.mesh.verts.field(3).at<bool>(0)[0] = false;
   for (int frame = 0; frame < 2; ++frame) {
@@ -385,7 +464,129 @@ TEST(Jit, MatrixResultsAreSpecialisedToTheBlocksWrittenUntilAWriteFallsOutside) 
     expect_same_fields(in.mesh.verts, jit.mesh.verts);
   }
   stats = jit.stats();
-  EXPECT_NE(stats.find("a write outside the specialised pattern: full patterns since (1 call)"),
+  EXPECT_NE(stats.find("the guard failed on 1 call (blocks recorded again); full patterns: "
+                       "nearly every block is written"),
+            std::string::npos)
+      << stats;
+}
+
+// Springs on a chain of six vertices; a spring writes its two off-diagonal entries only while
+// both its ends are on, and a vertex's k scales them (a written entry may be zero).
+const char* kChainProgram = R"(
+element V
+  k : float;
+  on : bool;
+end
+element E
+end
+extern verts : set{V};
+extern edges : set{E}(verts, verts);
+
+func spring(e : E, v : (V * 2)) -> K : matrix[verts,verts](float)
+  if v(0).on and v(1).on
+    K(v(0), v(1)) = v(0).k * v(1).k;
+    K(v(1), v(0)) = v(0).k;
+  end
+end
+
+export func step() -> K : matrix[verts,verts](float)
+  K = map spring to edges reduce +;
+end
+)";
+
+struct Chain {
+  std::shared_ptr<const CompiledProgram> compiled =
+      CompiledProgram::from_source("chain.sim", kChainProgram);
+  runtime::Set verts{"verts"};
+  runtime::Set edges{"edges", {&verts, &verts}};
+  std::unique_ptr<Engine> engine;
+
+  explicit Chain(ExecutorKind kind) {
+    EXPECT_TRUE(compiled->ok());
+    verts.add_many(6);
+    verts.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    verts.add_field("on", runtime::FieldType{runtime::ComponentKind::Bool, {}, false});
+    for (int i = 0; i < 6; ++i) {
+      verts.field(0).at<double>(i)[0] = i == 0 ? 0.0 : 0.5 + 0.25 * i;
+      verts.field(1).at<bool>(i)[0] = i != 2;
+    }
+    const int32_t ends[] = {0, 1, 1, 2, 2, 3, 3, 4, 4, 5};
+    edges.add_edges(ends);
+    EngineOptions o;
+    o.executor = kind;
+    o.jit.threshold = 0;
+    engine = std::make_unique<Engine>(compiled, o);
+    engine->bind_set(*compiled->find_extern("verts"), verts);
+    engine->bind_set(*compiled->find_extern("edges"), edges);
+  }
+  Value step() { return engine->call(*compiled->find_func("step"), {})[0]; }
+  void set_on(int i, bool on) { verts.field(1).at<bool>(i)[0] = on; }
+  double k(int i) { return verts.field(0).at<double>(i)[0]; }
+  std::string stats() const {
+    std::ostringstream os;
+    engine->print_jit_stats(os);
+    return os.str();
+  }
+};
+
+// The blocks kept are the blocks written, zeros included; the guard holds while only values
+// change, fails when `on` is written, and a recording that finds the same blocks keeps the
+// same pattern.
+TEST(Jit, ASpecialisedPatternKeepsTheBlocksWrittenAndIsRebuiltWhenItsGuardFails) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  Chain in(ExecutorKind::Interpreter), jit(ExecutorKind::Jit);
+  // 6 diagonal and 10 off-diagonal blocks; the springs (1,2) and (2,3) are off: 6 written.
+  Value a = in.step(), b = jit.step();
+  expect_same(a, b, "K");
+  b = jit.step();
+  const runtime::PatternPtr kept = b.matrix()->shared_pattern();
+  EXPECT_EQ(kept->nnz(), 6);
+  EXPECT_EQ(b.matrix()->pattern().find(0, 1), 0);  // written as 0 * k1: kept
+  EXPECT_LT(b.matrix()->pattern().find(1, 2), 0);
+  EXPECT_EQ(b.matrix()->component(0, 1), 0.0);
+  // Values change, the blocks do not: the guard holds and the zero block fills.
+  for (Chain* c : {&in, &jit}) c->verts.field(0).at<double>(0)[0] = 2.0;
+  a = in.step(), b = jit.step();
+  expect_same(a, b, "K with k0 = 2");
+  EXPECT_EQ(b.matrix()->shared_pattern(), kept);
+  EXPECT_EQ(b.matrix()->component(0, 1), 2.0 * jit.k(1));
+  EXPECT_EQ(b.matrix()->component(1, 0), 2.0);
+  std::string stats = jit.stats();
+  EXPECT_NE(stats.find("result 0 specialised to 37.5% of its blocks (6 of 16"), std::string::npos)
+      << stats;
+  EXPECT_NE(stats.find("guard: 1 field version and 0 scalars compared per call"), std::string::npos)
+      << stats;
+  // Vertex 2 on: every spring writes, 10 of 16 blocks.
+  for (Chain* c : {&in, &jit}) c->set_on(2, true);
+  for (int call = 0; call < 2; ++call) {
+    a = in.step(), b = jit.step();
+    expect_same(a, b, "K with vertex 2 on");
+  }
+  EXPECT_EQ(b.matrix()->pattern().nnz(), 10);
+  EXPECT_EQ(b.matrix()->component(2, 3), jit.k(2) * jit.k(3));
+  const runtime::PatternPtr all_on = b.matrix()->shared_pattern();
+  // `on` written with the values it holds: the guard fails, the blocks recorded are the same
+  // and so is the pattern.
+  for (Chain* c : {&in, &jit}) c->set_on(2, true);
+  for (int call = 0; call < 2; ++call) {
+    a = in.step(), b = jit.step();
+    expect_same(a, b, "K after rewriting on");
+  }
+  EXPECT_EQ(b.matrix()->shared_pattern(), all_on);
+  stats = jit.stats();
+  EXPECT_NE(stats.find("the guard failed on 2 calls"), std::string::npos) << stats;
+  EXPECT_EQ(stats.find("full patterns"), std::string::npos) << stats;
+  // Written before two calls in a row: the deciding field changes with every call, and the
+  // result stays on the full pattern.
+  for (int call = 0; call < 3; ++call) {
+    for (Chain* c : {&in, &jit}) c->set_on(2, call % 2 == 0);
+    a = in.step(), b = jit.step();
+    expect_same(a, b, "K with vertex 2 toggled");
+  }
+  EXPECT_EQ(b.matrix()->pattern().nnz(), 16);
+  stats = jit.stats();
+  EXPECT_NE(stats.find("full patterns: the inputs that decide the writes changed on two calls in "
+                       "a row"),
             std::string::npos)
       << stats;
 }

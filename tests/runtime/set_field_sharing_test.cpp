@@ -42,8 +42,8 @@ TEST(SetFieldSharing, AWriteAfterAReadLeavesTheReadValueUnchanged) {
   nodes.set(x, 0, vec3(1, 2, 3));
   Tensor before = nodes.field_tensor(x);
   const double* old_array = before.floats();
-  nodes.set(x, 0, vec3(4, 5, 6));                   // Set::set copies first
-  nodes.field(x).data<double>()[3] = 9.0;           // the array is now private: no copy
+  nodes.set(x, 0, vec3(4, 5, 6));          // Set::set copies first
+  nodes.field(x).data<double>()[3] = 9.0;  // the array is now private: no copy
   nodes.field(x).at<double>(2)[0] = 8.0;
   EXPECT_EQ(before.floats(), old_array);
   EXPECT_EQ(before.floats()[0], 1.0);
@@ -145,6 +145,45 @@ TEST(SetFieldSharing, Float32FieldsAreReadAsConvertedCopies) {
   t.mutable_floats()[0] = 4.0;
   nodes.assign_field(x, t);
   EXPECT_EQ(nodes.field(x).data<float>()[0], 4.0f);
+}
+
+// The write version counts every way a field can change, and nothing that only reads it:
+// caches derived from a field's values (the JIT's specialised patterns) compare it.
+TEST(SetFieldSharing, TheWriteVersionChangesWithEveryWriteAndNoRead) {
+  Set nodes("nodes");
+  const int x = nodes.add_field("x", vec3_field());
+  nodes.add_many(10);
+  const Set& view = nodes;
+  uint64_t v = view.field(x).write_version();
+  auto changed = [&] {
+    const uint64_t now = view.field(x).write_version();
+    const bool moved = now != v;
+    v = now;
+    return moved;
+  };
+  (void)view.field(x).bytes();
+  (void)view.field(x).data<double>();
+  (void)nodes.get(x, 3);
+  EXPECT_FALSE(changed()) << "reads";
+  nodes.set(x, 3, vec3(1, 2, 3));
+  EXPECT_TRUE(changed()) << "set";
+  Tensor whole = nodes.field_tensor(x);
+  EXPECT_FALSE(changed()) << "read as a tensor";
+  nodes.field(x).data<double>()[0] = 5.0;
+  EXPECT_TRUE(changed()) << "a mutable access (copying the array shared with `whole`)";
+  nodes.assign_field(x, whole);
+  EXPECT_TRUE(changed()) << "an adopted array";
+  nodes.assign_field(x, nodes.field_tensor(x));
+  EXPECT_FALSE(changed()) << "S.x = S.x";
+  Tensor taken = nodes.take_field(x);
+  EXPECT_TRUE(changed()) << "taken";
+  nodes.assign_field(x, taken);
+  EXPECT_TRUE(changed()) << "put back";
+  nodes.add_many(5);
+  EXPECT_TRUE(changed()) << "grown";
+  // The array is still the one adopted from `whole`: element 3 as set, element 0 not 5.
+  EXPECT_EQ(view.field(x).data<double>()[3 * 3 + 1], 2.0);
+  EXPECT_EQ(view.field(x).data<double>()[0], 0.0);
 }
 
 }  // namespace

@@ -184,16 +184,28 @@ Value* Emitter::assemble_base(const Stmt& s) {
   if (s.pair < 0) return address(s.slot, expr(*s.index), 0);
   // The block's position in the matrix comes from the pattern's per-element table.
   const int result = slots_[s.slot].index;
-  int table = -1;
-  for (size_t i = 0; i < slots_.size(); ++i)
-    if (slots_[i].kind == ArraySlot::Kind::Table && slots_[i].index == result)
-      table = static_cast<int>(i);
+  int table = -1, marks = -1;
+  for (size_t i = 0; i < slots_.size(); ++i) {
+    if (slots_[i].index != result) continue;
+    if (slots_[i].kind == ArraySlot::Kind::Table) table = static_cast<int>(i);
+    if (slots_[i].kind == ArraySlot::Kind::Marks) marks = static_cast<int>(i);
+  }
   llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
   tag(pos, table);
-  // -1: the block was left out of the pattern the controller specialised to.
-  if (t_->outside_error >= 0)
-    fail_unless(b_.CreateICmpSGE(pos, b_.getInt32(0)), t_->outside_error, "outside");
+  if (marks >= 0) mark(marks, pos);
   return address(s.slot, pos, 0);
+}
+
+// While the controller records the blocks a call writes (jit/write_guard.h), `marks` is an
+// array of a byte per block and each write sets its block's; otherwise it is null.
+void Emitter::mark(int marks, Value* pos) {
+  auto* set = llvm::BasicBlock::Create(ctx_, "mark", fn_);
+  auto* cont = llvm::BasicBlock::Create(ctx_, "marked", fn_);
+  b_.CreateCondBr(b_.CreateIsNotNull(arrays_[marks]), set, cont);
+  b_.SetInsertPoint(set);
+  tag(b_.CreateStore(b_.getInt8(1), address(marks, pos, 0)), marks);
+  b_.CreateBr(cont);
+  b_.SetInsertPoint(cont);
 }
 
 // Statements s[0 .. n-1]: components s[0].comp, s[0].comp + 1, ... of one block, whose values

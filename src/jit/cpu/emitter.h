@@ -108,6 +108,7 @@ class Emitter {
 
   void decompose(const Stmt& s);
   Value* assemble_base(const Stmt& s);
+  void mark(int marks, Value* pos);
   void assemble(const Stmt* s, int n);
   int assemble_run(const std::vector<Stmt>& body, size_t i);
   Value* root_address(int row);
@@ -147,7 +148,8 @@ class Emitter {
   llvm::MDNode *inputs_ = nullptr, *results_ = nullptr;
   void tag(llvm::Instruction* i, int slot) {
     if (!inputs_) return;
-    const bool result = slots_[static_cast<size_t>(slot)].kind == ArraySlot::Kind::Result;
+    const ArraySlot::Kind k = slots_[static_cast<size_t>(slot)].kind;
+    const bool result = k == ArraySlot::Kind::Result || k == ArraySlot::Kind::Marks;
     i->setMetadata(llvm::LLVMContext::MD_alias_scope, result ? results_ : inputs_);
     i->setMetadata(llvm::LLVMContext::MD_noalias, result ? inputs_ : results_);
   }
