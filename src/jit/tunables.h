@@ -13,6 +13,10 @@ inline constexpr long kHotThreshold = 2;
 inline constexpr int kMaxFailures = 3;
 // Statements a trace may hold after inlining and unrolling.
 inline constexpr size_t kMaxTraceStatements = 200000;
+// Components a dense tensor of a traced function may have, blocked or not: the tracer makes
+// each one a value of its own. The fem Hessian's element matrix, 4 x 4 blocks of 3 x 3, has
+// 144; a larger tensor leaves its site interpreted.
+inline constexpr size_t kMaxDenseComponents = 144;
 // Calls inlined inside one another.
 inline constexpr int kMaxInlineDepth = 32;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
@@ -26,6 +30,11 @@ inline constexpr int kLargeTraceOptLevel = 1;
 // every value once and keeps no local in memory, and the pipeline took a quarter of its
 // compile time for no measurable speed (the fem stiffness: 77 ms to 58).
 inline constexpr int kLargeLanesTraceOptLevel = 0;
+// A trace of more nodes than kHugeTrace (the fem Hessian with its 12 x 12 element matrix:
+// 20000) skips the IR pipeline and takes LLVM's fast code generator, which cut its compile
+// from 220 ms to 30; its time goes to the decomposition it calls, so the code barely slows.
+inline constexpr size_t kHugeTrace = 12000;
+inline constexpr int kHugeTraceOptLevel = 0;
 // A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
 // keeps at most this fraction of them.
 inline constexpr double kSpecialiseAtMost = 0.9;
