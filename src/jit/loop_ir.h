@@ -11,6 +11,7 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "frontend/source.h"
@@ -118,6 +119,10 @@ struct ArraySlot {
     Vector,  // a partial argument that is a global vector (one block per element)
     Result,  // result `index`'s components (a global vector or a matrix's values)
     Table,   // result `index`'s per-element block table (AssemblyIndex::table)
+    Matrix,  // a partial argument that is a global matrix: its values, one block per position
+    // Per element, where in partial matrix argument `index`'s pattern each block the trace
+    // reads lies (-1: outside it), one component per entry of `reads`.
+    Positions,
   };
   Kind kind = Kind::Field;
   int member = 0;       // Field
@@ -127,6 +132,8 @@ struct ArraySlot {
   bool written = false;
   int components = 1;  // per element (per block for results)
   std::string name;    // for dumps and messages
+  // Positions: the (row member, column member) of each block read, by component.
+  std::vector<std::pair<int, int>> reads;
 };
 
 // A run-time check that failed: where, and what to say.
@@ -153,7 +160,7 @@ struct Trace {
   // The error a matrix write reports when its table entry is -1: the block is not in the
   // pattern the controller specialised the result to (-1: no matrix results).
   int outside_error = -1;
-  bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
+  bool float32 = false;  // the interpreter's float32 mode (decompositions' tolerance)
 };
 
 // A run of system-level statements (a CG loop): scalar statements, fused passes over the

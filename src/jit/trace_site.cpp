@@ -154,7 +154,7 @@ ExprRef leaf(ExprKind k, Ty ty, int slot) {
 // Symbolic values of the traced function's expressions.
 
 struct Sym {
-  enum class Kind { None, Tensor, Element, Tuple, Vector, Result };
+  enum class Kind { None, Tensor, Element, Tuple, Vector, Matrix, Result };
   Kind kind = Kind::None;
   Ty ty = Ty::F64;
   std::vector<int> dims;   // Tensor: dimensions (none for a scalar); of the blocks if blocked
@@ -163,7 +163,7 @@ struct Sym {
   // row-major one after another (runtime/tensor.h).
   std::vector<ExprRef> c;
   int member = -1;     // Element: 0 the visited element, k + 1 its endpoint k
-  int slot = -1;       // Vector: array slot; Result: result index
+  int slot = -1;       // Vector, Matrix: array slot; Result: result index
   bool inout = false;  // Element: its fields may be written
 
   size_t size() const { return c.size(); }
@@ -463,6 +463,10 @@ class Tracer {
     return s;
   }
   Sym read_block(const Sym& base, const ast::TensorRead& r);
+  Sym read_matrix_block(const Sym& matrix, const ast::TensorRead& r);
+  Sym matrix_arg(int k, const ast::Param& p, const interp::Value& v);
+  template <class F>
+  void emit_if(ExprRef condition, const SourceSpan& at, F then_body);
   Sym elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at);
   Sym blocked_product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
   Sym product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
@@ -680,6 +684,7 @@ Sym Tracer::eval_read(const ast::TensorRead& r) {
     for (int k = 0; k < a.components; ++k) c.push_back(load(base.slot, at.member, k, r.span));
     return tensor(a.ty, dims_of(*r.type, r.span), std::move(c));
   }
+  if (base.kind == Sym::Kind::Matrix) return read_matrix_block(base, r);
   if (base.kind != Sym::Kind::Tensor) give_up(r.span, "reading from this value is not compiled");
   if (r.indices.size() != base.dims.size()) give_up(r.span, "index count does not match");
   if (base.blocked()) return read_block(base, r);
@@ -719,6 +724,49 @@ Sym Tracer::read_block(const Sym& base, const ast::TensorRead& r) {
   return tensor(base.ty, base.block,
                 std::vector<ExprRef>(base.c.begin() + static_cast<std::ptrdiff_t>(first),
                                      base.c.begin() + static_cast<std::ptrdiff_t>(first + bs)));
+}
+
+// `A(p, q)` of a global matrix argument at two members of the element: the block where the
+// controller's position table finds it in A's pattern, zero outside it (as the interpreter).
+Sym Tracer::read_matrix_block(const Sym& matrix, const ast::TensorRead& r) {
+  if (r.indices.size() != 2 || !r.indices[0] || !r.indices[1])
+    give_up(r.span, "a global matrix read that is not one block");
+  const Sym row = eval(*r.indices[0]), col = eval(*r.indices[1]);
+  if (row.kind != Sym::Kind::Element || col.kind != Sym::Kind::Element)
+    give_up(r.span, "a global matrix read that is not at members of the element");
+  const int arg = trace_.arrays[matrix.slot].index;
+  const std::string name = trace_.arrays[matrix.slot].name + ".positions";
+  const int table = array({ArraySlot::Kind::Positions, 0, arg, Ty::I32, false, false, 0, name, {}});
+  std::vector<std::pair<int, int>>& reads = trace_.arrays[table].reads;
+  const std::pair<int, int> pair{row.member, col.member};
+  auto found = std::find(reads.begin(), reads.end(), pair);
+  const int comp = static_cast<int>(found - reads.begin());
+  if (found == reads.end()) reads.push_back(pair);
+  trace_.arrays[table].components = static_cast<int>(reads.size());
+  const ExprRef pos = load(table, 0, comp, r.span);
+  const int bs = trace_.arrays[matrix.slot].components;
+  std::vector<int> locals;
+  std::vector<ExprRef> c;
+  for (int k = 0; k < bs; ++k) {
+    locals.push_back(new_local(Ty::F64, true));
+    set_local(locals.back(), fconst(0.0), r.span);
+  }
+  emit_if(compare(CmpOp::Ge, pos, iconst(0), r.span), r.span, [&] {
+    for (int k = 0; k < bs; ++k) {
+      Expr e;
+      e.kind = ExprKind::Load;
+      e.ty = Ty::F64;
+      e.slot = matrix.slot;
+      e.comp = k;
+      e.ops = {pos};
+      e.span = r.span;
+      set_local(locals[static_cast<size_t>(k)], make(std::move(e)), r.span);
+    }
+  });
+  for (int l : locals) c.push_back(read_local(l));
+  Sym out = tensor(Ty::F64, dims_of(*r.type, r.span), std::move(c));
+  if (out.size() != static_cast<size_t>(bs)) give_up(r.span, "a matrix block of another shape");
+  return out;
 }
 
 Sym Tracer::elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at) {
@@ -1242,6 +1290,25 @@ void Tracer::merge_assigned(const ast::Block& b) {
 
 void Tracer::exec_if(const ast::If& s) { exec_if_from(s, 0); }
 
+// An If with no else part whose body then_body() emits.
+template <class F>
+void Tracer::emit_if(ExprRef condition, const SourceSpan& at, F then_body) {
+  Stmt st;
+  st.kind = StmtKind::If;
+  st.value = std::move(condition);
+  st.span = at;
+  std::vector<Stmt>* saved = out_;
+  out_ = &st.body;
+  blocks_.push_back(next_block_++);
+  if (zero_fold) zero_fold->open();
+  then_body();
+  if (zero_fold)
+    if (auto check = zero_fold->close(trace_.errors, at)) st.body.push_back(std::move(*check));
+  blocks_.pop_back();
+  out_ = saved;
+  emit(std::move(st));
+}
+
 // Conditions that fold choose their branch now; the first that does not becomes an If whose
 // else part holds the rest of the chain (from condition `first` on).
 void Tracer::exec_if_from(const ast::If& s, size_t first) {
@@ -1422,7 +1489,7 @@ void Tracer::assign_result(const ast::TensorRead& r, const ast::TensorRead* comp
   if (it == frame().vars.end() || it->second.kind != Sym::Kind::Result || frames_.size() != 1)
     give_up(at, "a result write outside the mapped function");
   const int res = it->second.slot;
-  const int slot = array({ArraySlot::Kind::Result, 0, res, Ty::F64, false, true, 0, ""});
+  const int slot = array({ArraySlot::Kind::Result, 0, res, Ty::F64, false, true, 0, "", {}});
   ArraySlot& a = trace_.arrays[slot];
   if (value.kind != Sym::Kind::Tensor || value.ty != Ty::F64)
     give_up(at, "a result write of a non-float");
@@ -1482,6 +1549,24 @@ void Tracer::assign_result(const ast::TensorRead& r, const ast::TensorRead* comp
   }
 }
 
+// A global matrix argument, read by blocks (read_matrix_block).
+Sym Tracer::matrix_arg(int k, const ast::Param& p, const interp::Value& v) {
+  const runtime::SystemMatrix* m = v.matrix().get();
+  if (!m || !m->is_float()) give_up(p.span, "a global matrix argument of non-float components");
+  // The interpreter sums the repeated blocks of a stencil pattern where it reads one.
+  if (!m->pattern().canonical())
+    give_up(p.span, "a global matrix argument whose pattern repeats blocks");
+  ArraySlot a;
+  a.kind = ArraySlot::Kind::Matrix;
+  a.index = k;
+  a.components = m->block_size();
+  a.name = p.name;
+  Sym s;
+  s.kind = Sym::Kind::Matrix;
+  s.slot = array(std::move(a));
+  return s;
+}
+
 TracedSite Tracer::run() {
   TracedSite out;
   const ast::Assembly& site = *in_.site;
@@ -1508,7 +1593,10 @@ TracedSite Tracer::run() {
       const interp::Value& v = partial[k];
       const Type& t = *p.var->type;
       Sym s;
-      if (t.kind == Type::Kind::Tensor && t.is_global()) {
+      if (t.kind == Type::Kind::Tensor && t.is_global() &&
+          v.kind() == interp::Value::Kind::Matrix) {
+        s = matrix_arg(static_cast<int>(k), p, v);
+      } else if (t.kind == Type::Kind::Tensor && t.is_global()) {
         if (!v.is_tensor() || v.tensor().kind() != runtime::ComponentKind::Float ||
             t.dims.size() != 1)
           give_up(p.span, "a global argument other than a float vector");
@@ -1548,11 +1636,25 @@ TracedSite Tracer::run() {
       top.vars[f.results[i].var] = r;
       if (in_.patterns[i]) {
         trace_.pairs[i] = static_cast<int>(in_.patterns[i]->assembly().pairs());
-        array({ArraySlot::Kind::Table, 0, static_cast<int>(i), Ty::I32, false, false,
-               trace_.pairs[i], f.results[i].name + ".table"});
+        array({ArraySlot::Kind::Table,
+               0,
+               static_cast<int>(i),
+               Ty::I32,
+               false,
+               false,
+               trace_.pairs[i],
+               f.results[i].name + ".table",
+               {}});
       }
-      array({ArraySlot::Kind::Result, 0, static_cast<int>(i), Ty::F64, false, true, 1,
-             f.results[i].name});
+      array({ArraySlot::Kind::Result,
+             0,
+             static_cast<int>(i),
+             Ty::F64,
+             false,
+             true,
+             1,
+             f.results[i].name,
+             {}});
     }
     frames_.push_back(std::move(top));
     if (std::any_of(trace_.pairs.begin(), trace_.pairs.end(), [](int p) { return p > 0; })) {
