@@ -22,19 +22,19 @@ inline constexpr int kMaxInlineDepth = 32;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
 // LLVM's optimisation level for kernels (2 or 3), and for traces of more loop-IR nodes than
-// kLargeTrace (fully unrolled stiffness matrices), whose O2 compile exceeds 100 ms.
+// kLargeTrace (fully unrolled element matrices), whose O2 compile exceeds 100 ms.
 inline constexpr int kOptLevel = 2;
 inline constexpr size_t kLargeTrace = 4000;
-inline constexpr int kLargeTraceOptLevel = 1;
 // A large trace that runs in lanes skips LLVM's IR pipeline (0): its IR already computes
 // every value once and keeps no local in memory, and the pipeline took a quarter of its
 // compile time for no measurable speed (the fem stiffness: 77 ms to 58).
 inline constexpr int kLargeLanesTraceOptLevel = 0;
-// A trace of more nodes than kHugeTrace (the fem Hessian with its 12 x 12 element matrix:
-// 20000) skips the IR pipeline and takes LLVM's fast code generator, which cut its compile
-// from 220 ms to 30; its time goes to the decomposition it calls, so the code barely slows.
-inline constexpr size_t kHugeTrace = 12000;
-inline constexpr int kHugeTraceOptLevel = 0;
+// A large trace that does not run in lanes (it calls a decomposition, or merges locals after
+// a branch) skips the pipeline too, and takes LLVM's fast code generator: the fem Newton
+// Hessian (20000 nodes) compiled in 220 ms at O1 with the full code generator and in 25 ms
+// so, while its run time, mostly the 12 x 12 projection it calls, grew by 2%.
+inline constexpr int kLargeTraceOptLevel = 0;
+inline constexpr bool kLargeTraceFastCodegen = true;
 // A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
 // keeps at most this fraction of them.
 inline constexpr double kSpecialiseAtMost = 0.9;

@@ -32,7 +32,7 @@ constexpr const char* kFastCodegen = "simit.fast-codegen";
 
 // Object code for each module from a target machine of its own (so compiles on several
 // threads stay apart), at the host's best code generation unless the module asks for the fast
-// one: the code generator's time grows faster than the size of a huge straight-line trace.
+// one (jit/tunables.h, kLargeTraceFastCodegen).
 class Compiler : public llvm::orc::IRCompileLayer::IRCompiler {
  public:
   explicit Compiler(llvm::orc::JITTargetMachineBuilder jtmb, const llvm::TargetOptions& options)
@@ -146,18 +146,16 @@ class CpuBackend : public Backend {
   CpuBackend(Session& s, const HostCalls& host) : s_(s), host_(host) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
-    const size_t nodes = node_count(trace);
-    const int level = nodes > kHugeTrace     ? kHugeTraceOptLevel
-                      : nodes <= kLargeTrace ? kOptLevel
-                      : lanes_fit(trace)     ? kLargeLanesTraceOptLevel
-                                             : kLargeTraceOptLevel;
+    const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace);
+    const int level = !large ? kOptLevel : lanes ? kLargeLanesTraceOptLevel : kLargeTraceOptLevel;
+    const bool fast = large && !lanes && kLargeTraceFastCodegen;
     auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
-      if (nodes > kHugeTrace) m.addModuleFlag(llvm::Module::Warning, kFastCodegen, 1);
+      if (fast) m.addModuleFlag(llvm::Module::Warning, kFastCodegen, 1);
       return Emitter(trace, m, host_).run(name);
     });
     if (k) {
       k->fn = reinterpret_cast<KernelFn>(k->address);
-      k->lanes = lanes_fit(trace) ? kLanes : 1;
+      k->lanes = lanes ? kLanes : 1;
     }
     return k;
   }
