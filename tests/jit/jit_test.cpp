@@ -10,6 +10,7 @@
 #include "api/engine.h"
 #include "jit/loop_ir.h"
 #include "jit/pruned_matrix.h"
+#include "jit/tunables.h"
 
 namespace simit::jit {
 namespace {
@@ -676,6 +677,46 @@ TEST(Jit, BlockedElementMatricesAndMatrixBlockReadsComputeTheInterpretersBits) {
     for (int64_t j = 3; j < h.scalar_cols(); ++j)
       change = std::max(change, std::fabs(h.component(i, j) - h2.component(i, j)));
   EXPECT_GT(change, 1e-3);
+}
+
+// Every component of a dense local becomes a value of its own: a tensor of more than
+// kMaxDenseComponents stays interpreted, saying why, and computes what the interpreter does.
+TEST(Jit, ADenseLocalAboveTheComponentLimitStaysInterpreted) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const char* program = R"(
+element Point
+  a : float;
+end
+extern points : set{Point};
+func fill(p : Point) -> r : vector[points](float)
+  var A : matrix[4,4](matrix[4,4](float));
+  A(3, 3)(3, 3) = p.a;
+  r(p) = A(3, 3)(3, 3) + 1.0;
+end
+export func step() -> r : vector[points](float)
+  r = map fill to points;
+end
+)";
+  auto compiled = CompiledProgram::from_source("limit.sim", program);
+  ASSERT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  points.add_many(3);
+  points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < 3; ++i) points.field(0).at<double>(i)[0] = 0.5 * i;
+  EngineOptions o;
+  o.executor = ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  const std::vector<Value> r = engine.call(*compiled->find_func("step"), {});
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  const std::string limit = std::to_string(kMaxDenseComponents);
+  EXPECT_NE(os.str().find("interpreted: a dense tensor of 256 components (more than " + limit +
+                          ") is not compiled (line 7)"),
+            std::string::npos)
+      << os.str();
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(r[0].tensor().floats()[i], 0.5 * i + 1.0);
 }
 
 // A CG loop compiled whole: three loops per iteration after fusion, the interpreter's bits.
