@@ -1425,6 +1425,8 @@ void Tracer::assign_part(const ast::Variable& v, const std::vector<int64_t>& idx
   Sym cur = it != frame().vars.end() ? it->second : zero_of(*v.type, at);
   if (cur.kind != Sym::Kind::Tensor) give_up(at, "a component write into a non-tensor");
   if (sub && !cur.blocked()) give_up(at, "a component write into a component");
+  if (idx.size() != cur.dims.size() || (sub && sub->size() != cur.block.size()))
+    give_up(at, "index count does not match");
   size_t first = offset_of(cur.dims, idx, at), count = 1;
   if (cur.blocked()) {
     first *= cur.block_size();
