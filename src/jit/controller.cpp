@@ -43,6 +43,7 @@ struct TraceController::Entry {
   double guard_ms = 0.0;
   bool failed_last = false;  // the guard failed on the previous call
   std::string full_why;      // why the results stay on full patterns, for --jit-stats
+  std::vector<std::vector<int32_t>> positions;  // per Positions array slot, this call's
 };
 
 struct TraceController::SiteState {
@@ -158,6 +159,27 @@ std::string element_note(const interp::SiteCall& call, int element) {
   const bool one_set = t.homogeneous();
   return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") +
          ")";
+}
+
+// Where each block a trace reads from a global matrix argument lies in its pattern, per
+// element (-1 outside it). False where the interpreter must read it: a pattern that repeats
+// blocks (they are summed) or a member outside the matrix's rows or columns (an error).
+bool find_positions(const ArraySlot& a, const interp::SiteCall& call, std::vector<int32_t>& out) {
+  const Value& v = call.partial_args[a.index];
+  if (v.kind() != Value::Kind::Matrix || !v.matrix()) return false;
+  const runtime::MatrixPattern& p = v.matrix()->pattern();
+  if (!p.canonical()) return false;
+  const runtime::Set& t = call.target;
+  out.resize(static_cast<size_t>(t.size()) * a.reads.size());
+  size_t k = 0;
+  for (int e = 0; e < t.size(); ++e)
+    for (const auto& [rm, cm] : a.reads) {
+      const int32_t row = runtime::member_element(t, e, rm),
+                    col = runtime::member_element(t, e, cm);
+      if (row < 0 || row >= p.rows() || col < 0 || col >= p.cols()) return false;
+      out[k++] = p.find(row, col);
+    }
+  return true;
 }
 
 void zero_results(interp::SiteCall& call) {
@@ -416,6 +438,17 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
                           : nullptr;
           break;
         }
+        case ArraySlot::Kind::Matrix: {
+          const Value& m = call.partial_args[a.index];
+          if (m.kind() != Value::Kind::Matrix || !m.matrix()) return false;
+          arrays[i] = const_cast<double*>(m.matrix()->values());
+          break;
+        }
+        case ArraySlot::Kind::Positions:
+          e.positions.resize(t.arrays.size());
+          if (!find_positions(a, call, e.positions[i])) return false;
+          arrays[i] = e.positions[i].data();
+          break;
       }
     }
   const int32_t* endpoints = call.target.endpoints();

@@ -341,7 +341,8 @@ void print(std::ostream& os, const Trace& t) {
   os << "trace " << t.name << " (arity " << t.arity << (t.reduce ? ", reduce +" : "") << ")\n";
   for (size_t i = 0; i < t.arrays.size(); ++i) {
     const ArraySlot& a = t.arrays[i];
-    static const char* const kinds[] = {"field", "vector", "result", "table", "marks"};
+    static const char* const kinds[] = {"field", "vector", "result",   "table",
+                                        "marks", "matrix", "positions"};
     os << "  a" << i << ": " << kinds[static_cast<int>(a.kind)] << " " << a.name << " "
        << (a.single ? "f32" : ty_name(a.ty)) << " x" << a.components
        << (a.written ? " written" : "") << "\n";

@@ -11,6 +11,7 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "frontend/source.h"
@@ -119,6 +120,10 @@ struct ArraySlot {
     Result,  // result `index`'s components (a global vector or a matrix's values)
     Table,   // result `index`'s per-element block table (AssemblyIndex::table)
     Marks,   // result `index`'s marks, a byte per block, or null (see jit/write_guard.h)
+    Matrix,  // a partial argument that is a global matrix: its values, one block per position
+    // Per element, where in partial matrix argument `index`'s pattern each block the trace
+    // reads lies (-1: outside it), one component per entry of `reads`.
+    Positions,
   };
   Kind kind = Kind::Field;
   int member = 0;       // Field
@@ -128,6 +133,8 @@ struct ArraySlot {
   bool written = false;
   int components = 1;  // per element (per block for results)
   std::string name;    // for dumps and messages
+  // Positions: the (row member, column member) of each block read, by component.
+  std::vector<std::pair<int, int>> reads;
 };
 
 // A run-time check that failed: where, and what to say.

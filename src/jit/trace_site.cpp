@@ -154,24 +154,36 @@ ExprRef leaf(ExprKind k, Ty ty, int slot) {
 // Symbolic values of the traced function's expressions.
 
 struct Sym {
-  enum class Kind { None, Tensor, Element, Tuple, Vector, Result };
+  enum class Kind { None, Tensor, Element, Tuple, Vector, Matrix, Result };
   Kind kind = Kind::None;
   Ty ty = Ty::F64;
-  std::vector<int> dims;   // Tensor: dimensions (none for a scalar)
-  std::vector<ExprRef> c;  // Tensor: components, row-major
-  int member = -1;         // Element: 0 the visited element, k + 1 its endpoint k
-  int slot = -1;           // Vector: array slot; Result: result index
-  bool inout = false;      // Element: its fields may be written
+  std::vector<int> dims;   // Tensor: dimensions (none for a scalar); of the blocks if blocked
+  std::vector<int> block;  // Tensor: each block's dimensions (none when not blocked)
+  // Tensor: components in the runtime's order, row-major within each block and the blocks
+  // row-major one after another (runtime/tensor.h).
+  std::vector<ExprRef> c;
+  int member = -1;     // Element: 0 the visited element, k + 1 its endpoint k
+  int slot = -1;       // Vector, Matrix: array slot; Result: result index
+  bool inout = false;  // Element: its fields may be written
 
   size_t size() const { return c.size(); }
   bool scalar() const { return kind == Kind::Tensor && dims.empty(); }
+  bool blocked() const { return !block.empty(); }
+  size_t block_size() const { return blocked() ? size() / blocks() : 1; }
+  size_t blocks() const {
+    size_t n = 1;
+    for (int d : dims) n *= static_cast<size_t>(d);
+    return n;
+  }
+  bool same_shape(const Sym& o) const { return dims == o.dims && block == o.block; }
 };
 
-Sym tensor(Ty ty, std::vector<int> dims, std::vector<ExprRef> c) {
+Sym tensor(Ty ty, std::vector<int> dims, std::vector<ExprRef> c, std::vector<int> block = {}) {
   Sym s;
   s.kind = Sym::Kind::Tensor;
   s.ty = ty;
   s.dims = std::move(dims);
+  s.block = std::move(block);
   s.c = std::move(c);
   return s;
 }
@@ -186,13 +198,13 @@ Ty ty_of(ScalarKind k, const SourceSpan& at) {
   }
 }
 
-// The fixed dimensions of a small dense tensor type (none for a scalar).
-std::vector<int> dims_of(const Type& t, const SourceSpan& at) {
+bool is_blocked(const Type& t) { return t.block && t.block->kind != Type::Kind::Scalar; }
+
+// The fixed outer dimensions of a dense tensor type (none for a scalar).
+std::vector<int> outer_dims_of(const Type& t, const SourceSpan& at) {
   if (t.kind == Type::Kind::Scalar) return {};
   if (t.kind != Type::Kind::Tensor)
     give_up(at, "a value of type " + frontend::to_string(t) + " is not compiled");
-  if (t.block && t.block->kind != Type::Kind::Scalar)
-    give_up(at, "blocked dense tensors are not compiled");
   std::vector<int> d;
   for (const IndexSet& i : t.dims) {
     if (i.kind != IndexSet::Kind::Fixed) give_up(at, "a tensor over a set is not compiled here");
@@ -201,13 +213,75 @@ std::vector<int> dims_of(const Type& t, const SourceSpan& at) {
   return d;
 }
 
+// The fixed dimensions of a small unblocked dense tensor type (none for a scalar): fields,
+// result blocks and global vectors' blocks.
+std::vector<int> dims_of(const Type& t, const SourceSpan& at) {
+  if (is_blocked(t)) give_up(at, "a blocked value of type " + frontend::to_string(t) + " here");
+  return outer_dims_of(t, at);
+}
+
+// The dimensions of each block of a blocked dense tensor type (none when it is not blocked).
+std::vector<int> block_dims_of(const Type& t, const SourceSpan& at) {
+  if (t.kind != Type::Kind::Tensor || !is_blocked(t)) return {};
+  if (is_blocked(*t.block)) give_up(at, "tensors blocked on more than one level are not compiled");
+  return outer_dims_of(*t.block, at);
+}
+
+// Every component of a dense tensor becomes a value of its own: large ones stay interpreted.
+void check_components(size_t n, const SourceSpan& at) {
+  if (n > kMaxDenseComponents)
+    give_up(at, "a dense tensor of " + std::to_string(n) + " components (more than " +
+                    std::to_string(kMaxDenseComponents) + ") is not compiled");
+}
+
 Sym zero_of(const Type& t, const SourceSpan& at) {
   const Ty ty = ty_of(t.component(), at);
-  std::vector<int> d = dims_of(t, at);
+  std::vector<int> d = outer_dims_of(t, at), b = block_dims_of(t, at);
   size_t n = 1;
   for (int x : d) n *= static_cast<size_t>(x);
+  for (int x : b) n *= static_cast<size_t>(x);
+  check_components(n, at);
   return tensor(ty, std::move(d),
-                std::vector<ExprRef>(n, ty == Ty::F64 ? fconst(0.0) : iconst(0, ty)));
+                std::vector<ExprRef>(n, ty == Ty::F64 ? fconst(0.0) : iconst(0, ty)), std::move(b));
+}
+
+// For each component of a blocked matrix or vector in its logical (unblocked) row-major
+// order, its position in the blocked order: runtime::unblock's permutation for two levels.
+std::vector<size_t> logical_positions(const Sym& s) {
+  const size_t bs = s.block_size();
+  std::vector<size_t> at;
+  at.reserve(s.size());
+  if (s.dims.size() == 1) {
+    for (size_t k = 0; k < s.size(); ++k) at.push_back(k);
+    return at;
+  }
+  const int cols = s.dims[1], br = s.block[0], bc = s.block[1];
+  for (int r = 0; r < s.dims[0] * br; ++r)
+    for (int c = 0; c < cols * bc; ++c)
+      at.push_back((static_cast<size_t>(r / br) * cols + c / bc) * bs +
+                   static_cast<size_t>(r % br) * bc + c % bc);
+  return at;
+}
+
+// Whether a blocked tensor has an unblocked form the tracer handles: its blocks have as many
+// dimensions as it has (runtime::Shape::uniform), and it is a vector or a matrix.
+bool has_logical_form(const Sym& s) {
+  return s.blocked() && s.block.size() == s.dims.size() && s.dims.size() <= 2;
+}
+
+// The unblocked form of a blocked tensor (has_logical_form), and back.
+Sym unblocked(const Sym& s) {
+  std::vector<ExprRef> c;
+  for (size_t p : logical_positions(s)) c.push_back(s.c[p]);
+  std::vector<int> d;
+  for (size_t k = 0; k < s.dims.size(); ++k) d.push_back(s.dims[k] * s.block[k]);
+  return tensor(s.ty, std::move(d), std::move(c));
+}
+Sym reblocked(const Sym& logical, std::vector<int> dims, std::vector<int> block) {
+  Sym s = tensor(logical.ty, std::move(dims), logical.c, std::move(block));
+  const std::vector<size_t> at = logical_positions(s);
+  for (size_t k = 0; k < at.size(); ++k) s.c[at[k]] = logical.c[k];
+  return s;
 }
 
 // Constants of the program (and the literal values of externs, for their shapes).
@@ -220,6 +294,7 @@ Sym const_of(const interp::Value& v, const SourceSpan& at) {
     case K::Tensor: {
       const runtime::Tensor& t = v.tensor();
       if (t.shape().is_blocked()) give_up(at, "blocked constants are not compiled");
+      check_components(t.size(), at);
       std::vector<int> dims;
       for (int i = 0; i < t.shape().order(); ++i) dims.push_back(t.shape().dim(i));
       std::vector<ExprRef> c;
@@ -387,7 +462,13 @@ class Tracer {
     emit(std::move(check));
     return s;
   }
+  Sym read_block(const Sym& base, const ast::TensorRead& r);
+  Sym read_matrix_block(const Sym& matrix, const ast::TensorRead& r);
+  Sym matrix_arg(int k, const ast::Param& p, const interp::Value& v);
+  template <class F>
+  void emit_if(ExprRef condition, const SourceSpan& at, F then_body);
   Sym elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at);
+  Sym blocked_product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
   Sym product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
   ExprRef det(const std::vector<ExprRef>& a, int n, const std::vector<int>& rows,
               const std::vector<int>& cols);
@@ -400,6 +481,8 @@ class Tracer {
   void exec_for(const ast::ForRange& s);
   void exec_error(const SourceSpan& at);
   void assign(const ast::Expr& target, Sym value, const SourceSpan& at);
+  void assign_part(const ast::Variable& v, const std::vector<int64_t>& idx,
+                   const std::vector<int64_t>* sub, Sym value, const SourceSpan& at);
   void bind(const ast::Variable& v, Sym value, const SourceSpan& at);
   void assign_result(const ast::TensorRead& r, const ast::TensorRead* component, Sym value,
                      const SourceSpan& at);
@@ -487,6 +570,7 @@ Sym Tracer::eval(const ast::Expr& e) {
       return scalar(Ty::Bool, iconst(static_cast<const ast::BoolLit&>(e).value, Ty::Bool));
     case ast::NodeKind::DenseLit: {
       const auto& d = static_cast<const ast::DenseLit&>(e);
+      check_components(d.component == ScalarKind::Float ? d.floats.size() : d.ints.size(), e.span);
       std::vector<ExprRef> c;
       if (d.component == ScalarKind::Float) {
         for (double v : d.floats) c.push_back(fconst(v));
@@ -523,12 +607,19 @@ Sym Tracer::eval(const ast::Expr& e) {
       if (x.kind != Sym::Kind::Tensor) give_up(e.span, "transpose of a non-tensor");
       if (x.dims.size() <= 1) return x;
       if (x.dims.size() != 2) give_up(e.span, "transpose of a tensor of order 3 or more");
-      const int m = x.dims[0], n = x.dims[1];
-      std::vector<ExprRef> c(x.c.size());
+      if (x.blocked() && !has_logical_form(x))
+        give_up(e.span, "transpose of a matrix whose blocks are not matrices");
+      // A blocked matrix swaps its blocks and each block's dimensions (runtime::transpose):
+      // the transpose of its unblocked form.
+      const Sym l = x.blocked() ? unblocked(x) : x;
+      const int m = l.dims[0], n = l.dims[1];
+      std::vector<ExprRef> c(l.c.size());
       for (int i = 0; i < m; ++i)
         for (int j = 0; j < n; ++j)
-          c[static_cast<size_t>(j) * m + i] = x.c[static_cast<size_t>(i) * n + j];
-      return tensor(x.ty, {n, m}, std::move(c));
+          c[static_cast<size_t>(j) * m + i] = l.c[static_cast<size_t>(i) * n + j];
+      Sym t = tensor(x.ty, {n, m}, std::move(c));
+      if (!x.blocked()) return t;
+      return reblocked(t, {x.dims[1], x.dims[0]}, {x.block[1], x.block[0]});
     }
     case ast::NodeKind::Call: return eval_call(static_cast<const ast::Call&>(e));
     default: break;
@@ -593,8 +684,10 @@ Sym Tracer::eval_read(const ast::TensorRead& r) {
     for (int k = 0; k < a.components; ++k) c.push_back(load(base.slot, at.member, k, r.span));
     return tensor(a.ty, dims_of(*r.type, r.span), std::move(c));
   }
+  if (base.kind == Sym::Kind::Matrix) return read_matrix_block(base, r);
   if (base.kind != Sym::Kind::Tensor) give_up(r.span, "reading from this value is not compiled");
   if (r.indices.size() != base.dims.size()) give_up(r.span, "index count does not match");
+  if (base.blocked()) return read_block(base, r);
   // Constant indices and slices: the result keeps the sliced dimensions.
   std::vector<int64_t> fixed(r.indices.size(), -1);
   std::vector<int> out_dims;
@@ -620,15 +713,71 @@ Sym Tracer::eval_read(const ast::TensorRead& r) {
   return tensor(base.ty, std::move(out_dims), std::move(c));
 }
 
+// `A(i, j)`: one block of a blocked tensor, as a tensor of the block's shape.
+Sym Tracer::read_block(const Sym& base, const ast::TensorRead& r) {
+  std::vector<int64_t> idx;
+  for (const auto& i : r.indices) {
+    if (!i) give_up(r.span, "slices of blocked tensors are not compiled");
+    idx.push_back(const_int(*i));
+  }
+  const size_t bs = base.block_size(), first = offset_of(base.dims, idx, r.span) * bs;
+  return tensor(base.ty, base.block,
+                std::vector<ExprRef>(base.c.begin() + static_cast<std::ptrdiff_t>(first),
+                                     base.c.begin() + static_cast<std::ptrdiff_t>(first + bs)));
+}
+
+// `A(p, q)` of a global matrix argument at two members of the element: the block where the
+// controller's position table finds it in A's pattern, zero outside it (as the interpreter).
+Sym Tracer::read_matrix_block(const Sym& matrix, const ast::TensorRead& r) {
+  if (r.indices.size() != 2 || !r.indices[0] || !r.indices[1])
+    give_up(r.span, "a global matrix read that is not one block");
+  const Sym row = eval(*r.indices[0]), col = eval(*r.indices[1]);
+  if (row.kind != Sym::Kind::Element || col.kind != Sym::Kind::Element)
+    give_up(r.span, "a global matrix read that is not at members of the element");
+  const int arg = trace_.arrays[matrix.slot].index;
+  const std::string name = trace_.arrays[matrix.slot].name + ".positions";
+  const int table = array({ArraySlot::Kind::Positions, 0, arg, Ty::I32, false, false, 0, name, {}});
+  std::vector<std::pair<int, int>>& reads = trace_.arrays[table].reads;
+  const std::pair<int, int> pair{row.member, col.member};
+  auto found = std::find(reads.begin(), reads.end(), pair);
+  const int comp = static_cast<int>(found - reads.begin());
+  if (found == reads.end()) reads.push_back(pair);
+  trace_.arrays[table].components = static_cast<int>(reads.size());
+  const ExprRef pos = load(table, 0, comp, r.span);
+  const int bs = trace_.arrays[matrix.slot].components;
+  std::vector<int> locals;
+  std::vector<ExprRef> c;
+  for (int k = 0; k < bs; ++k) {
+    locals.push_back(new_local(Ty::F64, true));
+    set_local(locals.back(), fconst(0.0), r.span);
+  }
+  emit_if(compare(CmpOp::Ge, pos, iconst(0), r.span), r.span, [&] {
+    for (int k = 0; k < bs; ++k) {
+      Expr e;
+      e.kind = ExprKind::Load;
+      e.ty = Ty::F64;
+      e.slot = matrix.slot;
+      e.comp = k;
+      e.ops = {pos};
+      e.span = r.span;
+      set_local(locals[static_cast<size_t>(k)], make(std::move(e)), r.span);
+    }
+  });
+  for (int l : locals) c.push_back(read_local(l));
+  Sym out = tensor(Ty::F64, dims_of(*r.type, r.span), std::move(c));
+  if (out.size() != static_cast<size_t>(bs)) give_up(r.span, "a matrix block of another shape");
+  return out;
+}
+
 Sym Tracer::elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at) {
   if (l.ty != r.ty) give_up(at, "operands of different component types");
-  if (!l.scalar() && !r.scalar() && l.dims != r.dims)
+  if (!l.scalar() && !r.scalar() && !l.same_shape(r))
     give_up(at, "element-wise operation on different shapes");
   const Sym& shape = l.scalar() ? r : l;
   std::vector<ExprRef> c;
   for (size_t i = 0; i < shape.size(); ++i)
     c.push_back(binary(op, l.ty, l.scalar() ? l.c[0] : l.c[i], r.scalar() ? r.c[0] : r.c[i], at));
-  return tensor(l.ty, shape.dims, std::move(c));
+  return tensor(l.ty, shape.dims, std::move(c), shape.block);
 }
 
 // Products sum from +0.0 over k in ascending order (docs/arithmetic.md); an outer product
@@ -652,6 +801,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
       return scalar(Ty::F64, sum(n, [&](int k) { return mul(l.c[k], r.c[k]); }));
     }
     if (lrow || !rrow) give_up(at, "product of two vectors of the same orientation");
+    check_components(static_cast<size_t>(n) * m, at);
     std::vector<ExprRef> c;
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < m; ++j) c.push_back(mul(l.c[i], r.c[j]));
@@ -685,6 +835,45 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   give_up(at, "products of tensors of order 3 or more are not compiled");
 }
 
+// Products of blocked tensors are products of their unblocked forms, blocked level by level
+// like the operands (interp/operators.cpp), except the inner product, which sums each block
+// first (docs/arithmetic.md).
+Sym Tracer::blocked_product(const Sym& l, bool lrow, const Sym& r, bool rrow,
+                            const SourceSpan& at) {
+  if (!has_logical_form(l) || !has_logical_form(r))
+    give_up(at, "a product of tensors blocked differently is not compiled");
+  if (l.ty != Ty::F64 || r.ty != Ty::F64)
+    give_up(at, "products of non-float tensors are not compiled");
+  const bool lv = l.dims.size() == 1, rv = r.dims.size() == 1;
+  if (lv && rv && lrow && !rrow) {
+    if (!l.same_shape(r)) give_up(at, "inner product of vectors blocked differently");
+    ExprRef total = fconst(0.0);
+    for (size_t b = 0, bs = l.block_size(); b < l.blocks(); ++b) {
+      ExprRef s = fconst(0.0);
+      for (size_t k = b * bs; k < (b + 1) * bs; ++k)
+        s = binary(BinOp::Add, Ty::F64, s, binary(BinOp::Mul, Ty::F64, l.c[k], r.c[k], at), at);
+      total = binary(BinOp::Add, Ty::F64, total, s, at);
+    }
+    return scalar(Ty::F64, total);
+  }
+  std::vector<int> dims, block;
+  if (lv && rv) {
+    dims = {l.dims[0], r.dims[0]};
+    block = {l.block[0], r.block[0]};
+  } else if (!lv && rv) {
+    dims = {l.dims[0]};
+    block = {l.block[0]};
+  } else if (lv) {
+    dims = {r.dims[1]};
+    block = {r.block[1]};
+  } else {
+    dims = {l.dims[0], r.dims[1]};
+    block = {l.block[0], r.block[1]};
+  }
+  return reblocked(product(unblocked(l), lrow, unblocked(r), rrow, at), std::move(dims),
+                   std::move(block));
+}
+
 Sym Tracer::eval_binary(const ast::Binary& b) {
   using Op = ast::Binary::Op;
   Sym l = eval(*b.lhs), r = eval(*b.rhs);
@@ -709,6 +898,8 @@ Sym Tracer::eval_binary(const ast::Binary& b) {
     case Op::Mul:
       if (l.scalar() || r.scalar())
         v = elementwise(BinOp::Mul, l, r, b.span);
+      else if (l.blocked() || r.blocked())
+        v = blocked_product(l, is_row(*b.lhs), r, is_row(*b.rhs), b.span);
       else
         v = product(l, is_row(*b.lhs), r, is_row(*b.rhs), b.span);
       break;
@@ -777,6 +968,9 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
   for (const auto& arg : c.args) {
     a.push_back(settle(eval(*arg), c.span));
     if (a.back().kind != Sym::Kind::Tensor) give_up(c.span, "an intrinsic of a non-tensor");
+    if (a.back().blocked())
+      give_up(c.span, std::string("intrinsic ") + frontend::intrinsic_name(c.intrinsic) +
+                          " of a blocked tensor is not compiled");
   }
   auto f1 = [&](MathFn f) {
     if (!a[0].scalar() || a[0].ty != Ty::F64) give_up(c.span, "a math function of a non-float");
@@ -892,10 +1086,17 @@ std::vector<Sym> Tracer::decompose(const ast::Call& c) {
     default: give_up(c.span, "a call with several results that is not a decomposition");
   }
   if (c.args.size() != 1) give_up(c.span, "a decomposition of several arguments");
-  Sym a = settle(eval(*c.args[0]), c.span);
-  if (a.kind != Sym::Kind::Tensor || a.ty != Ty::F64 || a.dims.size() != 2 ||
-      a.dims[0] != a.dims[1])
+  Sym given = settle(eval(*c.args[0]), c.span);
+  if (given.kind != Sym::Kind::Tensor || given.ty != Ty::F64 || given.dims.size() != 2)
     give_up(c.span, "a decomposition of this value is not compiled");
+  // project_spd decomposes a blocked matrix in its unblocked form (runtime/decompositions.h);
+  // the others take unblocked matrices only.
+  const bool blocked = given.blocked();
+  if (blocked && (!has_logical_form(given) ||
+                  (d != Decomposition::ProjectSpd && d != Decomposition::ProjectSpdAbs)))
+    give_up(c.span, "a decomposition of this blocked matrix is not compiled");
+  const Sym a = blocked ? unblocked(given) : given;
+  if (a.dims[0] != a.dims[1]) give_up(c.span, "a decomposition of a matrix that is not square");
   const int n = a.dims[0];
   trace_.errors.push_back(
       {c.span, std::string(frontend::intrinsic_name(c.intrinsic)) + " needs a symmetric matrix"});
@@ -920,6 +1121,7 @@ std::vector<Sym> Tracer::decompose(const ast::Call& c) {
                         c.span));
   }
   emit(std::move(s));
+  if (blocked) out[0] = reblocked(out[0], given.dims, given.block);
   for (Sym& r : out) r = finite(std::move(r), c.span);
   return out;
 }
@@ -1088,6 +1290,25 @@ void Tracer::merge_assigned(const ast::Block& b) {
 
 void Tracer::exec_if(const ast::If& s) { exec_if_from(s, 0); }
 
+// An If with no else part whose body then_body() emits.
+template <class F>
+void Tracer::emit_if(ExprRef condition, const SourceSpan& at, F then_body) {
+  Stmt st;
+  st.kind = StmtKind::If;
+  st.value = std::move(condition);
+  st.span = at;
+  std::vector<Stmt>* saved = out_;
+  out_ = &st.body;
+  blocks_.push_back(next_block_++);
+  if (zero_fold) zero_fold->open();
+  then_body();
+  if (zero_fold)
+    if (auto check = zero_fold->close(trace_.errors, at)) st.body.push_back(std::move(*check));
+  blocks_.pop_back();
+  out_ = saved;
+  emit(std::move(st));
+}
+
 // Conditions that fold choose their branch now; the first that does not becomes an If whose
 // else part holds the rest of the chain (from condition `first` on).
 void Tracer::exec_if_from(const ast::If& s, size_t first) {
@@ -1137,6 +1358,7 @@ void Tracer::bind(const ast::Variable& v, Sym value, const SourceSpan& at) {
     for (size_t i = 0; i < value.size(); ++i) set_local(m->second[i], value.c[i], at);
     Sym& cur = f.vars[&v];
     cur.dims = value.dims;
+    cur.block = value.block;
     return;
   }
   if (auto b = f.bound_at.find(&v);
@@ -1178,19 +1400,55 @@ void Tracer::assign(const ast::Expr& target, Sym value, const SourceSpan& at) {
   }
   if (const auto* f = r->base->as<ast::FieldRead>())
     return store_field(*f, &idx, std::move(value), at);
-  const auto* base = r->base->as<ast::VarRef>();
+  // `B(i, j)(a, b) = x`: a component of a block of a blocked local.
+  const ast::TensorRead* outer = r;
+  std::vector<int64_t> sub;
+  if (const auto* in = r->base->as<ast::TensorRead>()) {
+    outer = in;
+    sub = std::move(idx);
+    idx.clear();
+    for (const auto& i : in->indices) {
+      if (!i) give_up(at, "slice assignments are not compiled");
+      idx.push_back(const_int(*i));
+    }
+  }
+  const auto* base = outer->base->as<ast::VarRef>();
   if (!base) give_up(at, "this assignment target is not compiled");
-  auto it = frame().vars.find(base->var);
-  Sym cur = it != frame().vars.end() ? it->second : zero_of(*base->var->type, at);
+  assign_part(*base->var, idx, outer != r ? &sub : nullptr, std::move(value), at);
+}
+
+// A write of a component of a local, or of a block or a block's component when it is blocked
+// (a scalar fills the block, as in the interpreter).
+void Tracer::assign_part(const ast::Variable& v, const std::vector<int64_t>& idx,
+                         const std::vector<int64_t>* sub, Sym value, const SourceSpan& at) {
+  auto it = frame().vars.find(&v);
+  Sym cur = it != frame().vars.end() ? it->second : zero_of(*v.type, at);
   if (cur.kind != Sym::Kind::Tensor) give_up(at, "a component write into a non-tensor");
-  if (!value.scalar() || value.ty != cur.ty) give_up(at, "a component write of a non-scalar");
-  const size_t off = offset_of(cur.dims, idx, at);
-  if (auto m = frame().merged.find(base->var); m != frame().merged.end()) {
-    set_local(m->second[off], value.c[0], at);
+  if (sub && !cur.blocked()) give_up(at, "a component write into a component");
+  if (idx.size() != cur.dims.size() || (sub && sub->size() != cur.block.size()))
+    give_up(at, "index count does not match");
+  size_t first = offset_of(cur.dims, idx, at), count = 1;
+  if (cur.blocked()) {
+    first *= cur.block_size();
+    count = cur.block_size();
+    if (sub) {
+      first += offset_of(cur.block, *sub, at);
+      count = 1;
+    }
+  }
+  if (value.kind != Sym::Kind::Tensor || value.ty != cur.ty)
+    give_up(at, "a component write of another type");
+  if (!value.scalar() && (value.size() != count || value.blocked()))
+    give_up(at, "a write of a block of another shape");
+  // Computed once, and every component read before any is written (`B(0, 0) = B(0, 0)'`).
+  if (count > 1) value = settle(std::move(value), at);
+  auto part = [&](size_t k) { return value.scalar() ? value.c[0] : value.c[k]; };
+  if (auto m = frame().merged.find(&v); m != frame().merged.end()) {
+    for (size_t k = 0; k < count; ++k) set_local(m->second[first + k], part(k), at);
     return;
   }
-  cur.c[off] = value.c[0];
-  bind(*base->var, std::move(cur), at);
+  for (size_t k = 0; k < count; ++k) cur.c[first + k] = part(k);
+  bind(v, std::move(cur), at);
 }
 
 void Tracer::store_field(const ast::FieldRead& f, const std::vector<int64_t>* idx, Sym value,
@@ -1203,7 +1461,7 @@ void Tracer::store_field(const ast::FieldRead& f, const std::vector<int64_t>* id
   ArraySlot& a = trace_.arrays[slot];
   a.written = true;
   trace_.writes_fields = true;
-  if (value.kind != Sym::Kind::Tensor || value.ty != a.ty)
+  if (value.kind != Sym::Kind::Tensor || value.ty != a.ty || value.blocked())
     give_up(at, "a field write of another type");
   std::vector<int> dims = dims_of(*f.type, f.span);
   size_t first = 0, count = static_cast<size_t>(a.components);
@@ -1233,10 +1491,11 @@ void Tracer::assign_result(const ast::TensorRead& r, const ast::TensorRead* comp
   if (it == frame().vars.end() || it->second.kind != Sym::Kind::Result || frames_.size() != 1)
     give_up(at, "a result write outside the mapped function");
   const int res = it->second.slot;
-  const int slot = array({ArraySlot::Kind::Result, 0, res, Ty::F64, false, true, 0, ""});
+  const int slot = array({ArraySlot::Kind::Result, 0, res, Ty::F64, false, true, 0, "", {}});
   ArraySlot& a = trace_.arrays[slot];
   if (value.kind != Sym::Kind::Tensor || value.ty != Ty::F64)
     give_up(at, "a result write of a non-float");
+  if (value.blocked()) give_up(at, "a result write of a blocked value");
   std::vector<int64_t> sub;
   if (component)
     for (const auto& i : component->indices) {
@@ -1292,6 +1551,24 @@ void Tracer::assign_result(const ast::TensorRead& r, const ast::TensorRead* comp
   }
 }
 
+// A global matrix argument, read by blocks (read_matrix_block).
+Sym Tracer::matrix_arg(int k, const ast::Param& p, const interp::Value& v) {
+  const runtime::SystemMatrix* m = v.matrix().get();
+  if (!m || !m->is_float()) give_up(p.span, "a global matrix argument of non-float components");
+  // The interpreter sums the repeated blocks of a stencil pattern where it reads one.
+  if (!m->pattern().canonical())
+    give_up(p.span, "a global matrix argument whose pattern repeats blocks");
+  ArraySlot a;
+  a.kind = ArraySlot::Kind::Matrix;
+  a.index = k;
+  a.components = m->block_size();
+  a.name = p.name;
+  Sym s;
+  s.kind = Sym::Kind::Matrix;
+  s.slot = array(std::move(a));
+  return s;
+}
+
 TracedSite Tracer::run() {
   TracedSite out;
   const ast::Assembly& site = *in_.site;
@@ -1318,7 +1595,10 @@ TracedSite Tracer::run() {
       const interp::Value& v = partial[k];
       const Type& t = *p.var->type;
       Sym s;
-      if (t.kind == Type::Kind::Tensor && t.is_global()) {
+      if (t.kind == Type::Kind::Tensor && t.is_global() &&
+          v.kind() == interp::Value::Kind::Matrix) {
+        s = matrix_arg(static_cast<int>(k), p, v);
+      } else if (t.kind == Type::Kind::Tensor && t.is_global()) {
         if (!v.is_tensor() || v.tensor().kind() != runtime::ComponentKind::Float ||
             t.dims.size() != 1)
           give_up(p.span, "a global argument other than a float vector");
@@ -1358,13 +1638,34 @@ TracedSite Tracer::run() {
       top.vars[f.results[i].var] = r;
       if (in_.patterns[i]) {
         trace_.pairs[i] = static_cast<int>(in_.patterns[i]->assembly().pairs());
-        array({ArraySlot::Kind::Table, 0, static_cast<int>(i), Ty::I32, false, false,
-               trace_.pairs[i], f.results[i].name + ".table"});
-        array({ArraySlot::Kind::Marks, 0, static_cast<int>(i), Ty::Bool, false, true, 1,
-               f.results[i].name + ".marks"});
+        array({ArraySlot::Kind::Table,
+               0,
+               static_cast<int>(i),
+               Ty::I32,
+               false,
+               false,
+               trace_.pairs[i],
+               f.results[i].name + ".table",
+               {}});
+        array({ArraySlot::Kind::Marks,
+               0,
+               static_cast<int>(i),
+               Ty::Bool,
+               false,
+               true,
+               1,
+               f.results[i].name + ".marks",
+               {}});
       }
-      array({ArraySlot::Kind::Result, 0, static_cast<int>(i), Ty::F64, false, true, 1,
-             f.results[i].name});
+      array({ArraySlot::Kind::Result,
+             0,
+             static_cast<int>(i),
+             Ty::F64,
+             false,
+             true,
+             1,
+             f.results[i].name,
+             {}});
     }
     frames_.push_back(std::move(top));
     exec_block(f.body);

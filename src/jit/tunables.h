@@ -13,19 +13,28 @@ inline constexpr long kHotThreshold = 2;
 inline constexpr int kMaxFailures = 3;
 // Statements a trace may hold after inlining and unrolling.
 inline constexpr size_t kMaxTraceStatements = 200000;
+// Components a dense tensor of a traced function may have, blocked or not: the tracer makes
+// each one a value of its own. The fem Hessian's element matrix, 4 x 4 blocks of 3 x 3, has
+// 144; a larger tensor leaves its site interpreted.
+inline constexpr size_t kMaxDenseComponents = 144;
 // Calls inlined inside one another.
 inline constexpr int kMaxInlineDepth = 32;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
 // LLVM's optimisation level for kernels (2 or 3), and for traces of more loop-IR nodes than
-// kLargeTrace (fully unrolled stiffness matrices), whose O2 compile exceeds 100 ms.
+// kLargeTrace (fully unrolled element matrices), whose O2 compile exceeds 100 ms.
 inline constexpr int kOptLevel = 2;
 inline constexpr size_t kLargeTrace = 4000;
-inline constexpr int kLargeTraceOptLevel = 1;
 // A large trace that runs in lanes skips LLVM's IR pipeline (0): its IR already computes
 // every value once and keeps no local in memory, and the pipeline took a quarter of its
 // compile time for no measurable speed (the fem stiffness: 77 ms to 58).
 inline constexpr int kLargeLanesTraceOptLevel = 0;
+// A large trace that does not run in lanes (it calls a decomposition, or merges locals after
+// a branch) skips the pipeline too, and takes LLVM's fast code generator: the fem Newton
+// Hessian (20000 nodes) compiled in 220 ms at O1 with the full code generator and in 25 ms
+// so, while its run time, mostly the 12 x 12 projection it calls, grew by 2%.
+inline constexpr int kLargeTraceOptLevel = 0;
+inline constexpr bool kLargeTraceFastCodegen = true;
 // A map's matrix result is specialised to the blocks it writes (jit/specialise.h) when that
 // keeps at most this fraction of them.
 inline constexpr double kSpecialiseAtMost = 0.9;

@@ -10,6 +10,7 @@
 #include "api/engine.h"
 #include "jit/loop_ir.h"
 #include "jit/pruned_matrix.h"
+#include "jit/tunables.h"
 #include "jit/write_guard.h"
 
 namespace simit::jit {
@@ -114,11 +115,11 @@ Stmt assemble(ExprRef value) {
 // through locals assigned under other conditions; not what the written values read.
 TEST(WriteGuard, TheDecidersAreWhatTheConditionsAroundTheWritesRead) {
   Trace t;
-  t.arrays = {{ArraySlot::Kind::Field, 1, 3, Ty::Bool, false, false, 1, "pinned"},
-              {ArraySlot::Kind::Field, 1, 0, Ty::F64, false, false, 3, "x"},
-              {ArraySlot::Kind::Vector, 0, 0, Ty::F64, false, false, 3, "p"},
-              {ArraySlot::Kind::Result, 0, 0, Ty::F64, false, true, 9, "K"},
-              {ArraySlot::Kind::Table, 0, 0, Ty::I32, false, false, 1, "K.table"}};
+  t.arrays = {{ArraySlot::Kind::Field, 1, 3, Ty::Bool, false, false, 1, "pinned", {}},
+              {ArraySlot::Kind::Field, 1, 0, Ty::F64, false, false, 3, "x", {}},
+              {ArraySlot::Kind::Vector, 0, 0, Ty::F64, false, false, 3, "p", {}},
+              {ArraySlot::Kind::Result, 0, 0, Ty::F64, false, true, 9, "K", {}},
+              {ArraySlot::Kind::Table, 0, 0, Ty::I32, false, false, 1, "K.table", {}}};
   t.scalars = {Ty::F64};
   t.locals = {Ty::F64, Ty::Bool};
   t.local_mutable = {false, true};
@@ -737,6 +738,186 @@ TEST(Jit, DecompositionsComputeTheInterpretersBits) {
   const double* s = results[0][0].tensor().floats();
   EXPECT_GT(s[0], s[1]);
   EXPECT_GT(s[1], 0.0);
+}
+
+// A Newton step's element Hessian as examples/fem/fem_newton.sim builds it: a blocked local
+// of 4 x 4 blocks of 3 x 3 written component by component, projected to positive
+// semi-definite as one 12 x 12 matrix when `project`, and assembled by blocks; then the
+// block-Jacobi preconditioner reads each vertex's diagonal block of the assembled matrix.
+// lambda < 0 makes the element matrices indefinite, so that the projection changes them.
+const char* kBlocked = R"(
+element Vertex
+  x : vector[3](float);
+  v : vector[3](float);
+  m : float;
+  pinned : bool;
+end
+element Tet
+  B : matrix[3,3](float);
+  W : float;
+end
+extern verts : set{Vertex};
+extern tets : set{Tet}(verts, verts, verts, verts);
+
+const eye3 = [1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0];
+
+func edge_matrix(v : (Vertex * 4)) -> D : matrix[3,3](float)
+  for j in 0:3
+    e = v(j).x - v(3).x;
+    for i in 0:3
+      D(i, j) = e(i);
+    end
+  end
+end
+
+func rest(inout t : Tet, v : (Vertex * 4)) -> m : vector[verts](float)
+  Dm = edge_matrix(v);
+  t.B = inv(Dm);
+  t.W = -det(Dm) / 6.0;
+  for j in 0:4
+    m(v(j)) = 0.25 * t.W;
+  end
+end
+
+func gradient(B : matrix[3,3](float), j : int) -> g : vector[3](float)
+  if j < 3
+    g = B(j, :)';
+  else
+    g = -(B(0, :) + B(1, :) + B(2, :))';
+  end
+end
+
+func unit(d : int) -> u : vector[3](float)
+  u(d) = 1.0;
+end
+
+func derivatives(mu : float, lambda : float, project : bool, t : Tet, v : (Vertex * 4))
+    -> (g : vector[verts](vector[3](float)), H : matrix[verts,verts](matrix[3,3](float)))
+  F = edge_matrix(v) * t.B;
+  var He : matrix[4,4](matrix[3,3](float));
+  for j in 0:4
+    gj = gradient(t.B, j);
+    if not v(j).pinned
+      g(v(j)) = t.W * ((F - eye3) * gj);
+    end
+    for d in 0:3
+      for i in 0:4
+        gi = gradient(t.B, i);
+        col = t.W * (mu * dot(gi, gj) * unit(d) + (mu * gi(d)) * gj + (lambda * gj(d)) * gi);
+        for a in 0:3
+          He(i, j)(a, d) = col(a);
+        end
+      end
+    end
+  end
+  if project
+    He = project_spd(He);
+  end
+  for i in 0:4
+    for j in 0:4
+      if not (v(i).pinned or v(j).pinned)
+        H(v(i), v(j)) = He(i, j);
+      end
+    end
+  end
+end
+
+func jacobi(H : matrix[verts,verts](matrix[3,3](float)), p : Vertex)
+    -> Pc : matrix[verts,verts](matrix[3,3](float))
+  Pc(p, p) = inv(project_spd_abs(p.m * eye3 + 0.01 * H(p, p)));
+end
+
+export func init()
+  verts.m = map rest to tets reduce +;
+end
+
+export func step() -> (g : vector[verts](vector[3](float)), H : matrix[verts,verts](matrix[3,3](float)),
+                       Pc : matrix[verts,verts](matrix[3,3](float)),
+                       H2 : matrix[verts,verts](matrix[3,3](float)))
+  g, H = map derivatives(1.5, -4.0, true) to tets reduce +;
+  Pc = map jacobi(H) to verts reduce +;
+  g2, H2 = map derivatives(1.5, -4.0, false) to tets reduce +;
+end
+)";
+
+TEST(Jit, BlockedElementMatricesAndMatrixBlockReadsComputeTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::vector<Value> results[2];
+  std::string stats;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source("blocked.sim", kBlocked);
+    ASSERT_TRUE(compiled->ok());
+    Mesh mesh;
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("verts"), mesh.verts);
+    engine.bind_set(*compiled->find_extern("tets"), mesh.tets);
+    engine.call(*compiled->find_func("init"), {});
+    for (int frame = 0; frame < 2; ++frame)
+      results[k] = engine.call(*compiled->find_func("step"), {});
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) stats = os.str();
+  }
+  for (const char* site : {"derivatives (line 90)", "jacobi (line 91)", "derivatives (line 92)"}) {
+    const size_t at = stats.find(site);
+    ASSERT_NE(at, std::string::npos) << site << "\n" << stats;
+    EXPECT_NE(stats.substr(at, stats.find('\n', at) - at).find(" compiled"), std::string::npos)
+        << site << "\n"
+        << stats;
+  }
+  const char* names[] = {"g", "H", "Pc", "H2"};
+  for (int r = 0; r < 4; ++r) expect_same(results[0][r], results[1][r], names[r]);
+  // The projection changed the indefinite element matrices: H and H2 differ off vertex 0's
+  // rows and columns (pinned, left out of both).
+  const runtime::SystemMatrix &h = *results[0][1].matrix(), &h2 = *results[0][3].matrix();
+  double change = 0.0;
+  for (int64_t i = 3; i < h.scalar_rows(); ++i)
+    for (int64_t j = 3; j < h.scalar_cols(); ++j)
+      change = std::max(change, std::fabs(h.component(i, j) - h2.component(i, j)));
+  EXPECT_GT(change, 1e-3);
+}
+
+// Every component of a dense local becomes a value of its own: a tensor of more than
+// kMaxDenseComponents stays interpreted, saying why, and computes what the interpreter does.
+TEST(Jit, ADenseLocalAboveTheComponentLimitStaysInterpreted) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const char* program = R"(
+element Point
+  a : float;
+end
+extern points : set{Point};
+func fill(p : Point) -> r : vector[points](float)
+  var A : matrix[4,4](matrix[4,4](float));
+  A(3, 3)(3, 3) = p.a;
+  r(p) = A(3, 3)(3, 3) + 1.0;
+end
+export func step() -> r : vector[points](float)
+  r = map fill to points;
+end
+)";
+  auto compiled = CompiledProgram::from_source("limit.sim", program);
+  ASSERT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  points.add_many(3);
+  points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < 3; ++i) points.field(0).at<double>(i)[0] = 0.5 * i;
+  EngineOptions o;
+  o.executor = ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  const std::vector<Value> r = engine.call(*compiled->find_func("step"), {});
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  const std::string limit = std::to_string(kMaxDenseComponents);
+  EXPECT_NE(os.str().find("interpreted: a dense tensor of 256 components (more than " + limit +
+                          ") is not compiled (line 7)"),
+            std::string::npos)
+      << os.str();
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(r[0].tensor().floats()[i], 0.5 * i + 1.0);
 }
 
 // A CG loop compiled whole: three loops per iteration after fusion, the interpreter's bits.

@@ -6,6 +6,7 @@
 #include <functional>
 #include <mutex>
 
+#include <llvm/ExecutionEngine/Orc/CompileUtils.h>
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
 #include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
 #include <llvm/ExecutionEngine/Orc/LLJIT.h>
@@ -25,6 +26,30 @@ using cpu::Emitter;
 using cpu::lanes_fit;
 
 std::string message_of(llvm::Error e) { return llvm::toString(std::move(e)); }
+
+// A module flag: compile with LLVM's fast instruction selector and register allocator.
+constexpr const char* kFastCodegen = "simit.fast-codegen";
+
+// Object code for each module from a target machine of its own (so compiles on several
+// threads stay apart), at the host's best code generation unless the module asks for the fast
+// one (jit/tunables.h, kLargeTraceFastCodegen).
+class Compiler : public llvm::orc::IRCompileLayer::IRCompiler {
+ public:
+  explicit Compiler(llvm::orc::JITTargetMachineBuilder jtmb, const llvm::TargetOptions& options)
+      : IRCompiler(llvm::orc::irManglingOptionsFromTargetOptions(options)),
+        jtmb_(std::move(jtmb)) {}
+
+  llvm::Expected<std::unique_ptr<llvm::MemoryBuffer>> operator()(llvm::Module& m) override {
+    llvm::orc::JITTargetMachineBuilder jtmb = jtmb_;
+    if (m.getModuleFlag(kFastCodegen)) jtmb.setCodeGenOptLevel(llvm::CodeGenOptLevel::None);
+    auto tm = jtmb.createTargetMachine();
+    if (!tm) return tm.takeError();
+    return llvm::orc::SimpleCompiler(**tm)(m);
+  }
+
+ private:
+  llvm::orc::JITTargetMachineBuilder jtmb_;
+};
 
 // The one ORC session of the process: its code lives as long as the kernels that own it.
 class Session {
@@ -59,7 +84,15 @@ class Session {
     auto tm = jtmb->createTargetMachine();
     if (!tm) return message_of(tm.takeError());
     tm_ = std::move(*tm);
-    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*jtmb).create();
+    auto jit =
+        llvm::orc::LLJITBuilder()
+            .setJITTargetMachineBuilder(*jtmb)
+            .setCompileFunctionCreator(
+                [options = tm_->Options](llvm::orc::JITTargetMachineBuilder b)
+                    -> llvm::Expected<std::unique_ptr<llvm::orc::IRCompileLayer::IRCompiler>> {
+                  return std::make_unique<Compiler>(std::move(b), options);
+                })
+            .create();
     if (!jit) return message_of(jit.takeError());
     jit_ = std::move(*jit);
     auto gen = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
@@ -113,16 +146,16 @@ class CpuBackend : public Backend {
   CpuBackend(Session& s, const HostCalls& host) : s_(s), host_(host) {}
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
-    const bool large = node_count(trace) > kLargeTrace;
-    const int level = !large             ? kOptLevel
-                      : lanes_fit(trace) ? kLargeLanesTraceOptLevel
-                                         : kLargeTraceOptLevel;
+    const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace);
+    const int level = !large ? kOptLevel : lanes ? kLargeLanesTraceOptLevel : kLargeTraceOptLevel;
+    const bool fast = large && !lanes && kLargeTraceFastCodegen;
     auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
+      if (fast) m.addModuleFlag(llvm::Module::Warning, kFastCodegen, 1);
       return Emitter(trace, m, host_).run(name);
     });
     if (k) {
       k->fn = reinterpret_cast<KernelFn>(k->address);
-      k->lanes = lanes_fit(trace) ? kLanes : 1;
+      k->lanes = lanes ? kLanes : 1;
     }
     return k;
   }
