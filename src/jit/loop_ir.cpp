@@ -192,10 +192,32 @@ void print_block(std::ostream& os, const std::vector<Stmt>& body, int indent) {
 // path before they are read.
 class Verifier {
  public:
-  explicit Verifier(const Trace& t) : t_(t), set_(t.locals.size(), false) {}
+  // Locals 0 .. preset-1 hold values on entry (a system trace's program scalars).
+  explicit Verifier(const Trace& t, int preset = 0) : t_(t), set_(t.locals.size(), false) {
+    for (int i = 0; i < preset && static_cast<size_t>(i) < set_.size(); ++i) set_[i] = true;
+  }
 
   std::string run() {
     block(t_.body);
+    return error_;
+  }
+  // A system trace: its condition, then its ops' bodies in order (t_ holds its arrays,
+  // locals and errors).
+  std::string run(const SystemTrace& st) {
+    need(st.condition, Ty::Bool, "while condition");
+    for (const VectorOp& op : st.body) {
+      if (op.kind == VectorOp::Kind::SpMV) {
+        for (int a : {op.row_ptr, op.cols, op.values, op.x, op.y}) array(a, "spmv");
+        if (error_.empty() && !t_.arrays[op.y].written) fail("spmv into an array not written");
+      }
+      if (op.kind != VectorOp::Kind::Scalar &&
+          (op.length < 0 || static_cast<size_t>(op.length) >= st.sizes.size()))
+        fail("a loop over a size out of range");
+      for (int s : op.sums)
+        if (s < 0 || static_cast<size_t>(s) >= t_.locals.size() || t_.locals[s] != Ty::F64)
+          fail("a sum that is not a float local");
+      block(op.body);
+    }
     return error_;
   }
 
@@ -380,6 +402,14 @@ void print(std::ostream& os, const SystemTrace& t) {
 }
 
 std::string verify(const Trace& t) { return Verifier(t).run(); }
+
+std::string verify(const SystemTrace& st) {
+  Trace t;
+  t.arrays = st.arrays;
+  t.locals = st.locals;
+  t.errors = st.errors;
+  return Verifier(t, st.scalars).run(st);
+}
 
 size_t node_count(const Trace& t) { return count_block(t.body); }
 

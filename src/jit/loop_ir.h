@@ -153,7 +153,7 @@ struct Trace {
   // The error a matrix write reports when its table entry is -1: the block is not in the
   // pattern the controller specialised the result to (-1: no matrix results).
   int outside_error = -1;
-  bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
+  bool float32 = false;  // the interpreter's float32 mode (decompositions' tolerance)
 };
 
 // A run of system-level statements (a CG loop): scalar statements, fused passes over the
@@ -190,6 +190,9 @@ struct SystemTrace {
   std::vector<std::string> sizes;  // what each size is (for dumps)
   ExprRef condition;               // the while condition
   std::vector<VectorOp> body;
+  // The loop's error statements (Check statements in its scalar ops): a kernel that reaches
+  // one returns 1 + its index, and the controller hands the loop back to the interpreter.
+  std::vector<ErrorSite> errors;
 };
 
 // Prints the trace as text (`--dump=loop-ir`).
@@ -202,6 +205,8 @@ int fuse_passes(SystemTrace& t);
 // Checks the invariants every pass relies on: operand types, slots in range, locals set
 // before they are read on every path. Returns the first violation, or "" when it holds.
 std::string verify(const Trace& t);
+// The same for a system trace, whose first `scalars` locals are set on entry.
+std::string verify(const SystemTrace& t);
 // Counts the nodes of a trace (for size limits and statistics).
 size_t node_count(const Trace& t);
 

@@ -67,20 +67,7 @@ class SystemTracer {
       ast::for_each_child(e, [&](const ast::Expr& c) { expr(c); });
     };
     expr(*loop_.condition);
-    for (const auto& s : loop_.body) {
-      if (const auto* d = s->as<ast::VarDecl>()) {
-        note(*d->var, d->span);
-        if (d->init) expr(*d->init);
-      } else if (const auto* a = s->as<ast::Assign>()) {
-        for (const auto& t : a->targets) expr(*t);
-        expr(*a->value);
-      } else {
-        // An error statement stays interpreted: only the interpreter can format its message.
-        const auto* p = s->as<ast::Print>();
-        give_up(s->span, std::string(p && p->is_error() ? "error" : ast::node_kind_name(s->kind)) +
-                             " statements in a compiled loop");
-      }
-    }
+    collect_block(loop_.body, expr);
     // Vectors first assigned in the loop borrow the shape of a vector of the same type.
     for (auto& [v, slot] : vector_slot_) {
       const Value& val = in_.variable(*v);
@@ -92,6 +79,27 @@ class SystemTracer {
         give_up(v->span, "vector '" + v->name + "' has no value and no vector gives its shape");
       b_.created.emplace_back(v, like);
       size_of_[v] = size_of_[like];
+    }
+  }
+
+  void collect_block(const ast::Block& body, const std::function<void(const ast::Expr&)>& expr) {
+    for (const auto& s : body) {
+      if (const auto* d = s->as<ast::VarDecl>()) {
+        note(*d->var, d->span);
+        if (d->init) expr(*d->init);
+      } else if (const auto* a = s->as<ast::Assign>()) {
+        for (const auto& t : a->targets) expr(*t);
+        expr(*a->value);
+      } else if (const auto* i = s->as<ast::If>()) {
+        for (const auto& c : i->conditions) expr(*c);
+        for (const auto& b : i->branches) collect_block(b, expr);
+        collect_block(i->else_branch, expr);
+      } else if (const auto* p = s->as<ast::Print>(); p && p->is_error()) {
+        // Its arguments are only formatted by the interpreter, which runs the loop again.
+      } else {
+        give_up(s->span,
+                std::string(ast::node_kind_name(s->kind)) + " statements in a compiled loop");
+      }
     }
   }
 
@@ -166,8 +174,14 @@ class SystemTracer {
 
   // Ops: consecutive scalar statements share one Scalar op.
   void scalar_stmt(Stmt s) {
+    if (sink_) return sink_->push_back(std::move(s));
     if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar) t_.body.emplace_back();
     t_.body.back().body.push_back(std::move(s));
+  }
+  // A loop over vectors; inside an `if` only scalar statements are compiled.
+  void push_op(VectorOp op, const SourceSpan& at) {
+    if (sink_) give_up(at, "a vector operation inside an if in a compiled loop");
+    t_.body.push_back(std::move(op));
   }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
     Stmt s;
@@ -236,7 +250,7 @@ class SystemTracer {
                    at);
     s.span = at;
     pass.body.push_back(std::move(s));
-    t_.body.push_back(std::move(pass));
+    push_op(std::move(pass), at);
     return local(t, Ty::F64);
   }
 
@@ -449,7 +463,7 @@ class SystemTracer {
         op.x = vector_slot_.at(x->var);
         op.y = vt->second;
         op.length = size_of_.at(&target);
-        t_.body.push_back(std::move(op));
+        push_op(std::move(op), at);
         return;
       }
     }
@@ -470,10 +484,12 @@ class SystemTracer {
     s.value = v;
     s.span = at;
     pass.body.push_back(std::move(s));
-    t_.body.push_back(std::move(pass));
+    push_op(std::move(pass), at);
   }
 
   void stmt(const ast::Stmt& s) {
+    if (const auto* i = s.as<ast::If>()) return if_stmt(*i, 0);
+    if (s.is<ast::Print>()) return error_stmt(s.span);
     if (const auto* d = s.as<ast::VarDecl>()) {
       if (!d->init) give_up(s.span, "a declaration without a value");
       return assign(*d->var, *d->init, s.span);
@@ -484,6 +500,38 @@ class SystemTracer {
     const auto* target = a.targets[0]->as<ast::VarRef>();
     if (!target) give_up(s.span, "an assignment to part of a variable");
     assign(*target->var, *a.value, s.span);
+  }
+
+  // Branch `from` of an if (and the elifs after it, nested in its else) as one If statement
+  // of scalar statements. The conditions are traced where the interpreter evaluates them.
+  void if_stmt(const ast::If& i, size_t from) {
+    Stmt s;
+    s.kind = StmtKind::If;
+    s.span = i.conditions[from]->span;
+    s.value = scalar(*i.conditions[from]);
+    if (s.value->ty != Ty::Bool) give_up(s.span, "a condition that is not a boolean");
+    std::vector<Stmt>* outer = sink_;
+    sink_ = &s.body;
+    for (const auto& b : i.branches[from]) stmt(*b);
+    sink_ = &s.orelse;
+    if (from + 1 < i.conditions.size())
+      if_stmt(i, from + 1);
+    else
+      for (const auto& b : i.else_branch) stmt(*b);
+    sink_ = outer;
+    scalar_stmt(std::move(s));
+  }
+
+  // An error statement: a check that always fails. Only the interpreter formats the message,
+  // so a kernel that reaches it hands the whole loop back (TraceController::run_loop_kernel).
+  void error_stmt(const SourceSpan& at) {
+    Stmt s;
+    s.kind = StmtKind::Check;
+    s.value = iconst(0, Ty::Bool);
+    s.error = static_cast<int>(t_.errors.size());
+    s.span = at;
+    t_.errors.push_back({at, "error statement"});
+    scalar_stmt(std::move(s));
   }
 
   struct Mat {
@@ -498,6 +546,7 @@ class SystemTracer {
   std::map<const ast::Variable*, int> scalar_local_, vector_slot_, size_of_, block_of_;
   std::map<const ast::Variable*, Mat> matrix_;
   std::map<std::pair<bool, int64_t>, int> sizes_;
+  std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
 };
 
 }  // namespace
