@@ -35,6 +35,7 @@ void block_uses(const std::vector<Stmt>& body, Uses& u) {
 Uses uses_of(const VectorOp& op) {
   Uses u;
   block_uses(op.body, u);
+  if (op.guard >= 0) u.reads.insert(op.guard);
   if (op.kind == VectorOp::Kind::SpMV) {
     u.array_reads.insert({op.row_ptr, op.cols, op.values, op.x});
     u.array_writes.insert(op.y);
@@ -70,20 +71,22 @@ int fuse_passes(SystemTrace& t) {
       std::swap(ops[j - 1], ops[j]);
       --j;
     }
-    if (j > 0 && ops[j - 1].kind == VectorOp::Kind::Scalar) {
+    if (j > 0 && ops[j - 1].kind == VectorOp::Kind::Scalar && ops[j - 1].guard == ops[j].guard) {
       for (Stmt& s : ops[j].body) ops[j - 1].body.push_back(std::move(s));
       ops.erase(ops.begin() + static_cast<long>(j));
       i = j - 1;
     }
   }
-  // 2. Loops over the same length merge when the second reads no local the first writes (a
+  // 2. Loops over the same length and guard merge when the second reads no local the first writes
+  // (a
   //    reduction's sum is only complete after its loop). Into a product's row loop goes only
   //    a pass that writes no array: the rows after the current one still read the product's
   //    operand.
   std::vector<VectorOp> out;
   for (VectorOp& op : ops) {
     if (!out.empty() && op.kind == VectorOp::Kind::Pass &&
-        out.back().kind != VectorOp::Kind::Scalar && out.back().length == op.length) {
+        out.back().kind != VectorOp::Kind::Scalar && out.back().length == op.length &&
+        out.back().guard == op.guard) {
       const Uses prev = uses_of(out.back()), cur = uses_of(op);
       const bool into_product = out.back().kind == VectorOp::Kind::SpMV;
       // Sums keep their runs: a pass with sums joins only a loop of the same runs.

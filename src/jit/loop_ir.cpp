@@ -2,6 +2,7 @@
 #include "jit/loop_ir.h"
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 namespace simit::jit {
@@ -205,7 +206,21 @@ class Verifier {
   // locals and errors).
   std::string run(const SystemTrace& st) {
     need(st.condition, Ty::Bool, "while condition");
+    // An op under a guard runs only when it holds: what it sets counts as set for the later
+    // ops under the same guard, not for the others (fusion may interleave the branches).
+    std::vector<bool> always = set_;
+    std::map<int, std::vector<bool>> under;
     for (const VectorOp& op : st.body) {
+      set_ = always;
+      if (op.guard >= 0) {
+        Expr g;
+        g.kind = ExprKind::Local;
+        g.ty = Ty::Bool;
+        g.slot = op.guard;
+        expr(g);
+        if (auto it = under.find(op.guard); it != under.end())
+          for (size_t i = 0; i < set_.size(); ++i) set_[i] = set_[i] || it->second[i];
+      }
       if (op.kind == VectorOp::Kind::SpMV) {
         for (int a : {op.row_ptr, op.cols, op.values, op.x, op.y}) array(a, "spmv");
         if (error_.empty() && !t_.arrays[op.y].written) fail("spmv into an array not written");
@@ -217,6 +232,7 @@ class Verifier {
         if (s < 0 || static_cast<size_t>(s) >= t_.locals.size() || t_.locals[s] != Ty::F64)
           fail("a sum that is not a float local");
       block(op.body);
+      (op.guard >= 0 ? under[op.guard] : always) = set_;
     }
     return error_;
   }
@@ -384,7 +400,7 @@ void print(std::ostream& os, const SystemTrace& t) {
   os << "\n";
   for (const VectorOp& op : t.body) {
     switch (op.kind) {
-      case VectorOp::Kind::Scalar: os << "    scalar\n"; break;
+      case VectorOp::Kind::Scalar: os << "    scalar"; break;
       case VectorOp::Kind::Pass: os << "    pass over n" << op.length; break;
       case VectorOp::Kind::SpMV:
         os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
@@ -396,7 +412,8 @@ void print(std::ostream& os, const SystemTrace& t) {
       for (int s : op.sums) os << " l" << s;
       os << " by runs of " << op.group;
     }
-    if (op.kind != VectorOp::Kind::Scalar) os << "\n";
+    if (op.guard >= 0) os << " when %" << op.guard;
+    os << "\n";
     print_block(os, op.body, 3);
   }
 }

@@ -180,6 +180,8 @@ struct VectorOp {
   // element; an SpMV's row); each run is summed on its own, then added to s.
   int group = 1;
   std::vector<int> sums;
+  // A Bool local: the op runs only when it holds (the op is in a branch of an `if`), or -1.
+  int guard = -1;
 };
 
 struct SystemTrace {

@@ -175,12 +175,17 @@ class SystemTracer {
   // Ops: consecutive scalar statements share one Scalar op.
   void scalar_stmt(Stmt s) {
     if (sink_) return sink_->push_back(std::move(s));
-    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar) t_.body.emplace_back();
+    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar ||
+        t_.body.back().guard != guard_) {
+      t_.body.emplace_back();
+      t_.body.back().guard = guard_;
+    }
     t_.body.back().body.push_back(std::move(s));
   }
-  // A loop over vectors; inside an `if` only scalar statements are compiled.
+  // A loop over vectors, under the guard of the branch being traced.
   void push_op(VectorOp op, const SourceSpan& at) {
     if (sink_) give_up(at, "a vector operation inside an if in a compiled loop");
+    op.guard = guard_;
     t_.body.push_back(std::move(op));
   }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
@@ -434,6 +439,11 @@ class SystemTracer {
     }
     auto vt = vector_slot_.find(&target);
     if (vt == vector_slot_.end()) give_up(at, "an assignment to '" + target.name + "'");
+    // The controller makes such a vector before the loop runs, where the interpreter would
+    // leave it without a value when the branch does not run.
+    if (guard_ >= 0)
+      for (const auto& [v, like] : b_.created)
+        if (v == &target) give_up(at, "a vector first assigned inside an if");
     t_.arrays[vt->second].written = true;
     // `y = A * x`: a sparse product.
     if (const auto* b = value.as<ast::Binary>(); b && b->op == ast::Binary::Op::Mul) {
@@ -488,7 +498,7 @@ class SystemTracer {
   }
 
   void stmt(const ast::Stmt& s) {
-    if (const auto* i = s.as<ast::If>()) return if_stmt(*i, 0);
+    if (const auto* i = s.as<ast::If>()) return has_vectors(*i) ? guarded_if(*i) : if_stmt(*i, 0);
     if (s.is<ast::Print>()) return error_stmt(s.span);
     if (const auto* d = s.as<ast::VarDecl>()) {
       if (!d->init) give_up(s.span, "a declaration without a value");
@@ -522,6 +532,68 @@ class SystemTracer {
     scalar_stmt(std::move(s));
   }
 
+  // Whether an if's branches (or its elif conditions) compute on vectors: then it is traced
+  // as guarded ops, else as one If statement of scalar statements.
+  static bool mentions_vector(const ast::Expr& e) {
+    if (e.type && has_set_dim(*e.type)) return true;
+    bool found = false;
+    ast::for_each_child(e, [&](const ast::Expr& c) { found = found || mentions_vector(c); });
+    return found;
+  }
+  static bool has_vectors(const ast::If& i) {
+    for (size_t k = 1; k < i.conditions.size(); ++k)
+      if (mentions_vector(*i.conditions[k])) return true;
+    auto block = [](const ast::Block& b) {
+      for (const auto& s : b) {
+        if (const auto* d = s->as<ast::VarDecl>(); d && d->init && mentions_vector(*d->init))
+          return true;
+        if (const auto* a = s->as<ast::Assign>()) {
+          if (mentions_vector(*a->value)) return true;
+          for (const auto& t : a->targets)
+            if (mentions_vector(*t)) return true;
+        }
+        if (const auto* n = s->as<ast::If>();
+            n && (mentions_vector(*n->conditions[0]) || has_vectors(*n)))
+          return true;
+      }
+      return false;
+    };
+    for (const auto& b : i.branches)
+      if (block(b)) return true;
+    return block(i.else_branch);
+  }
+
+  // An if with vector operations: each branch's ops run under a guard, a Bool local set on
+  // every iteration to "the enclosing guard holds, the earlier conditions do not, and this
+  // one does". Each condition is evaluated before its branch, as the interpreter does (when
+  // an earlier branch ran, its value does not matter).
+  void guarded_if(const ast::If& i) {
+    if (sink_) give_up(i.span, "vector operations inside an if in an if");
+    const int outer = guard_;
+    const SourceSpan at = i.span;
+    auto both = [&](ExprRef a, ExprRef b) {
+      return a ? node(ExprKind::Binary, Ty::Bool, static_cast<uint8_t>(BinOp::And), {a, b}, at) : b;
+    };
+    ExprRef rest = outer >= 0 ? local(outer, Ty::Bool) : nullptr;
+    for (size_t k = 0; k < i.conditions.size(); ++k) {
+      guard_ = -1;
+      ExprRef c = scalar(*i.conditions[k]);
+      if (c->ty != Ty::Bool) give_up(i.conditions[k]->span, "a condition that is not a boolean");
+      const int g = temp(Ty::Bool), r = temp(Ty::Bool);
+      set_local(g, both(rest, c), i.conditions[k]->span);
+      set_local(r,
+                both(rest, node(ExprKind::Unary, Ty::Bool, static_cast<uint8_t>(UnOp::Not), {c},
+                                i.conditions[k]->span)),
+                i.conditions[k]->span);
+      guard_ = g;
+      for (const auto& b : i.branches[k]) stmt(*b);
+      rest = local(r, Ty::Bool);
+    }
+    guard_ = rest->slot;
+    for (const auto& b : i.else_branch) stmt(*b);
+    guard_ = outer;
+  }
+
   // An error statement: a check that always fails. Only the interpreter formats the message,
   // so a kernel that reaches it hands the whole loop back (TraceController::run_loop_kernel).
   void error_stmt(const SourceSpan& at) {
@@ -547,6 +619,7 @@ class SystemTracer {
   std::map<const ast::Variable*, Mat> matrix_;
   std::map<std::pair<bool, int64_t>, int> sizes_;
   std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
+  int guard_ = -1;  // the Bool local the ops traced now run under (guarded_if), or -1
 };
 
 }  // namespace

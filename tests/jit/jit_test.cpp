@@ -86,6 +86,38 @@ TEST(LoopIr, VerifierRejectsMismatchedTypes) {
   EXPECT_EQ(verify(t), "set local: operand is f64, expected i32");
 }
 
+// A system trace's ops under a guard (a branch of an if): what they set is set for the later
+// ops under the same guard, not for the ops under another guard or none.
+TEST(LoopIr, VerifierFollowsGuardsInASystemTrace) {
+  SystemTrace t;
+  t.scalars = 1;  // %0: a program scalar, the guard
+  t.locals = {Ty::Bool, Ty::F64, Ty::F64};
+  Expr tru;
+  tru.ty = Ty::Bool;
+  tru.i = 1;
+  t.condition = std::make_shared<const Expr>(tru);
+  auto op = [&](int guard, int set, int read) {
+    VectorOp o;
+    o.guard = guard;
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = set;
+    s.value = c(1.0);
+    if (read >= 0) {
+      Expr r;
+      r.kind = ExprKind::Local;
+      r.slot = read;
+      s.value = std::make_shared<const Expr>(r);
+    }
+    o.body.push_back(s);
+    return o;
+  };
+  t.body = {op(0, 1, -1), op(-1, 2, -1), op(0, 2, 1)};  // %1 set and read under %0
+  EXPECT_EQ(verify(t), "");
+  t.body[2].guard = -1;  // read where %0 may not hold
+  EXPECT_EQ(verify(t), "local %1 read before it is set");
+}
+
 // ---------------------------------------------------------------------------
 // The compiled products' copy of a matrix
 
@@ -1035,9 +1067,9 @@ TEST(Jit, ACheckFailingInOneLaneStopsAtItsElement) {
 }
 
 // ---------------------------------------------------------------------------
-// Solver loops with ifs on scalars (jit/system_trace.cpp): a preconditioned CG whose body
-// tests p'Ap, counts slow iterations, and may stop with an error statement at an iteration
-// the host chooses.
+// Solver loops with ifs (jit/system_trace.cpp): a preconditioned CG whose body tests p'Ap,
+// counts slow iterations, may stop with an error statement at an iteration the host chooses,
+// and restarts its search direction once (a vector update in a branch).
 
 const char* const kPcg = R"(element Point
   b : vector[3](float);
@@ -1100,7 +1132,11 @@ export func solve() -> (x : vector[points](vector[3](float)), iterations : int, 
     if iterations == stop_at
       error "stopped at CG iteration ", iterations, " with r'z = ", rz_new;
     end
-    p = z + (rz_new / rz) * p;
+    if iterations == 4
+      p = z;
+    else
+      p = z + (rz_new / rz) * p;
+    end
     rz = rz_new;
     iterations = iterations + 1;
     going = (rz > 1.0e-24) and (iterations < 60);
@@ -1110,7 +1146,7 @@ end
 
 struct PcgRun {
   std::vector<std::vector<Value>> results;  // per call that returned
-  std::string error, stats;
+  std::string error, stats, dump;
 };
 
 // Calls `solve` once per entry of `stops` (the iteration its error statement fires at, -1
@@ -1135,6 +1171,9 @@ PcgRun run_pcg(ExecutorKind kind, bool check, const std::vector<int>& stops) {
   o.executor = kind;
   o.jit.threshold = 0;
   o.jit.check = check;
+  std::ostringstream dump;
+  o.jit.dump = &dump;
+  o.jit.dump_loop_ir = true;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("points"), points);
   engine.bind_set(*compiled->find_extern("links"), links);
@@ -1151,6 +1190,7 @@ PcgRun run_pcg(ExecutorKind kind, bool check, const std::vector<int>& stops) {
   std::ostringstream os;
   engine.print_jit_stats(os);
   run.stats = os.str();
+  run.dump = dump.str();
   return run;
 }
 
@@ -1191,6 +1231,11 @@ TEST(Jit, ALoopWithIfsOnScalarsIsCompiledAndComputesTheInterpretersBits) {
   EXPECT_NE(loop.find(" compiled"), std::string::npos) << jit.stats;
   EXPECT_NE(loop.find(" 2 "), std::string::npos) << loop;  // both calls ran the kernel
   for (int call = 0; call < 2; ++call) expect_same_pcg_results(in.results[call], jit.results[call]);
+  // The restart's two updates of p are passes under guards; the breakdown test is an if in a
+  // scalar op.
+  const std::string loop_ir = jit.dump.substr(jit.dump.find("system trace"));
+  EXPECT_NE(loop_ir.find("pass over n1 when %"), std::string::npos) << loop_ir;
+  EXPECT_NE(loop_ir.find("check false else error 0"), std::string::npos) << loop_ir;
   // The branches ran: CG took real iterations, some slow and some not.
   const std::vector<Value>& r = in.results[0];
   EXPECT_GT(r[1].as_int(), 5);

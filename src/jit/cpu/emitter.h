@@ -88,6 +88,7 @@ class Emitter {
   // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
   void loop(Value* begin, Value* end, const std::function<void(Value*)>& body);
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
   // Unless `ok` (expected true), the kernel returns error + 1 with the element in *failed (a
   // map kernel).
   void fail_unless(Value* ok, int error, const char* what) {
