@@ -1040,7 +1040,9 @@ struct Cg {
   int iterations = 1;
   bool own_function = false, extra_vector = false, extra_scalar = false, extra_flag = false,
        extra_int = false;
-  int if_form = -1;   // an if on scalars: -1 none, 0 if/elif/else, 1 if, 2 if/else
+  // An if: -1 none; on scalars 0 if/elif/else, 1 if, 2 if/else; 3 with a vector update and
+  // a dot product in its branches.
+  int if_form = -1;
   int error_at = -1;  // an error statement that fires at this iteration if the residual grew
 };
 
@@ -1100,7 +1102,14 @@ std::string ProgramGen::cg_text(const Cg& c) {
 std::string ProgramGen::branches(const Cg& c) {
   std::ostringstream s;
   const std::string i2 = "    ", i3 = "      ", set = i3 + c.branchy + " = ";
-  if (c.if_form >= 0) {
+  if (c.if_form == 3) {
+    s << i2 << "if " << c.rn << " > " << c.rs << "\n"
+      << set << c.branchy << " + " << c.alpha << ";\n"
+      << i3 << c.x << " = " << c.x << " - (0.25 * " << c.alpha << ") * " << c.p << ";\n"
+      << i2 << "else\n"
+      << set << c.branchy << " - dot(" << c.r << ", " << c.r << ");\n"
+      << i2 << "end\n";
+  } else if (c.if_form >= 0) {
     s << i2 << "if " << c.rn << " > " << c.rs << "\n"
       << set << c.branchy << " + " << c.alpha << ";\n";
     if (c.if_form == 0)
@@ -1153,7 +1162,7 @@ void ProgramGen::cg_stage(Step& st) {
   c.extra_scalar = coin(0.4);
   c.extra_flag = coin(0.25);
   c.extra_int = coin(0.25);
-  c.if_form = coin(0.4) ? pick(0, 2) : -1;
+  c.if_form = coin(0.4) ? pick(0, 3) : -1;
   c.error_at = coin(0.15) ? pick(0, c.iterations - 1) : -1;
   // Another vector of the same type, read in the loop (a field view stays interpreted).
   std::vector<std::string> others;
