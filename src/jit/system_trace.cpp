@@ -50,6 +50,11 @@ class SystemTracer {
       t_.condition = scalar(*loop_.condition);
       if (!t_.body.empty()) give_up(loop_.condition->span, "a loop condition over vectors");
       for (const auto& s : loop_.body) stmt(*s);
+      if (!starts_.empty()) {
+        VectorOp first;
+        first.body = std::move(starts_);
+        t_.body.insert(t_.body.begin(), std::move(first));
+      }
     } catch (const GiveUp& g) {
       out.reason = g.reason;
       return out;
@@ -239,7 +244,14 @@ class SystemTracer {
     if (group_of(v) != group || group < 1)
       give_up(at, "a dot product of vectors blocked differently");
     const int t = temp(Ty::F64);
-    set_local(t, fconst(0.0), at);
+    // The sum starts at +0.0 at the top of every iteration, so that no scalar op stands
+    // between the start and its pass: fuse_passes may move the pass up to another loop.
+    Stmt start;
+    start.kind = StmtKind::SetLocal;
+    start.slot = t;
+    start.value = fconst(0.0);
+    start.span = at;
+    starts_.push_back(std::move(start));
     ExprRef a = component(u), b = component(v);
     VectorOp pass;
     pass.kind = VectorOp::Kind::Pass;
@@ -619,7 +631,8 @@ class SystemTracer {
   std::map<const ast::Variable*, Mat> matrix_;
   std::map<std::pair<bool, int64_t>, int> sizes_;
   std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
-  int guard_ = -1;  // the Bool local the ops traced now run under (guarded_if), or -1
+  int guard_ = -1;            // the Bool local the ops traced now run under (guarded_if), or -1
+  std::vector<Stmt> starts_;  // the sums' +0.0 starts, first in the loop's body
 };
 
 }  // namespace
