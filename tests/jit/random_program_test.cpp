@@ -1081,10 +1081,12 @@ std::string ProgramGen::cg_text(const Cg& c) {
   }
   if (c.extra_scalar) {
     const std::string acc = i2 + c.acc + " = " + c.acc;
-    switch (pick(0, 3)) {
+    switch (pick(0, 4)) {
       case 0: s << acc << " + max(" << c.alpha << ", 0.0);\n"; break;
       case 1: s << acc << " + g_s * " << c.alpha << ";\n"; break;
       case 2: s << acc << " * k_s + " << c.rn << ";\n"; break;
+      // A dot product after a scalar statement: its pass moves up to the x and r updates.
+      case 3: s << acc << " + 1.0e-3 * (" << c.x << "' * " << c.x << ");\n"; break;
       default: s << acc << " + sqrt(abs(" << c.alpha << "));\n";
     }
   }
