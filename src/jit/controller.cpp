@@ -540,6 +540,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
+  e->stats.note.clear();
   if (e->total > 0) {
     char note[160];
     std::snprintf(note, sizeof note,

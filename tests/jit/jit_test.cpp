@@ -1352,5 +1352,65 @@ TEST(Jit, CheckModeComparesALoopWithIfs) {
   for (int call = 0; call < 2; ++call) expect_same_pcg_results(in.results[call], jit.results[call]);
 }
 
+// A loop without products whose error statement fires on two calls: both hand the loop back,
+// and the stats say so once.
+const char* const kHalving = R"(element P
+  b : float;
+end
+extern ps : set{P};
+
+export func main()
+  b = ps.b;
+  var x = 0.0 * b;
+  var k = 0;
+  while k < 10
+    x = x + b;
+    if x' * x > 40.0
+      x = 0.5 * x;
+      error "x'x = ", x' * x, " after halving at k = ", k;
+    end
+    k = k + 1;
+  end
+end
+)";
+
+TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  auto compiled = CompiledProgram::from_source("halving.sim", kHalving);
+  ASSERT_TRUE(compiled->ok());
+  runtime::Set ps("ps");
+  ps.add_many(2);
+  ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  ps.field(0).at<double>(0)[0] = 1.0;
+  ps.field(0).at<double>(1)[0] = 2.0;
+  EngineOptions o;
+  o.executor = ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  // x'x is 5, 20, then 45: halved to [1.5, 3], 11.25, at k = 2.
+  const std::string where = "halving.sim:" + std::to_string(line_of(kHalving, "error \"x")) + ":";
+  for (int call = 0; call < 2; ++call) {
+    std::string message;
+    try {
+      engine.call(*compiled->find_func("main"), {});
+    } catch (const interp::RuntimeError& e) {
+      message = e.render();
+    }
+    EXPECT_EQ(message.rfind(where, 0), 0u) << message;
+    EXPECT_NE(message.find("runtime error: x'x = 11.25 after halving at k = 2"), std::string::npos)
+        << message;
+  }
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  const std::string stats = os.str();
+  const std::string note = "2 calls reached an error statement and ran again interpreted";
+  EXPECT_NE(stats.find(note), std::string::npos) << stats;
+  const size_t first = stats.find("reached an error statement");
+  EXPECT_EQ(stats.find("reached an error statement", first + 1), std::string::npos) << stats;
+  EXPECT_NE(loop_stats(stats, line_of(kHalving, "while k")).find(" compiled"), std::string::npos)
+      << stats;
+}
+
 }  // namespace
 }  // namespace simit::jit
