@@ -18,7 +18,8 @@ using KernelFn = int32_t (*)(void* const* arrays, const double* scalars, const i
                              int32_t begin, int32_t end, int32_t* failed_element);
 
 // A compiled system trace: `scalars` holds the program's scalars (in, then out), `sizes` the
-// lengths the trace names. Returns 0.
+// lengths the trace names. Returns 0, or 1 + the index in SystemTrace::errors of the error
+// statement it reached (the scalars and vectors are then partly updated).
 using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes);
 
 class Kernel {

@@ -62,6 +62,7 @@ struct TraceController::LoopEntry {
   double prune_cpu_ms = 0.0;
   std::vector<int64_t> sizes;       // the lengths it was traced for
   std::vector<bool> writes_scalar;  // per scalar local
+  long handed_back = 0;             // calls that reached an error statement
   TraceStats stats;
 };
 
@@ -103,6 +104,15 @@ std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& 
       out.push_back(v.is_tensor() ? static_cast<int64_t>(v.tensor().size()) : -1);
   }
   return out;
+}
+
+// Marks the program scalars (locals below `scalars`) a block sets, in branches too.
+void note_scalar_writes(const std::vector<Stmt>& body, int scalars, std::vector<bool>& writes) {
+  for (const Stmt& st : body) {
+    if (st.kind == StmtKind::SetLocal && st.slot < scalars) writes[st.slot] = true;
+    note_scalar_writes(st.body, scalars, writes);
+    note_scalar_writes(st.orelse, scalars, writes);
+  }
 }
 
 // What a kernel is specialised for: the target's identity and topology, the patterns of the
@@ -519,13 +529,11 @@ TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& lo
       key << "; " << removed << " loops fused away";
       e->stats.key = key.str();
       e->writes_scalar.assign(static_cast<size_t>(t.scalars), false);
-      for (const VectorOp& op : t.body)
-        for (const Stmt& st : op.body)
-          if (st.kind == StmtKind::SetLocal && st.slot < t.scalars)
-            e->writes_scalar[st.slot] = true;
+      for (const VectorOp& op : t.body) note_scalar_writes(op.body, t.scalars, e->writes_scalar);
       std::string error;
-      e->kernel = backend_->compile(t, options_.dump_llvm, error);
-      if (!e->kernel) {
+      if (std::string bad = verify(t); !bad.empty()) {
+        fail("loop IR failed verification: " + bad, true);
+      } else if (e->kernel = backend_->compile(t, options_.dump_llvm, error); !e->kernel) {
         fail(error, false);
       } else {
         e->stats.status = "compiled";
@@ -549,16 +557,39 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
   LoopEntry* e = loop_entry_for(*loop, in);
   if (!e) return false;
   if (options_.check) return check_loop(*e, *loop, in);
-  run_loop_kernel(*e, in);
-  return true;
+  return run_loop_kernel(*e, in);
 }
 
-void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in) {
+namespace {
+
+using Saved = std::vector<std::pair<const ast::Variable*, Value>>;
+
+// The variables a loop writes, as shared copies: a vector the kernel writes is copied by
+// its first write (copy on write), so keeping the old value costs one copy of each written
+// vector per call, and only for loops that may stop.
+Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
+                          const std::vector<bool>& writes_scalar, interp::Interpreter& in) {
+  Saved out;
+  for (size_t i = 0; i < b.arrays.size(); ++i)
+    if (t.arrays[i].written) out.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
+  for (size_t i = 0; i < b.scalars.size(); ++i)
+    if (writes_scalar[i]) out.emplace_back(b.scalars[i], in.variable(*b.scalars[i]));
+  return out;
+}
+
+}  // namespace
+
+// Runs the loop's kernel on the interpreter's variables. A loop that reaches an error
+// statement is put back as it was and left to the interpreter (false), which runs it from
+// the start and stops with the error in its own words, at its line.
+bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in) {
   LoopEntry* e = &entry;
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
   const SystemBinding& b = e->traced.binding;
   const SystemTrace& t = *e->traced.trace;
+  Saved saved;
+  if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
   for (const auto& [var, like] : b.created)
     if (in.variable(*var).empty()) {
       const runtime::Tensor& shape = in.variable(*like).tensor();
@@ -595,8 +626,12 @@ void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
     const Value& v = in.variable(*b.scalars[i]);
     if (!v.empty()) scalars[i] = component(v, 0);
   }
-  e->kernel->system(arrays.data(), scalars.data(), e->sizes.data());
-  for (size_t i = 0; i < b.scalars.size(); ++i) {
+  const int32_t rc = e->kernel->system(arrays.data(), scalars.data(), e->sizes.data());
+  if (rc != 0) {
+    for (auto& [var, value] : saved) in.variable(*var) = std::move(value);
+    ++e->handed_back;
+  }
+  for (size_t i = 0; i < b.scalars.size() && rc == 0; ++i) {
     if (!e->writes_scalar[i]) continue;
     switch (b.scalar_types[i]) {
       case Ty::F64: in.variable(*b.scalars[i]) = Value::of_float(scalars[i]); break;
@@ -610,6 +645,7 @@ void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
+  e->stats.note.clear();
   if (e->total > 0) {
     char note[160];
     std::snprintf(note, sizeof note,
@@ -618,6 +654,11 @@ void TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
                   e->prune_cpu_ms);
     e->stats.note = note;
   }
+  if (e->handed_back > 0)
+    e->stats.note += "; " + std::to_string(e->handed_back) + " call" +
+                     (e->handed_back > 1 ? "s" : "") +
+                     " reached an error statement and ran again interpreted";
+  return rc == 0;
 }
 
 namespace {
@@ -753,13 +794,8 @@ void TraceController::site_done(interp::SiteCall& call) {
 // copies: the kernel's writes copy them first) and put back for the interpreter.
 bool TraceController::check_loop(LoopEntry& e, const ast::While& loop, interp::Interpreter& in) {
   const SystemBinding& b = e.traced.binding;
-  std::vector<std::pair<const ast::Variable*, Value>> before;
-  for (size_t i = 0; i < b.arrays.size(); ++i)
-    if (e.traced.trace->arrays[i].written)
-      before.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
-  for (size_t i = 0; i < b.scalars.size(); ++i)
-    if (e.writes_scalar[i]) before.emplace_back(b.scalars[i], in.variable(*b.scalars[i]));
-  run_loop_kernel(e, in);
+  Saved before = save_loop_variables(b, *e.traced.trace, e.writes_scalar, in);
+  if (!run_loop_kernel(e, in)) return false;  // an error: the interpreter reports it
   auto p = std::make_unique<Pending>();
   p->at = &loop;
   p->name = e.stats.site;

@@ -79,7 +79,7 @@ class TraceController : public interp::SiteHook {
   struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit
   bool check_site(Entry& e, interp::SiteCall& call);
   bool check_loop(LoopEntry& e, const frontend::ast::While& loop, interp::Interpreter& in);
-  void run_loop_kernel(LoopEntry& e, interp::Interpreter& in);
+  bool run_loop_kernel(LoopEntry& e, interp::Interpreter& in);
 
   JitOptions options_;
   std::unique_ptr<Pending> pending_;

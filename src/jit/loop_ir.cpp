@@ -2,6 +2,7 @@
 #include "jit/loop_ir.h"
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 namespace simit::jit {
@@ -192,10 +193,47 @@ void print_block(std::ostream& os, const std::vector<Stmt>& body, int indent) {
 // path before they are read.
 class Verifier {
  public:
-  explicit Verifier(const Trace& t) : t_(t), set_(t.locals.size(), false) {}
+  // Locals 0 .. preset-1 hold values on entry (a system trace's program scalars).
+  explicit Verifier(const Trace& t, int preset = 0) : t_(t), set_(t.locals.size(), false) {
+    for (int i = 0; i < preset && static_cast<size_t>(i) < set_.size(); ++i) set_[i] = true;
+  }
 
   std::string run() {
     block(t_.body);
+    return error_;
+  }
+  // A system trace: its condition, then its ops' bodies in order (t_ holds its arrays,
+  // locals and errors).
+  std::string run(const SystemTrace& st) {
+    need(st.condition, Ty::Bool, "while condition");
+    // An op under a guard runs only when it holds: what it sets counts as set for the later
+    // ops under the same guard, not for the others (fusion may interleave the branches).
+    std::vector<bool> always = set_;
+    std::map<int, std::vector<bool>> under;
+    for (const VectorOp& op : st.body) {
+      set_ = always;
+      if (op.guard >= 0) {
+        Expr g;
+        g.kind = ExprKind::Local;
+        g.ty = Ty::Bool;
+        g.slot = op.guard;
+        expr(g);
+        if (auto it = under.find(op.guard); it != under.end())
+          for (size_t i = 0; i < set_.size(); ++i) set_[i] = set_[i] || it->second[i];
+      }
+      if (op.kind == VectorOp::Kind::SpMV) {
+        for (int a : {op.row_ptr, op.cols, op.values, op.x, op.y}) array(a, "spmv");
+        if (error_.empty() && !t_.arrays[op.y].written) fail("spmv into an array not written");
+      }
+      if (op.kind != VectorOp::Kind::Scalar &&
+          (op.length < 0 || static_cast<size_t>(op.length) >= st.sizes.size()))
+        fail("a loop over a size out of range");
+      for (int s : op.sums)
+        if (s < 0 || static_cast<size_t>(s) >= t_.locals.size() || t_.locals[s] != Ty::F64)
+          fail("a sum that is not a float local");
+      block(op.body);
+      (op.guard >= 0 ? under[op.guard] : always) = set_;
+    }
     return error_;
   }
 
@@ -363,7 +401,7 @@ void print(std::ostream& os, const SystemTrace& t) {
   os << "\n";
   for (const VectorOp& op : t.body) {
     switch (op.kind) {
-      case VectorOp::Kind::Scalar: os << "    scalar\n"; break;
+      case VectorOp::Kind::Scalar: os << "    scalar"; break;
       case VectorOp::Kind::Pass: os << "    pass over n" << op.length; break;
       case VectorOp::Kind::SpMV:
         os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
@@ -375,12 +413,21 @@ void print(std::ostream& os, const SystemTrace& t) {
       for (int s : op.sums) os << " l" << s;
       os << " by runs of " << op.group;
     }
-    if (op.kind != VectorOp::Kind::Scalar) os << "\n";
+    if (op.guard >= 0) os << " when %" << op.guard;
+    os << "\n";
     print_block(os, op.body, 3);
   }
 }
 
 std::string verify(const Trace& t) { return Verifier(t).run(); }
+
+std::string verify(const SystemTrace& st) {
+  Trace t;
+  t.arrays = st.arrays;
+  t.locals = st.locals;
+  t.errors = st.errors;
+  return Verifier(t, st.scalars).run(st);
+}
 
 size_t node_count(const Trace& t) { return count_block(t.body); }
 

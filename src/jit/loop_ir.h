@@ -185,6 +185,8 @@ struct VectorOp {
   // element; an SpMV's row); each run is summed on its own, then added to s.
   int group = 1;
   std::vector<int> sums;
+  // A Bool local: the op runs only when it holds (the op is in a branch of an `if`), or -1.
+  int guard = -1;
 };
 
 struct SystemTrace {
@@ -195,6 +197,9 @@ struct SystemTrace {
   std::vector<std::string> sizes;  // what each size is (for dumps)
   ExprRef condition;               // the while condition
   std::vector<VectorOp> body;
+  // The loop's error statements (Check statements in its scalar ops): a kernel that reaches
+  // one returns 1 + its index, and the controller hands the loop back to the interpreter.
+  std::vector<ErrorSite> errors;
 };
 
 // Prints the trace as text (`--dump=loop-ir`).
@@ -207,6 +212,8 @@ int fuse_passes(SystemTrace& t);
 // Checks the invariants every pass relies on: operand types, slots in range, locals set
 // before they are read on every path. Returns the first violation, or "" when it holds.
 std::string verify(const Trace& t);
+// The same for a system trace, whose first `scalars` locals are set on entry.
+std::string verify(const SystemTrace& t);
 // Counts the nodes of a trace (for size limits and statistics).
 size_t node_count(const Trace& t);
 

@@ -50,6 +50,11 @@ class SystemTracer {
       t_.condition = scalar(*loop_.condition);
       if (!t_.body.empty()) give_up(loop_.condition->span, "a loop condition over vectors");
       for (const auto& s : loop_.body) stmt(*s);
+      if (!starts_.empty()) {
+        VectorOp first;
+        first.body = std::move(starts_);
+        t_.body.insert(t_.body.begin(), std::move(first));
+      }
     } catch (const GiveUp& g) {
       out.reason = g.reason;
       return out;
@@ -67,20 +72,7 @@ class SystemTracer {
       ast::for_each_child(e, [&](const ast::Expr& c) { expr(c); });
     };
     expr(*loop_.condition);
-    for (const auto& s : loop_.body) {
-      if (const auto* d = s->as<ast::VarDecl>()) {
-        note(*d->var, d->span);
-        if (d->init) expr(*d->init);
-      } else if (const auto* a = s->as<ast::Assign>()) {
-        for (const auto& t : a->targets) expr(*t);
-        expr(*a->value);
-      } else {
-        // An error statement stays interpreted: only the interpreter can format its message.
-        const auto* p = s->as<ast::Print>();
-        give_up(s->span, std::string(p && p->is_error() ? "error" : ast::node_kind_name(s->kind)) +
-                             " statements in a compiled loop");
-      }
-    }
+    collect_block(loop_.body, expr);
     // Vectors first assigned in the loop borrow the shape of a vector of the same type.
     for (auto& [v, slot] : vector_slot_) {
       const Value& val = in_.variable(*v);
@@ -92,6 +84,27 @@ class SystemTracer {
         give_up(v->span, "vector '" + v->name + "' has no value and no vector gives its shape");
       b_.created.emplace_back(v, like);
       size_of_[v] = size_of_[like];
+    }
+  }
+
+  void collect_block(const ast::Block& body, const std::function<void(const ast::Expr&)>& expr) {
+    for (const auto& s : body) {
+      if (const auto* d = s->as<ast::VarDecl>()) {
+        note(*d->var, d->span);
+        if (d->init) expr(*d->init);
+      } else if (const auto* a = s->as<ast::Assign>()) {
+        for (const auto& t : a->targets) expr(*t);
+        expr(*a->value);
+      } else if (const auto* i = s->as<ast::If>()) {
+        for (const auto& c : i->conditions) expr(*c);
+        for (const auto& b : i->branches) collect_block(b, expr);
+        collect_block(i->else_branch, expr);
+      } else if (const auto* p = s->as<ast::Print>(); p && p->is_error()) {
+        // Its arguments are only formatted by the interpreter, which runs the loop again.
+      } else {
+        give_up(s->span,
+                std::string(ast::node_kind_name(s->kind)) + " statements in a compiled loop");
+      }
     }
   }
 
@@ -166,8 +179,19 @@ class SystemTracer {
 
   // Ops: consecutive scalar statements share one Scalar op.
   void scalar_stmt(Stmt s) {
-    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar) t_.body.emplace_back();
+    if (sink_) return sink_->push_back(std::move(s));
+    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar ||
+        t_.body.back().guard != guard_) {
+      t_.body.emplace_back();
+      t_.body.back().guard = guard_;
+    }
     t_.body.back().body.push_back(std::move(s));
+  }
+  // A loop over vectors, under the guard of the branch being traced.
+  void push_op(VectorOp op, const SourceSpan& at) {
+    if (sink_) give_up(at, "a vector operation inside an if in a compiled loop");
+    op.guard = guard_;
+    t_.body.push_back(std::move(op));
   }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
     Stmt s;
@@ -220,7 +244,14 @@ class SystemTracer {
     if (group_of(v) != group || group < 1)
       give_up(at, "a dot product of vectors blocked differently");
     const int t = temp(Ty::F64);
-    set_local(t, fconst(0.0), at);
+    // The sum starts at +0.0 at the top of every iteration, so that no scalar op stands
+    // between the start and its pass: fuse_passes may move the pass up to another loop.
+    Stmt start;
+    start.kind = StmtKind::SetLocal;
+    start.slot = t;
+    start.value = fconst(0.0);
+    start.span = at;
+    starts_.push_back(std::move(start));
     ExprRef a = component(u), b = component(v);
     VectorOp pass;
     pass.kind = VectorOp::Kind::Pass;
@@ -236,7 +267,7 @@ class SystemTracer {
                    at);
     s.span = at;
     pass.body.push_back(std::move(s));
-    t_.body.push_back(std::move(pass));
+    push_op(std::move(pass), at);
     return local(t, Ty::F64);
   }
 
@@ -420,6 +451,11 @@ class SystemTracer {
     }
     auto vt = vector_slot_.find(&target);
     if (vt == vector_slot_.end()) give_up(at, "an assignment to '" + target.name + "'");
+    // The controller makes such a vector before the loop runs, where the interpreter would
+    // leave it without a value when the branch does not run.
+    if (guard_ >= 0)
+      for (const auto& [v, like] : b_.created)
+        if (v == &target) give_up(at, "a vector first assigned inside an if");
     t_.arrays[vt->second].written = true;
     // `y = A * x`: a sparse product.
     if (const auto* b = value.as<ast::Binary>(); b && b->op == ast::Binary::Op::Mul) {
@@ -449,7 +485,7 @@ class SystemTracer {
         op.x = vector_slot_.at(x->var);
         op.y = vt->second;
         op.length = size_of_.at(&target);
-        t_.body.push_back(std::move(op));
+        push_op(std::move(op), at);
         return;
       }
     }
@@ -470,10 +506,12 @@ class SystemTracer {
     s.value = v;
     s.span = at;
     pass.body.push_back(std::move(s));
-    t_.body.push_back(std::move(pass));
+    push_op(std::move(pass), at);
   }
 
   void stmt(const ast::Stmt& s) {
+    if (const auto* i = s.as<ast::If>()) return has_vectors(*i) ? guarded_if(*i) : if_stmt(*i, 0);
+    if (s.is<ast::Print>()) return error_stmt(s.span);
     if (const auto* d = s.as<ast::VarDecl>()) {
       if (!d->init) give_up(s.span, "a declaration without a value");
       return assign(*d->var, *d->init, s.span);
@@ -484,6 +522,100 @@ class SystemTracer {
     const auto* target = a.targets[0]->as<ast::VarRef>();
     if (!target) give_up(s.span, "an assignment to part of a variable");
     assign(*target->var, *a.value, s.span);
+  }
+
+  // Branch `from` of an if (and the elifs after it, nested in its else) as one If statement
+  // of scalar statements. The conditions are traced where the interpreter evaluates them.
+  void if_stmt(const ast::If& i, size_t from) {
+    Stmt s;
+    s.kind = StmtKind::If;
+    s.span = i.conditions[from]->span;
+    s.value = scalar(*i.conditions[from]);
+    if (s.value->ty != Ty::Bool) give_up(s.span, "a condition that is not a boolean");
+    std::vector<Stmt>* outer = sink_;
+    sink_ = &s.body;
+    for (const auto& b : i.branches[from]) stmt(*b);
+    sink_ = &s.orelse;
+    if (from + 1 < i.conditions.size())
+      if_stmt(i, from + 1);
+    else
+      for (const auto& b : i.else_branch) stmt(*b);
+    sink_ = outer;
+    scalar_stmt(std::move(s));
+  }
+
+  // Whether an if's branches (or its elif conditions) compute on vectors: then it is traced
+  // as guarded ops, else as one If statement of scalar statements.
+  static bool mentions_vector(const ast::Expr& e) {
+    if (e.type && has_set_dim(*e.type)) return true;
+    bool found = false;
+    ast::for_each_child(e, [&](const ast::Expr& c) { found = found || mentions_vector(c); });
+    return found;
+  }
+  static bool has_vectors(const ast::If& i) {
+    for (size_t k = 1; k < i.conditions.size(); ++k)
+      if (mentions_vector(*i.conditions[k])) return true;
+    auto block = [](const ast::Block& b) {
+      for (const auto& s : b) {
+        if (const auto* d = s->as<ast::VarDecl>(); d && d->init && mentions_vector(*d->init))
+          return true;
+        if (const auto* a = s->as<ast::Assign>()) {
+          if (mentions_vector(*a->value)) return true;
+          for (const auto& t : a->targets)
+            if (mentions_vector(*t)) return true;
+        }
+        if (const auto* n = s->as<ast::If>();
+            n && (mentions_vector(*n->conditions[0]) || has_vectors(*n)))
+          return true;
+      }
+      return false;
+    };
+    for (const auto& b : i.branches)
+      if (block(b)) return true;
+    return block(i.else_branch);
+  }
+
+  // An if with vector operations: each branch's ops run under a guard, a Bool local set on
+  // every iteration to "the enclosing guard holds, the earlier conditions do not, and this
+  // one does". Each condition is evaluated before its branch, as the interpreter does (when
+  // an earlier branch ran, its value does not matter).
+  void guarded_if(const ast::If& i) {
+    if (sink_) give_up(i.span, "vector operations inside an if in an if");
+    const int outer = guard_;
+    const SourceSpan at = i.span;
+    auto both = [&](ExprRef a, ExprRef b) {
+      return a ? node(ExprKind::Binary, Ty::Bool, static_cast<uint8_t>(BinOp::And), {a, b}, at) : b;
+    };
+    ExprRef rest = outer >= 0 ? local(outer, Ty::Bool) : nullptr;
+    for (size_t k = 0; k < i.conditions.size(); ++k) {
+      guard_ = -1;
+      ExprRef c = scalar(*i.conditions[k]);
+      if (c->ty != Ty::Bool) give_up(i.conditions[k]->span, "a condition that is not a boolean");
+      const int g = temp(Ty::Bool), r = temp(Ty::Bool);
+      set_local(g, both(rest, c), i.conditions[k]->span);
+      set_local(r,
+                both(rest, node(ExprKind::Unary, Ty::Bool, static_cast<uint8_t>(UnOp::Not), {c},
+                                i.conditions[k]->span)),
+                i.conditions[k]->span);
+      guard_ = g;
+      for (const auto& b : i.branches[k]) stmt(*b);
+      rest = local(r, Ty::Bool);
+    }
+    guard_ = rest->slot;
+    for (const auto& b : i.else_branch) stmt(*b);
+    guard_ = outer;
+  }
+
+  // An error statement: a check that always fails. Only the interpreter formats the message,
+  // so a kernel that reaches it hands the whole loop back (TraceController::run_loop_kernel).
+  void error_stmt(const SourceSpan& at) {
+    Stmt s;
+    s.kind = StmtKind::Check;
+    s.value = iconst(0, Ty::Bool);
+    s.error = static_cast<int>(t_.errors.size());
+    s.span = at;
+    t_.errors.push_back({at, "error statement"});
+    scalar_stmt(std::move(s));
   }
 
   struct Mat {
@@ -498,6 +630,9 @@ class SystemTracer {
   std::map<const ast::Variable*, int> scalar_local_, vector_slot_, size_of_, block_of_;
   std::map<const ast::Variable*, Mat> matrix_;
   std::map<std::pair<bool, int64_t>, int> sizes_;
+  std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
+  int guard_ = -1;            // the Bool local the ops traced now run under (guarded_if), or -1
+  std::vector<Stmt> starts_;  // the sums' +0.0 starts, first in the loop's body
 };
 
 }  // namespace

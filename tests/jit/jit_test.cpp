@@ -3,6 +3,7 @@
 // reasons, errors reported in the interpreter's words, and switching executors mid-run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -159,6 +160,108 @@ TEST(LoopIr, VerifierRejectsMismatchedTypes) {
   s.value = c(1.0);
   t.body.push_back(s);
   EXPECT_EQ(verify(t), "set local: operand is f64, expected i32");
+}
+
+// A system trace's ops under a guard (a branch of an if): what they set is set for the later
+// ops under the same guard, not for the ops under another guard or none.
+TEST(LoopIr, VerifierFollowsGuardsInASystemTrace) {
+  SystemTrace t;
+  t.scalars = 1;  // %0: a program scalar, the guard
+  t.locals = {Ty::Bool, Ty::F64, Ty::F64};
+  Expr tru;
+  tru.ty = Ty::Bool;
+  tru.i = 1;
+  t.condition = std::make_shared<const Expr>(tru);
+  auto op = [&](int guard, int set, int read) {
+    VectorOp o;
+    o.guard = guard;
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = set;
+    s.value = c(1.0);
+    if (read >= 0) {
+      Expr r;
+      r.kind = ExprKind::Local;
+      r.slot = read;
+      s.value = std::make_shared<const Expr>(r);
+    }
+    o.body.push_back(s);
+    return o;
+  };
+  t.body = {op(0, 1, -1), op(-1, 2, -1), op(0, 2, 1)};  // %1 set and read under %0
+  EXPECT_EQ(verify(t), "");
+  t.body[2].guard = -1;  // read where %0 may not hold
+  EXPECT_EQ(verify(t), "local %1 read before it is set");
+}
+
+// A pass moves up past a scalar op it does not depend on and joins the pass before it: r'r
+// after `rz = r'r_old` (a scalar op that waits for the update's sum) joins the update.
+TEST(LoopIr, APassMovesUpToTheLoopItCanJoin) {
+  SystemTrace t;
+  t.scalars = 2;  // %0, %1: program scalars; %2, %3: sums
+  t.locals = {Ty::F64, Ty::F64, Ty::F64, Ty::F64};
+  t.sizes = {"n"};
+  t.arrays.resize(1);
+  t.arrays[0].written = true;
+  Expr tru;
+  tru.ty = Ty::Bool;
+  tru.i = 1;
+  t.condition = std::make_shared<const Expr>(tru);
+  auto local = [](int l) {
+    Expr e;
+    e.kind = ExprKind::Local;
+    e.slot = l;
+    return std::make_shared<const Expr>(e);
+  };
+  Expr k;
+  k.kind = ExprKind::Element;
+  k.ty = Ty::I32;
+  Expr r;
+  r.kind = ExprKind::Load;
+  r.ops = {std::make_shared<const Expr>(k)};
+  auto load_r = std::make_shared<const Expr>(r);
+  auto set = [](int l, ExprRef v) {
+    Stmt s;
+    s.kind = StmtKind::SetLocal;
+    s.slot = l;
+    s.value = std::move(v);
+    return s;
+  };
+  auto binary = [](BinOp op, ExprRef a, ExprRef b) {
+    Expr e;
+    e.kind = ExprKind::Binary;
+    e.op = static_cast<uint8_t>(op);
+    e.ops = {std::move(a), std::move(b)};
+    return std::make_shared<const Expr>(e);
+  };
+  VectorOp start, update, scalar, sum;
+  start.body = {set(2, c(0.0)), set(3, c(0.0))};
+  update.kind = VectorOp::Kind::Pass;
+  update.length = 0;
+  Stmt store;
+  store.kind = StmtKind::Store;
+  store.index = load_r->ops[0];
+  store.value = binary(BinOp::Mul, load_r, c(0.5));  // r = 0.5 * r, and %3 = r'r
+  update.sums = {3};
+  update.body = {store, set(3, binary(BinOp::Add, local(3), binary(BinOp::Mul, load_r, load_r)))};
+  scalar.body = {set(1, local(3)), set(0, local(1))};
+  sum.kind = VectorOp::Kind::Pass;
+  sum.length = 0;
+  sum.sums = {2};
+  sum.body = {set(2, binary(BinOp::Add, local(2), binary(BinOp::Mul, load_r, load_r)))};
+  t.body = {start, update, scalar, sum};
+  ASSERT_EQ(verify(t), "");
+  EXPECT_EQ(fuse_passes(t), 1);
+  ASSERT_EQ(t.body.size(), 3u);
+  EXPECT_EQ(t.body[1].kind, VectorOp::Kind::Pass);
+  EXPECT_EQ(t.body[1].body.size(), 3u);  // the update, then the two sums' terms
+  EXPECT_EQ(t.body[1].sums, (std::vector<int>{3, 2}));
+  EXPECT_EQ(t.body[2].kind, VectorOp::Kind::Scalar);
+  EXPECT_EQ(verify(t), "");
+  // A pass that reads what the scalar op writes stays after it.
+  scalar.body = {set(1, local(3)), set(2, c(0.0))};
+  t.body = {start, update, scalar, sum};
+  EXPECT_EQ(fuse_passes(t), 0);
 }
 
 // ---------------------------------------------------------------------------
@@ -1010,7 +1113,8 @@ TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
   };
   EXPECT_EQ(count(" = spmv("), 1u) << loop;
   EXPECT_EQ(count("pass over"), 2u) << loop;
-  EXPECT_NE(stats.find("4 loops fused away"), std::string::npos) << stats;
+  // Six loops before fusion (the product, p'Ap, x, r, r'r, p), three after.
+  EXPECT_NE(stats.find("3 loops fused away"), std::string::npos) << stats;
   ASSERT_EQ(results[0][1].as_int(), results[1][1].as_int());
   EXPECT_GT(results[0][1].as_int(), 5);  // CG took real iterations
   expect_same(results[0][0], results[1][0], "x");
@@ -1413,6 +1517,281 @@ TEST(Jit, ACheckFailingInOneLaneStopsAtItsElement) {
   EXPECT_NE(in.error.find("element 6 of set 'ss'"), std::string::npos) << in.error;
   EXPECT_EQ(in.error, jit.error);
   EXPECT_NE(jit.stats.find("4 elements at once"), std::string::npos) << jit.stats;
+}
+
+// ---------------------------------------------------------------------------
+// Solver loops with ifs (jit/system_trace.cpp): a preconditioned CG whose body tests p'Ap,
+// counts slow iterations, may stop with an error statement at an iteration the host chooses,
+// and restarts its search direction once (a vector update in a branch).
+
+const char* const kPcg = R"(element Point
+  b : vector[3](float);
+  d : float;
+end
+element Link
+  k : float;
+end
+extern points : set{Point};
+extern links : set{Link}(points, points);
+extern stop_at : int;
+
+const eye3 = [1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0];
+const offd = [0.0, 1.0, 0.0; 1.0, 0.0, 0.0; 0.0, 0.0, 0.5];
+
+func stiffness(l : Link, p : (Point * 2)) -> A : matrix[points,points](matrix[3,3](float))
+  A(p(0), p(0)) = l.k * eye3;
+  A(p(1), p(1)) = l.k * eye3;
+  A(p(0), p(1)) = (-0.5 * l.k) * eye3;
+  A(p(1), p(0)) = (-0.5 * l.k) * eye3;
+end
+
+func diagonal(q : Point) -> D : matrix[points,points](matrix[3,3](float))
+  D(q, q) = q.d * eye3 + 0.1 * offd;
+end
+
+func jacobi(A : matrix[points,points](matrix[3,3](float)), q : Point)
+    -> Pc : matrix[points,points](matrix[3,3](float))
+  Pc(q, q) = inv(A(q, q));
+end
+
+export func solve() -> (x : vector[points](vector[3](float)), iterations : int, rz : float,
+                        slow : int, fast : float)
+  A = (map stiffness to links reduce +) + (map diagonal to points reduce +);
+  Pc = map jacobi(A) to points reduce +;
+  b = points.b;
+  var r = b;
+  var z = Pc * r;
+  var p = z;
+  rz = r' * z;
+  var going = rz > 1.0e-24;
+  while going
+    Ap = A * p;
+    pAp = p' * Ap;
+    if pAp <= 0.0
+      error "CG breakdown: p'Ap = ", pAp, " <= 0 at CG iteration ", iterations;
+    end
+    alpha = rz / pAp;
+    x = x + alpha * p;
+    r = r - alpha * Ap;
+    z = Pc * r;
+    rz_new = r' * z;
+    if rz_new > 0.05 * rz
+      slow = slow + 1;
+    elif iterations == 1
+      fast = fast - 1.0;
+    else
+      fast = max(fast, rz_new / rz);
+    end
+    if iterations == stop_at
+      error "stopped at CG iteration ", iterations, " with r'z = ", rz_new;
+    end
+    if iterations == 4
+      p = z;
+    else
+      p = z + (rz_new / rz) * p;
+    end
+    rz = rz_new;
+    iterations = iterations + 1;
+    going = (rz > 1.0e-24) and (iterations < 60);
+  end
+end
+)";
+
+struct PcgRun {
+  std::vector<std::vector<Value>> results;  // per call that returned
+  std::string error, stats, dump;
+};
+
+// Calls `solve` once per entry of `stops` (the iteration its error statement fires at, -1
+// for none) on one engine; the first error ends the run.
+PcgRun run_pcg(ExecutorKind kind, bool check, const std::vector<int>& stops) {
+  auto compiled = CompiledProgram::from_source("pcg.sim", kPcg);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  runtime::Set links("links", {&points, &points});
+  const int n = 30;
+  points.add_many(n);
+  points.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+  points.add_field("d", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  links.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) points.field(0).at<double>(i)[c] = std::sin(0.3 * i + c);
+    points.field(1).at<double>(i)[0] = 0.2 + 0.01 * i;
+    if (i + 1 < n) links.add({i, i + 1});
+  }
+  for (int e = 0; e < links.size(); ++e) links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
+  EngineOptions o;
+  o.executor = kind;
+  o.jit.threshold = 0;
+  o.jit.check = check;
+  std::ostringstream dump;
+  o.jit.dump = &dump;
+  o.jit.dump_loop_ir = true;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  engine.bind_set(*compiled->find_extern("links"), links);
+  PcgRun run;
+  for (int stop : stops) {
+    engine.set_global(*compiled->find_extern("stop_at"), Value::of_int(stop));
+    try {
+      run.results.push_back(engine.call(*compiled->find_func("solve"), {}));
+    } catch (const interp::RuntimeError& e) {
+      run.error = e.render();
+      break;
+    }
+  }
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  run.stats = os.str();
+  run.dump = dump.str();
+  return run;
+}
+
+// The stats line of the while loop at `line`.
+std::string loop_stats(const std::string& stats, int line) {
+  const std::string site = "while (line " + std::to_string(line) + ")";
+  const size_t at = stats.find(site);
+  if (at == std::string::npos) return "";
+  return stats.substr(at, stats.find('\n', at) - at);
+}
+
+// The 1-based line of the first line of `text` that contains `what`.
+int line_of(const char* text, const std::string& what) {
+  const std::string s = text;
+  const size_t at = s.find(what);
+  return 1 + static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(at), '\n'));
+}
+
+void expect_same_pcg_results(const std::vector<Value>& a, const std::vector<Value>& b) {
+  ASSERT_EQ(a.size(), 5u);
+  ASSERT_EQ(b.size(), 5u);
+  expect_same(a[0], b[0], "x");
+  EXPECT_EQ(a[1].as_int(), b[1].as_int());
+  const double rz[2] = {a[2].as_float(), b[2].as_float()};
+  expect_same_bits(&rz[0], &rz[1], 1, "rz");
+  EXPECT_EQ(a[3].as_int(), b[3].as_int());
+  const double fast[2] = {a[4].as_float(), b[4].as_float()};
+  expect_same_bits(&fast[0], &fast[1], 1, "fast");
+}
+
+TEST(Jit, ALoopWithIfsOnScalarsIsCompiledAndComputesTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const PcgRun in = run_pcg(ExecutorKind::Interpreter, false, {-1, -1});
+  const PcgRun jit = run_pcg(ExecutorKind::Jit, false, {-1, -1});
+  ASSERT_EQ(in.error, "");
+  ASSERT_EQ(jit.error, "");
+  const std::string loop = loop_stats(jit.stats, line_of(kPcg, "while going"));
+  EXPECT_NE(loop.find(" compiled"), std::string::npos) << jit.stats;
+  EXPECT_NE(loop.find(" 2 "), std::string::npos) << loop;  // both calls ran the kernel
+  for (int call = 0; call < 2; ++call) expect_same_pcg_results(in.results[call], jit.results[call]);
+  // The restart's two updates of p are passes under guards; the breakdown test is an if in a
+  // scalar op.
+  const std::string loop_ir = jit.dump.substr(jit.dump.find("system trace"));
+  EXPECT_NE(loop_ir.find("pass over n1 when %"), std::string::npos) << loop_ir;
+  EXPECT_NE(loop_ir.find("check false else error 0"), std::string::npos) << loop_ir;
+  // The branches ran: CG took real iterations, some slow and some not.
+  const std::vector<Value>& r = in.results[0];
+  EXPECT_GT(r[1].as_int(), 5);
+  EXPECT_GT(r[3].as_int(), 0);
+  EXPECT_LT(r[3].as_int(), r[1].as_int());
+}
+
+TEST(Jit, AnErrorStatementInACompiledLoopIsReportedAsTheInterpreterReportsIt) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  // The first call stops at iteration 3; the engine then solves without stopping.
+  for (bool check : {false, true}) {
+    const PcgRun in = run_pcg(ExecutorKind::Interpreter, false, {3});
+    const PcgRun jit = run_pcg(ExecutorKind::Jit, check, {3});
+    const PcgRun jit_after = run_pcg(ExecutorKind::Jit, check, {-1, 3, -1});
+    const PcgRun in_after = run_pcg(ExecutorKind::Interpreter, false, {-1, 3, -1});
+    // The message prints the loop's state at iteration 3: the interpreter ran the loop from
+    // the state before the kernel's call, which the controller put back.
+    const std::string where = "pcg.sim:" + std::to_string(line_of(kPcg, "error \"stopped")) + ":";
+    EXPECT_EQ(in.error.rfind(where, 0), 0u) << in.error;
+    EXPECT_NE(in.error.find("runtime error: stopped at CG iteration 3 with r'z = "),
+              std::string::npos)
+        << in.error;
+    EXPECT_EQ(jit.error, in.error);
+    EXPECT_EQ(jit_after.error, in.error);
+    EXPECT_EQ(in_after.error, in.error);
+    ASSERT_EQ(jit_after.results.size(), 1u);
+    expect_same_pcg_results(in_after.results[0], jit_after.results[0]);
+    const std::string loop = loop_stats(jit.stats, line_of(kPcg, "while going"));
+    EXPECT_NE(loop.find(" compiled"), std::string::npos) << jit.stats;
+    EXPECT_NE(jit.stats.find("1 call reached an error statement and ran again interpreted"),
+              std::string::npos)
+        << jit.stats;
+  }
+}
+
+TEST(Jit, CheckModeComparesALoopWithIfs) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const PcgRun in = run_pcg(ExecutorKind::Interpreter, false, {-1, -1});
+  const PcgRun jit = run_pcg(ExecutorKind::Jit, true, {-1, -1});
+  ASSERT_EQ(jit.error, "");
+  const std::string loop = loop_stats(jit.stats, line_of(kPcg, "while going"));
+  EXPECT_NE(loop.find(" compiled"), std::string::npos) << jit.stats;
+  for (int call = 0; call < 2; ++call) expect_same_pcg_results(in.results[call], jit.results[call]);
+}
+
+// A loop without products whose error statement fires on two calls: both hand the loop back,
+// and the stats say so once.
+const char* const kHalving = R"(element P
+  b : float;
+end
+extern ps : set{P};
+
+export func main()
+  b = ps.b;
+  var x = 0.0 * b;
+  var k = 0;
+  while k < 10
+    x = x + b;
+    if x' * x > 40.0
+      x = 0.5 * x;
+      error "x'x = ", x' * x, " after halving at k = ", k;
+    end
+    k = k + 1;
+  end
+end
+)";
+
+TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  auto compiled = CompiledProgram::from_source("halving.sim", kHalving);
+  ASSERT_TRUE(compiled->ok());
+  runtime::Set ps("ps");
+  ps.add_many(2);
+  ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  ps.field(0).at<double>(0)[0] = 1.0;
+  ps.field(0).at<double>(1)[0] = 2.0;
+  EngineOptions o;
+  o.executor = ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  // x'x is 5, 20, then 45: halved to [1.5, 3], 11.25, at k = 2.
+  const std::string where = "halving.sim:" + std::to_string(line_of(kHalving, "error \"x")) + ":";
+  for (int call = 0; call < 2; ++call) {
+    std::string message;
+    try {
+      engine.call(*compiled->find_func("main"), {});
+    } catch (const interp::RuntimeError& e) {
+      message = e.render();
+    }
+    EXPECT_EQ(message.rfind(where, 0), 0u) << message;
+    EXPECT_NE(message.find("runtime error: x'x = 11.25 after halving at k = 2"), std::string::npos)
+        << message;
+  }
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  const std::string stats = os.str();
+  const std::string note = "2 calls reached an error statement and ran again interpreted";
+  EXPECT_NE(stats.find(note), std::string::npos) << stats;
+  const size_t first = stats.find("reached an error statement");
+  EXPECT_EQ(stats.find("reached an error statement", first + 1), std::string::npos) << stats;
+  EXPECT_NE(loop_stats(stats, line_of(kHalving, "while k")).find(" compiled"), std::string::npos)
+      << stats;
 }
 
 }  // namespace

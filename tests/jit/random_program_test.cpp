@@ -223,6 +223,7 @@ class ProgramGen {
   void map_site(Step& st, bool edge, const Pool& vectors);
   void system_stage(Step& st);
   std::string cg_text(const Cg& c);
+  std::string branches(const Cg& c);
   void cg_stage(Step& st);
   void field_updates(Step& st);
   std::string step();
@@ -1034,11 +1035,15 @@ void ProgramGen::system_stage(Step& st) {
 // The names and variations of one CG-like loop.
 struct Cg {
   std::string A, b;  // the operands as the loop names them
-  std::string x, r, p, rs, it, Ap, alpha, rn, q, acc, flag, cnt;
+  std::string x, r, p, rs, it, Ap, alpha, rn, q, acc, flag, cnt, branchy;
   std::string other;  // a vector of x's type that the loop reads
   int iterations = 1;
   bool own_function = false, extra_vector = false, extra_scalar = false, extra_flag = false,
        extra_int = false;
+  // An if: -1 none; on scalars 0 if/elif/else, 1 if, 2 if/else; 3 with a vector update and
+  // a dot product in its branches.
+  int if_form = -1;
+  int error_at = -1;  // an error statement that fires at this iteration if the residual grew
 };
 
 // The loop and the declarations before it.
@@ -1055,6 +1060,7 @@ std::string ProgramGen::cg_text(const Cg& c) {
   if (c.extra_scalar) s << in << "var " << c.acc << " = 0.0;\n";
   if (c.extra_flag) s << in << "var " << c.flag << " = true;\n";
   if (c.extra_int) s << in << "var " << c.cnt << " = 1;\n";
+  if (c.if_form >= 0) s << in << "var " << c.branchy << " = 0.0;\n";
   const int form = c.extra_flag ? 0 : pick(1, 10);
   s << in << "while (" << c.it << " < " << bound << ")";
   if (form == 0) s << " and " << c.flag;
@@ -1075,19 +1081,49 @@ std::string ProgramGen::cg_text(const Cg& c) {
   }
   if (c.extra_scalar) {
     const std::string acc = i2 + c.acc + " = " + c.acc;
-    switch (pick(0, 3)) {
+    switch (pick(0, 4)) {
       case 0: s << acc << " + max(" << c.alpha << ", 0.0);\n"; break;
       case 1: s << acc << " + g_s * " << c.alpha << ";\n"; break;
       case 2: s << acc << " * k_s + " << c.rn << ";\n"; break;
+      // A dot product after a scalar statement: its pass moves up to the x and r updates.
+      case 3: s << acc << " + 1.0e-3 * (" << c.x << "' * " << c.x << ");\n"; break;
       default: s << acc << " + sqrt(abs(" << c.alpha << "));\n";
     }
   }
   if (c.extra_flag) s << i2 << c.flag << " = " << c.rn << " < " << c.rs << ";\n";
   if (c.extra_int) s << i2 << c.cnt << " = " << c.cnt << " * 2 - " << c.it << ";\n";
+  s << branches(c);
   s << i2 << c.p << " = " << c.r << " + (" << c.rn << " / " << c.rs << ") * " << c.p << ";\n";
   s << i2 << c.rs << " = " << c.rn << ";\n";
   s << i2 << c.it << " = " << c.it << " + 1;\n";
   s << in << "end\n";
+  return s.str();
+}
+
+// The loop's ifs on scalars: one whose branches update a scalar, and an error statement.
+std::string ProgramGen::branches(const Cg& c) {
+  std::ostringstream s;
+  const std::string i2 = "    ", i3 = "      ", set = i3 + c.branchy + " = ";
+  if (c.if_form == 3) {
+    s << i2 << "if " << c.rn << " > " << c.rs << "\n"
+      << set << c.branchy << " + " << c.alpha << ";\n"
+      << i3 << c.x << " = " << c.x << " - (0.25 * " << c.alpha << ") * " << c.p << ";\n"
+      << i2 << "else\n"
+      << set << c.branchy << " - dot(" << c.r << ", " << c.r << ");\n"
+      << i2 << "end\n";
+  } else if (c.if_form >= 0) {
+    s << i2 << "if " << c.rn << " > " << c.rs << "\n"
+      << set << c.branchy << " + " << c.alpha << ";\n";
+    if (c.if_form == 0)
+      s << i2 << "elif " << c.it << " == 1\n" << set << "0.5 * " << c.branchy << " - 1.0;\n";
+    if (c.if_form != 1) s << i2 << "else\n" << set << c.branchy << " * k_s;\n";
+    s << i2 << "end\n";
+  }
+  if (c.error_at >= 0)
+    s << i2 << "if (" << c.it << " == " << c.error_at << ") and (" << c.rn << " > " << c.rs << ")\n"
+      << i3 << "error \"the residual grew at iteration \", " << c.it << ", \": \", " << c.rn
+      << ";\n"
+      << i2 << "end\n";
   return s.str();
 }
 
@@ -1120,13 +1156,16 @@ void ProgramGen::cg_stage(Step& st) {
                               {&c.q, "cq"},
                               {&c.acc, "cacc"},
                               {&c.flag, "cflag"},
-                              {&c.cnt, "ccnt"}})
+                              {&c.cnt, "ccnt"},
+                              {&c.branchy, "cif"}})
     *name = fresh(prefix);
   c.iterations = pick(1, 8);
   c.extra_vector = coin(0.4);
   c.extra_scalar = coin(0.4);
   c.extra_flag = coin(0.25);
   c.extra_int = coin(0.25);
+  c.if_form = coin(0.4) ? pick(0, 3) : -1;
+  c.error_at = coin(0.15) ? pick(0, c.iterations - 1) : -1;
   // Another vector of the same type, read in the loop (a field view stays interpreted).
   std::vector<std::string> others;
   const bool views = coin(0.2);
@@ -1152,6 +1191,7 @@ void ProgramGen::cg_stage(Step& st) {
   } else {
     st.s << loop;
     if (c.extra_scalar) st.scalars.push_back(c.acc);
+    if (c.if_form >= 0) st.scalars.push_back(c.branchy);
     if (c.extra_vector) st.made.push_back({c.q, vt});
     if (c.extra_flag) out("bool", c.flag);
     if (c.extra_int) out("int", c.cnt);

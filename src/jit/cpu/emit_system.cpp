@@ -114,6 +114,18 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   }
 }
 
+// An op in a branch of an `if` runs when its guard holds.
+void Emitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
+  if (op.guard < 0) return vector_op(op, sizes);
+  auto* run = llvm::BasicBlock::Create(ctx_, "guarded", fn_);
+  auto* join = llvm::BasicBlock::Create(ctx_, "guarded.done", fn_);
+  b_.CreateCondBr(b_.CreateLoad(b_.getInt1Ty(), locals_[op.guard]), run, join);
+  b_.SetInsertPoint(run);
+  vector_op(op, sizes);
+  b_.CreateBr(join);
+  b_.SetInsertPoint(join);
+}
+
 // Whether a pass with sums by runs can take four runs at a time in vectors: its statements
 // store components of vectors at the visited component, or add a term to one of its sums, and
 // read only components at the visited component, constants and other scalars.
@@ -275,7 +287,7 @@ llvm::Function* Emitter::run_system(const std::string& name) {
   b_.SetInsertPoint(head);
   b_.CreateCondBr(expr(*st_->condition), body, done);
   b_.SetInsertPoint(body);
-  for (const VectorOp& op : st_->body) vector_op(op, sizes);
+  for (const VectorOp& op : st_->body) guarded_op(op, sizes);
   b_.CreateBr(head);
   b_.SetInsertPoint(done);
   for (int i = 0; i < st_->scalars; ++i) {

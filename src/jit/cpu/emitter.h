@@ -88,13 +88,15 @@ class Emitter {
   // for (i = begin; i < end; ++i) body(i), i an i32 (or i64 when wide).
   void loop(Value* begin, Value* end, const std::function<void(Value*)>& body);
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
-  // Unless `ok` (expected true), the kernel returns error + 1 with the element in *failed.
+  void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  // Unless `ok` (expected true), the kernel returns error + 1 with the element in *failed (a
+  // map kernel).
   void fail_unless(Value* ok, int error, const char* what) {
     auto* fail = llvm::BasicBlock::Create(ctx_, std::string(what) + ".fail", fn_);
     auto* cont = llvm::BasicBlock::Create(ctx_, std::string(what) + ".ok", fn_);
     b_.CreateCondBr(ok, cont, fail, llvm::MDBuilder(ctx_).createLikelyBranchWeights());
     b_.SetInsertPoint(fail);
-    b_.CreateStore(element_, failed_);
+    if (failed_) b_.CreateStore(element_, failed_);  // a system trace has no element
     b_.CreateRet(b_.getInt32(error + 1));
     b_.SetInsertPoint(cont);
   }
