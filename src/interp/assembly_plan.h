@@ -13,9 +13,11 @@
 //      (field arrays and matrix values are the runtime's own, so nothing is copied), and
 //      returns true; returning false leaves the site to the interpreter.
 //   3. Statements the frontend marked system-level (frontend/system_statements.h: vector
-//      updates, `A * p`, a whole CG loop) are offered too, through run_statement; the
-//      executor reads and writes the running function's variables through
-//      Interpreter::variable.
+//      updates, `A * p`, a whole CG loop) are offered too: each maximal run of two or more
+//      consecutive ones in a block through run_statements (a CG function's set-up, loop and
+//      residual as one), then each statement the run's executor did not take through
+//      run_statement; the executor reads and writes the running function's variables
+//      through Interpreter::variable.
 //   4. While the debugger's trap point is armed (a breakpoint, a watch, stepping, Ctrl-C),
 //      nothing is offered: every statement must run interpreted so that it can stop.
 #pragma once
@@ -76,6 +78,15 @@ class SiteHook {
   virtual bool run_statement(const frontend::ast::Stmt& stmt, Interpreter& in) {
     (void)stmt, (void)in;
     return false;
+  }
+  // Runs statements block[first, first + count), consecutive system-level statements, or a
+  // prefix of them, and returns how many it ran. The interpreter offers each maximal run of
+  // two or more; when the hook returns 0 it runs block[first] and offers the rest of the run
+  // (while two or more remain), and the statements it runs are offered one by one.
+  virtual size_t run_statements(const frontend::ast::Block& block, size_t first, size_t count,
+                                Interpreter& in) {
+    (void)block, (void)first, (void)count, (void)in;
+    return 0;
   }
   // The interpreter ran a site (or a statement) that run_site (run_statement) declined: a
   // differential check compares its results with what the compiled code computed.

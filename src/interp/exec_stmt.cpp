@@ -13,7 +13,36 @@ namespace ast = frontend::ast;
 using frontend::Type;
 
 void Interpreter::exec_block(const ast::Block& b) {
-  for (const auto& s : b) exec(*s);
+  const size_t n = b.size();
+  for (size_t i = 0; i < n; ++i) {
+    const ast::Stmt& s = *b[i];
+    // The first statement of a run of system-level statements: the run is offered whole.
+    if (s.system_level && options_.sites && i + 1 < n && b[i + 1]->system_level &&
+        (i == 0 || !b[i - 1]->system_level)) [[unlikely]]
+      i += exec_run(b, i) - 1;
+    else
+      exec(s);
+  }
+}
+
+// Offers the run of system-level statements that starts at b[first] (at least two) and
+// returns how many statements from `first` ran. What the executor declines runs interpreted
+// one statement at a time, and the rest of the run (while two or more remain) is offered
+// again: a run whose first statement cannot be compiled may compile from its second.
+[[gnu::noinline]] size_t Interpreter::exec_run(const ast::Block& b, size_t first) {
+  size_t end = first + 1;
+  while (end < b.size() && b[end]->system_level) ++end;
+  size_t i = first;
+  while (end - i >= 2) {
+#if SIMIT_STATEMENT_HOOK
+    if (trap_->armed()) break;
+#endif
+    if (const size_t ran = options_.sites->run_statements(b, i, end - i, *this))
+      return i + ran - first;
+    exec(*b[i++]);
+  }
+  if (i == first) exec(*b[i++]);
+  return i - first;
 }
 
 void Interpreter::exec(const ast::Stmt& s) {
@@ -35,6 +64,8 @@ void Interpreter::exec(const ast::Stmt& s) {
 }
 
 Value& Interpreter::variable(const ast::Variable& v) { return var(v); }
+
+void Interpreter::exec_interpreted(const ast::Stmt& s) { exec_node(s); }
 
 #if SIMIT_STATEMENT_HOOK
 // Out of line so that exec() stays small enough to inline into the block loop.

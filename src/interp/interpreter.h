@@ -75,6 +75,9 @@ class Interpreter {
   // The storage of a variable of the running function (or a global), for a SiteHook that
   // runs a statement: reads and writes go straight to the interpreter's own values.
   Value& variable(const frontend::ast::Variable& var);
+  // Runs a statement of the running function without offering it to the SiteHook (what it
+  // holds is offered as usual): for a hook whose compiled run of statements hands them back.
+  void exec_interpreted(const frontend::ast::Stmt& s);
 
   // ---- Inspection of a paused run, for hooks (the step debugger). Level 0 is the innermost
   // active call (gdb's numbering); frame_count() is 0 when nothing runs. See interp/inspect.h.
@@ -194,8 +197,9 @@ class Interpreter {
   // exec_stmt.cpp: statements
   void exec_block(const frontend::ast::Block& b);
   void exec(const frontend::ast::Stmt& s);
-  void exec_trapped(const frontend::ast::Stmt& s);  // the trap point's slow path
-  void exec_offered(const frontend::ast::Stmt& s);  // the executor seam for statements
+  void exec_trapped(const frontend::ast::Stmt& s);               // the trap point's slow path
+  void exec_offered(const frontend::ast::Stmt& s);               // the executor seam for statements
+  size_t exec_run(const frontend::ast::Block& b, size_t first);  // ... and for runs of them
   void exec_node(const frontend::ast::Stmt& s);
   void exec_var_decl(const frontend::ast::VarDecl& d);
   void exec_assign(const frontend::ast::Assign& a);

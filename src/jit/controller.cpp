@@ -54,19 +54,22 @@ struct TraceController::SiteState {
 };
 
 struct TraceController::LoopEntry {
+  std::vector<const ast::Stmt*> run;  // the statements it runs (a while loop alone, or a run)
   TracedSystem traced;
   std::unique_ptr<Kernel> kernel;
   // Per matrix the loop multiplies (by the variable): its non-zero blocks, rebuilt per call.
   std::map<const ast::Variable*, PrunedMatrix> pruned;
   int64_t kept = 0, total = 0;  // blocks streamed and blocks in the patterns, over all calls
   double prune_cpu_ms = 0.0;
-  std::vector<int64_t> sizes;       // the lengths it was traced for
-  std::vector<bool> writes_scalar;  // per scalar local
-  long handed_back = 0;             // calls that reached an error statement
+  std::vector<int64_t> sizes;                // the lengths it was traced for
+  std::vector<bool> writes_scalar;           // per scalar local
+  long handed_back = 0;                      // calls that reached an error statement
+  std::vector<std::vector<double>> scratch;  // per array slot: a scratch vector's storage
   TraceStats stats;
 };
 
 struct TraceController::LoopState {
+  size_t length = 0;  // a run: how many of its statements are traced (a prefix, after a failure)
   long runs = 0;
   int failures = 0;
   std::string gave_up;
@@ -496,16 +499,16 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   return true;
 }
 
-TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& loop,
-                                                            interp::Interpreter& in) {
-  auto& slot = loops_[&loop];
-  if (!slot) slot = std::make_unique<LoopState>();
-  LoopState& s = *slot;
+// The kernel of a while loop alone or of a run of statements, for the lengths its variables
+// have now: found, or traced and compiled. A run whose statement j > 1 cannot be traced is
+// traced again without it and the statements after it (s.length shrinks).
+TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
+                                                              std::vector<const ast::Stmt*> run,
+                                                              interp::Interpreter& in) {
   for (auto& e : s.entries)
     if (e->kernel && current_sizes(e->traced.binding, in) == e->sizes) return e.get();
   if (!s.gave_up.empty()) return nullptr;
   auto e = std::make_unique<LoopEntry>();
-  e->stats.site = "while (line " + std::to_string(loop.span.start().line) + ")";
   auto fail = [&](std::string why, bool final) {
     e->stats.status = "interpreted: " + std::move(why);
     if (final || ++s.failures >= kMaxFailures) s.gave_up = e->stats.status;
@@ -517,7 +520,12 @@ TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& lo
                                : "float32 runs system statements in the interpreter",
          true);
   } else {
-    e->traced = trace_system(loop, in);
+    e->traced = trace_system(run, in);
+    while (!e->traced.trace && run.size() > 2 && e->traced.failed_at >= 2) {
+      run.resize(e->traced.failed_at);
+      s.length = run.size();
+      e->traced = trace_system(run, in);
+    }
     if (!e->traced.trace) {
       fail(e->traced.reason, true);
     } else {
@@ -529,7 +537,8 @@ TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& lo
       key << "; " << removed << " loops fused away";
       e->stats.key = key.str();
       e->writes_scalar.assign(static_cast<size_t>(t.scalars), false);
-      for (const VectorOp& op : t.body) note_scalar_writes(op.body, t.scalars, e->writes_scalar);
+      for (const auto* ops : {&t.before, &t.body, &t.after})
+        for (const VectorOp& op : *ops) note_scalar_writes(op.body, t.scalars, e->writes_scalar);
       std::string error;
       if (std::string bad = verify(t); !bad.empty()) {
         fail("loop IR failed verification: " + bad, true);
@@ -543,6 +552,11 @@ TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& lo
       }
     }
   }
+  const ast::Stmt& first = *run.front();
+  e->stats.site = run.size() == 1 && first.is<ast::While>()
+                      ? "while (line " + std::to_string(first.span.start().line) + ")"
+                      : "statements (lines " + run_lines(run) + ")";
+  e->run = std::move(run);
   LoopEntry* out = e.get();
   s.entries.push_back(std::move(e));
   return out && out->kernel ? out : nullptr;
@@ -551,13 +565,53 @@ TraceController::LoopEntry* TraceController::loop_entry_for(const ast::While& lo
 bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
   const auto* loop = stmt.as<ast::While>();
   if (!loop) return false;
+  loop_of_body_[&loop->body] = loop;
+  if (checking_run_) return false;
   auto& state = loops_[loop];
   if (!state) state = std::make_unique<LoopState>();
   if (++state->runs <= options_.threshold) return false;
-  LoopEntry* e = loop_entry_for(*loop, in);
+  LoopEntry* e = system_entry_for(*state, {loop}, in);
   if (!e) return false;
-  if (options_.check) return check_loop(*e, *loop, in);
+  if (options_.check) {
+    check_system(*e, in);
+    return false;
+  }
   return run_loop_kernel(*e, in);
+}
+
+bool TraceController::in_loop_to_compile(const ast::Block& block) const {
+  const auto loop = loop_of_body_.find(&block);
+  if (loop == loop_of_body_.end()) return false;
+  const auto state = loops_.find(loop->second);
+  return state == loops_.end() || state->second->gave_up.empty();
+}
+
+size_t TraceController::run_statements(const ast::Block& block, size_t first, size_t count,
+                                       interp::Interpreter& in) {
+  for (size_t i = first; i < first + count; ++i)
+    if (const auto* loop = block[i]->as<ast::While>()) loop_of_body_[&loop->body] = loop;
+  // Where no system statement compiles, the loops alone say why (a run would say it again
+  // for each of its statements).
+  if (!backend_ || options_.check_finite || options_.float32) return 0;
+  if (checking_run_ || in_loop_to_compile(block)) return 0;
+  auto& state = runs_[block[first].get()];
+  if (!state) {
+    state = std::make_unique<LoopState>();
+    state->length = count;
+  }
+  if (++state->runs <= options_.threshold) return 0;
+  std::vector<const ast::Stmt*> run;
+  for (size_t i = first; i < first + std::min(count, state->length); ++i)
+    run.push_back(block[i].get());
+  LoopEntry* e = system_entry_for(*state, std::move(run), in);
+  if (!e) return 0;
+  if (options_.check ? check_system(*e, in) : run_loop_kernel(*e, in))
+    return options_.check ? 0 : e->run.size();
+  // The kernel reached an error statement and put the variables back: the interpreter runs
+  // the statements from the first and stops at the error, without offering them again (the
+  // rest of the run, or its loop alone, would compile and stop at the same error).
+  for (const ast::Stmt* s : e->run) in.exec_interpreted(*s);
+  return e->run.size();
 }
 
 namespace {
@@ -571,7 +625,8 @@ Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
                           const std::vector<bool>& writes_scalar, interp::Interpreter& in) {
   Saved out;
   for (size_t i = 0; i < b.arrays.size(); ++i)
-    if (t.arrays[i].written) out.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
+    if (t.arrays[i].written && b.arrays[i].var)
+      out.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
   for (size_t i = 0; i < b.scalars.size(); ++i)
     if (writes_scalar[i]) out.emplace_back(b.scalars[i], in.variable(*b.scalars[i]));
   return out;
@@ -590,17 +645,27 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
   const SystemTrace& t = *e->traced.trace;
   Saved saved;
   if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
-  for (const auto& [var, like] : b.created)
-    if (in.variable(*var).empty()) {
-      const runtime::Tensor& shape = in.variable(*like).tensor();
+  // A vector first assigned in the loop or run is made with the shape of its model: a value
+  // left from an earlier run through the same statements may have another.
+  for (const auto& [var, like] : b.created) {
+    const runtime::Tensor& shape = in.variable(*like).tensor();
+    const Value& now = in.variable(*var);
+    if (now.empty() || !now.is_tensor() || now.tensor().size() != shape.size() ||
+        now.tensor().kind() != shape.kind())
       in.variable(*var) = Value::of_tensor(runtime::Tensor(shape.kind(), shape.shape()));
-    }
+  }
   std::vector<void*> arrays(b.arrays.size(), nullptr);
   for (int pass = 0; pass < 2; ++pass)
     for (size_t i = 0; i < b.arrays.size(); ++i) {
       if (t.arrays[i].written != (pass == 0)) continue;
-      Value& v = in.variable(*b.arrays[i].var);
       using Part = SystemBinding::Array::Part;
+      if (b.arrays[i].part == Part::Scratch) {
+        e->scratch.resize(b.arrays.size());
+        e->scratch[i].resize(static_cast<size_t>(e->sizes[static_cast<size_t>(b.arrays[i].size)]));
+        arrays[i] = e->scratch[i].data();
+        continue;
+      }
+      Value& v = in.variable(*b.arrays[i].var);
       switch (b.arrays[i].part) {
         case Part::Vector:
           arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
@@ -619,6 +684,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
         }
         case Part::Cols: arrays[i] = e->pruned[b.arrays[i].var].cols.data(); break;
         case Part::Values: arrays[i] = e->pruned[b.arrays[i].var].values.data(); break;
+        case Part::Scratch: break;
       }
     }
   std::vector<double> scalars(b.scalars.size(), 0.0);
@@ -792,23 +858,29 @@ void TraceController::site_done(interp::SiteCall& call) {
 
 // --check-jit on a loop: the same, with the variables the loop writes kept (as shared
 // copies: the kernel's writes copy them first) and put back for the interpreter.
-bool TraceController::check_loop(LoopEntry& e, const ast::While& loop, interp::Interpreter& in) {
+// --check-jit on a loop or a run: run the kernel, keep what it computed, put the variables
+// back as they were and let the interpreter run the statements; statement_done compares
+// after the last one. Nothing is offered meanwhile (a run's loop would check itself).
+// False when the kernel reached an error statement (and put the variables back).
+bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   const SystemBinding& b = e.traced.binding;
   Saved before = save_loop_variables(b, *e.traced.trace, e.writes_scalar, in);
   if (!run_loop_kernel(e, in)) return false;  // an error: the interpreter reports it
   auto p = std::make_unique<Pending>();
-  p->at = &loop;
+  p->at = e.run.back();
   p->name = e.stats.site;
   for (auto& [var, value] : before) {
     p->variables.emplace_back(var, in.variable(*var));
     in.variable(*var) = std::move(value);
   }
   pending_ = std::move(p);
-  return false;
+  if (e.run.size() > 1 || !e.run.front()->is<ast::While>()) checking_run_ = e.run.back();
+  return true;
 }
 
 void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter& in) {
   if (!pending_ || pending_->at != &stmt) return;
+  checking_run_ = nullptr;
   const std::unique_ptr<Pending> p = std::move(pending_);
   for (const auto& [var, jit] : p->variables) {
     const Value& got = in.variable(*var);
@@ -869,8 +941,9 @@ std::vector<TraceStats> TraceController::stats() const {
                            (e->guard_failures > 1 ? "s" : "") + " (blocks recorded again)";
       if (!e->full_why.empty()) out.back().note += "; full patterns: " + e->full_why;
     }
-  for (const auto& [loop, s] : loops_)
-    for (const auto& e : s->entries) out.push_back(e->stats);
+  for (const auto* states : {&runs_, &loops_})
+    for (const auto& [at, s] : *states)
+      for (const auto& e : s->entries) out.push_back(e->stats);
   return out;
 }
 

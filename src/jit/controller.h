@@ -54,6 +54,10 @@ class TraceController : public interp::SiteHook {
   bool run_site(interp::SiteCall& call) override;
   // A while loop of system-level statements (a CG loop), compiled as a whole.
   bool run_statement(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
+  // A run of system-level statements (a CG function's set-up, loop and residual), compiled
+  // as one trace; when a statement of it cannot be compiled, the statements before it.
+  size_t run_statements(const frontend::ast::Block& block, size_t first, size_t count,
+                        interp::Interpreter& in) override;
   void site_done(interp::SiteCall& call) override;
   void statement_done(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
 
@@ -68,7 +72,8 @@ class TraceController : public interp::SiteHook {
   struct SiteState;
   struct LoopEntry;
   struct LoopState;
-  LoopEntry* loop_entry_for(const frontend::ast::While& loop, interp::Interpreter& in);
+  LoopEntry* system_entry_for(LoopState& s, std::vector<const frontend::ast::Stmt*> run,
+                              interp::Interpreter& in);
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
   std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call);
@@ -78,7 +83,7 @@ class TraceController : public interp::SiteHook {
 
   struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit
   bool check_site(Entry& e, interp::SiteCall& call);
-  bool check_loop(LoopEntry& e, const frontend::ast::While& loop, interp::Interpreter& in);
+  bool check_system(LoopEntry& e, interp::Interpreter& in);
   bool run_loop_kernel(LoopEntry& e, interp::Interpreter& in);
 
   JitOptions options_;
@@ -86,7 +91,14 @@ class TraceController : public interp::SiteHook {
   std::unique_ptr<Backend> backend_;
   std::string backend_error_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
-  std::map<const void*, std::unique_ptr<LoopState>> loops_;
+  std::map<const void*, std::unique_ptr<LoopState>> loops_;  // by while loop
+  std::map<const void*, std::unique_ptr<LoopState>> runs_;   // by a run's first statement
+  // The body of each system-level while loop seen: a run in it is not compiled while the loop
+  // itself may still be (a cold loop's iterations would compile its body for nothing).
+  std::map<const frontend::ast::Block*, const frontend::ast::While*> loop_of_body_;
+  bool in_loop_to_compile(const frontend::ast::Block& block) const;
+  // While a checked run's statements run interpreted, up to this one, nothing is offered.
+  const frontend::ast::Stmt* checking_run_ = nullptr;
 };
 
 }  // namespace simit::jit

@@ -68,10 +68,11 @@ bool commutes(const Uses& pass, const Uses& op) {
 
 // Whether a pass can join the loop `last` (over the same length, under the same guard): it
 // reads no local the loop writes (a reduction's sum is only complete after its loop); into a
-// product's row loop goes only a pass that writes no array (the rows after the current one
-// still read the product's operand); and sums keep their runs: a pass with sums joins only a
-// loop of the same runs. Arrays are read and written at the visited component only, so a
-// pass may read what the loop writes.
+// product's row loop goes only a pass that writes no array the loop reads (the rows after
+// the current one still read the product's operand, and the fused body reads at the visited
+// component only); and sums keep their runs: a pass with sums joins only a loop of the same
+// runs. Arrays are read and written at the visited component only, so a pass may read what
+// the loop writes.
 bool can_join(const VectorOp& last, const VectorOp& op) {
   if (op.kind != VectorOp::Kind::Pass || last.kind == VectorOp::Kind::Scalar ||
       last.length != op.length || last.guard != op.guard)
@@ -80,15 +81,18 @@ bool can_join(const VectorOp& last, const VectorOp& op) {
   const bool into_product = last.kind == VectorOp::Kind::SpMV;
   const bool runs_agree = op.sums.empty() || op.group == last.group ||
                           (last.sums.empty() && last.kind == VectorOp::Kind::Pass);
-  return !meets(cur.reads, prev.writes) && (!into_product || cur.array_writes.empty()) &&
-         runs_agree;
+  return !meets(cur.reads, prev.writes) &&
+         (!into_product || !meets(cur.array_writes, prev.array_reads)) && runs_agree;
 }
 
 }  // namespace
 
 int fuse_passes(SystemTrace& t) {
-  const size_t before = t.body.size();
-  std::vector<VectorOp>& ops = t.body;
+  return fuse_passes(t.before) + fuse_passes(t.body) + fuse_passes(t.after);
+}
+
+int fuse_passes(std::vector<VectorOp>& ops) {
+  const size_t before = ops.size();
   // 1. Scalar ops move up past independent loops, and merge with the scalar op they reach.
   for (size_t i = 1; i < ops.size(); ++i) {
     if (ops[i].kind != VectorOp::Kind::Scalar) continue;

@@ -202,15 +202,30 @@ class Verifier {
     block(t_.body);
     return error_;
   }
-  // A system trace: its condition, then its ops' bodies in order (t_ holds its arrays,
-  // locals and errors).
+  // A system trace: the ops before the loop, its condition, its ops, the ops after it (t_
+  // holds its arrays, locals and errors). The loop may run no iteration, so what its ops set
+  // does not count as set after it.
   std::string run(const SystemTrace& st) {
-    need(st.condition, Ty::Bool, "while condition");
-    // An op under a guard runs only when it holds: what it sets counts as set for the later
-    // ops under the same guard, not for the others (fusion may interleave the branches).
+    ops(st, st.before);
+    if (st.condition) {
+      need(st.condition, Ty::Bool, "while condition");
+      const std::vector<bool> entry = set_;
+      ops(st, st.body);
+      set_ = entry;
+    } else if (!st.body.empty()) {
+      fail("loop ops without a loop condition");
+    }
+    ops(st, st.after);
+    return error_;
+  }
+
+ private:
+  // An op under a guard runs only when it holds: what it sets counts as set for the later
+  // ops under the same guard, not for the others (fusion may interleave the branches).
+  void ops(const SystemTrace& st, const std::vector<VectorOp>& list) {
     std::vector<bool> always = set_;
     std::map<int, std::vector<bool>> under;
-    for (const VectorOp& op : st.body) {
+    for (const VectorOp& op : list) {
       set_ = always;
       if (op.guard >= 0) {
         Expr g;
@@ -234,10 +249,9 @@ class Verifier {
       block(op.body);
       (op.guard >= 0 ? under[op.guard] : always) = set_;
     }
-    return error_;
+    set_ = always;
   }
 
- private:
   void fail(const std::string& what) {
     if (error_.empty()) error_ = what;
   }
@@ -373,6 +387,27 @@ size_t count_block(const std::vector<Stmt>& body) {
   return n;
 }
 
+void print_ops(std::ostream& os, const std::vector<VectorOp>& ops) {
+  for (const VectorOp& op : ops) {
+    switch (op.kind) {
+      case VectorOp::Kind::Scalar: os << "    scalar"; break;
+      case VectorOp::Kind::Pass: os << "    pass over n" << op.length; break;
+      case VectorOp::Kind::SpMV:
+        os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
+           << op.block << "x" << op.block << ", then per component";
+        break;
+    }
+    if (op.kind != VectorOp::Kind::Scalar && !op.sums.empty()) {
+      os << ", sums";
+      for (int s : op.sums) os << " l" << s;
+      os << " by runs of " << op.group;
+    }
+    if (op.guard >= 0) os << " when %" << op.guard;
+    os << "\n";
+    print_block(os, op.body, 3);
+  }
+}
+
 }  // namespace
 
 void print(std::ostream& os, const Trace& t) {
@@ -396,26 +431,19 @@ void print(std::ostream& os, const SystemTrace& t) {
     os << "  a" << i << ": " << t.arrays[i].name << " " << ty_name(t.arrays[i].ty)
        << (t.arrays[i].written ? " written" : "") << "\n";
   for (size_t i = 0; i < t.sizes.size(); ++i) os << "  n" << i << ": " << t.sizes[i] << "\n";
-  os << "  while ";
-  print_expr(os, *t.condition);
-  os << "\n";
-  for (const VectorOp& op : t.body) {
-    switch (op.kind) {
-      case VectorOp::Kind::Scalar: os << "    scalar"; break;
-      case VectorOp::Kind::Pass: os << "    pass over n" << op.length; break;
-      case VectorOp::Kind::SpMV:
-        os << "    a" << op.y << " = spmv(a" << op.values << ", a" << op.x << "), blocks "
-           << op.block << "x" << op.block << ", then per component";
-        break;
-    }
-    if (op.kind != VectorOp::Kind::Scalar && !op.sums.empty()) {
-      os << ", sums";
-      for (int s : op.sums) os << " l" << s;
-      os << " by runs of " << op.group;
-    }
-    if (op.guard >= 0) os << " when %" << op.guard;
+  if (!t.before.empty()) {
+    os << "  before\n";
+    print_ops(os, t.before);
+  }
+  if (t.condition) {
+    os << "  while ";
+    print_expr(os, *t.condition);
     os << "\n";
-    print_block(os, op.body, 3);
+    print_ops(os, t.body);
+  }
+  if (!t.after.empty()) {
+    os << "  after\n";
+    print_ops(os, t.after);
   }
 }
 

@@ -161,8 +161,9 @@ struct Trace {
   bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
 };
 
-// A run of system-level statements (a CG loop): scalar statements, fused passes over the
-// components of global vectors, and sparse matrix-vector products, inside a while loop.
+// A run of system-level statements (a CG function's set-up, its while loop and its residual):
+// scalar statements, fused passes over the components of global vectors, and sparse
+// matrix-vector products, before, inside and after at most one while loop.
 // Vectors are arrays of one-component elements indexed by the component (ExprKind::Element
 // is the component in a pass); locals 0 .. scalars-1 are the program's scalar variables,
 // read from the scalar array on entry and written back on exit.
@@ -195,8 +196,10 @@ struct SystemTrace {
   std::vector<Ty> locals;
   int scalars = 0;                 // the first locals: the program's scalars, in and out
   std::vector<std::string> sizes;  // what each size is (for dumps)
-  ExprRef condition;               // the while condition
-  std::vector<VectorOp> body;
+  std::vector<VectorOp> before;    // ops run once, before the loop
+  ExprRef condition;               // the while condition; null when the run has no loop
+  std::vector<VectorOp> body;      // the loop's ops, per iteration
+  std::vector<VectorOp> after;     // ops run once, after the loop
   // The loop's error statements (Check statements in its scalar ops): a kernel that reaches
   // one returns 1 + its index, and the controller hands the loop back to the interpreter.
   std::vector<ErrorSite> errors;
@@ -209,6 +212,8 @@ void print(std::ostream& os, const SystemTrace& t);
 // product's result into the product's row loop, and moves scalar statements that do not
 // depend on a pass above it (jit/fuse_passes.cpp). Returns the number of loops removed.
 int fuse_passes(SystemTrace& t);
+// The same for one list of ops (one section of a trace).
+int fuse_passes(std::vector<VectorOp>& ops);
 // Checks the invariants every pass relies on: operand types, slots in range, locals set
 // before they are read on every path. Returns the first violation, or "" when it holds.
 std::string verify(const Trace& t);

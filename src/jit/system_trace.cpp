@@ -1,7 +1,9 @@
-// The system tracer (jit/system_trace.h): a while loop over global vectors and system
-// matrices, lowered statement by statement into vector ops.
+// The system tracer (jit/system_trace.h): a run of statements over global vectors and
+// system matrices (at most one while loop), lowered statement by statement into vector ops.
 #include "jit/system_trace.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <map>
 
@@ -38,25 +40,37 @@ bool is_row(const ast::Expr& e) { return e.type && is_vector(*e.type) && e.type-
 
 class SystemTracer {
  public:
-  SystemTracer(const ast::While& loop, interp::Interpreter& in) : loop_(loop), in_(in) {}
+  SystemTracer(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in)
+      : run_(run), in_(in) {}
 
   TracedSystem run() {
     TracedSystem out;
     try {
       collect();
-      t_.name = "while";
-      if (loop_.span.valid()) t_.name += ":" + std::to_string(loop_.span.start().line);
-      t_.scalars = static_cast<int>(b_.scalars.size());
-      t_.condition = scalar(*loop_.condition);
-      if (!t_.body.empty()) give_up(loop_.condition->span, "a loop condition over vectors");
-      for (const auto& s : loop_.body) stmt(*s);
-      if (!starts_.empty()) {
-        VectorOp first;
-        first.body = std::move(starts_);
-        t_.body.insert(t_.body.begin(), std::move(first));
+      const ast::While* loop = nullptr;
+      for (at_ = 0; at_ < run_.size(); ++at_) {
+        const ast::Stmt& s = *run_[at_];
+        if (const auto* w = s.as<ast::While>()) {
+          if (loop) give_up(s.span, "a second while loop in one run of statements");
+          loop = w;
+          end_section();
+          trace_loop(*w);
+        } else {
+          stmt(s);
+        }
       }
+      end_section();
+      // Each call copies the matrices it multiplies by (PrunedMatrix): worth it for the
+      // iterations of a loop, not for one product, which the interpreter computes in place.
+      if (!loop && first_product_ < run_.size()) {
+        at_ = first_product_;
+        give_up(run_[at_]->span, "a product outside a loop (the matrix would be copied for it)");
+      }
+      name(loop);
+      t_.scalars = static_cast<int>(b_.scalars.size());
     } catch (const GiveUp& g) {
       out.reason = g.reason;
+      out.failed_at = at_;
       return out;
     }
     out.trace = std::move(t_);
@@ -65,15 +79,56 @@ class SystemTracer {
   }
 
  private:
-  // Every variable the loop reads or writes, classified by its type.
+  struct Mat {
+    int row_ptr, cols, values, rows, block;
+    int64_t length;
+  };
+
+  // "while:LINE" for a loop alone, else "statements:FIRST-LAST".
+  void name(const ast::While* loop) {
+    if (run_.size() == 1 && loop) {
+      t_.name = "while";
+      if (loop->span.valid()) t_.name += ":" + std::to_string(loop->span.start().line);
+      return;
+    }
+    t_.name = "statements:" + run_lines(run_);
+  }
+
+  void trace_loop(const ast::While& loop) {
+    ops_ = &t_.body;
+    t_.condition = scalar(*loop.condition);
+    if (!t_.body.empty()) give_up(loop.condition->span, "a loop condition over vectors");
+    for (const auto& s : loop.body) stmt(*s);
+    end_section();
+    ops_ = &t_.after;
+  }
+
+  // Every sum of the section just traced starts at +0.0 first in it, so that no scalar op
+  // stands between a start and its pass: fuse_passes may move the pass up to another loop.
+  void end_section() {
+    if (starts_.empty()) return;
+    VectorOp first;
+    first.body = std::move(starts_);
+    starts_.clear();
+    ops_->insert(ops_->begin(), std::move(first));
+  }
+
+  // Every variable the run reads or writes, classified by its type.
   void collect() {
     std::function<void(const ast::Expr&)> expr = [&](const ast::Expr& e) {
       if (const auto* r = e.as<ast::VarRef>()) note(*r->var, r->span);
       ast::for_each_child(e, [&](const ast::Expr& c) { expr(c); });
     };
-    expr(*loop_.condition);
-    collect_block(loop_.body, expr);
-    // Vectors first assigned in the loop borrow the shape of a vector of the same type.
+    for (at_ = 0; at_ < run_.size(); ++at_) {
+      if (const auto* w = run_[at_]->as<ast::While>()) {
+        expr(*w->condition);
+        collect_block(w->body, expr);
+      } else {
+        collect_stmt(*run_[at_], expr);
+      }
+    }
+    at_ = 0;
+    // Vectors first assigned in the run borrow the shape of a vector of the same type.
     for (auto& [v, slot] : vector_slot_) {
       const Value& val = in_.variable(*v);
       if (!val.empty()) continue;
@@ -88,23 +143,23 @@ class SystemTracer {
   }
 
   void collect_block(const ast::Block& body, const std::function<void(const ast::Expr&)>& expr) {
-    for (const auto& s : body) {
-      if (const auto* d = s->as<ast::VarDecl>()) {
-        note(*d->var, d->span);
-        if (d->init) expr(*d->init);
-      } else if (const auto* a = s->as<ast::Assign>()) {
-        for (const auto& t : a->targets) expr(*t);
-        expr(*a->value);
-      } else if (const auto* i = s->as<ast::If>()) {
-        for (const auto& c : i->conditions) expr(*c);
-        for (const auto& b : i->branches) collect_block(b, expr);
-        collect_block(i->else_branch, expr);
-      } else if (const auto* p = s->as<ast::Print>(); p && p->is_error()) {
-        // Its arguments are only formatted by the interpreter, which runs the loop again.
-      } else {
-        give_up(s->span,
-                std::string(ast::node_kind_name(s->kind)) + " statements in a compiled loop");
-      }
+    for (const auto& s : body) collect_stmt(*s, expr);
+  }
+  void collect_stmt(const ast::Stmt& s, const std::function<void(const ast::Expr&)>& expr) {
+    if (const auto* d = s.as<ast::VarDecl>()) {
+      note(*d->var, d->span);
+      if (d->init) expr(*d->init);
+    } else if (const auto* a = s.as<ast::Assign>()) {
+      for (const auto& t : a->targets) expr(*t);
+      expr(*a->value);
+    } else if (const auto* i = s.as<ast::If>()) {
+      for (const auto& c : i->conditions) expr(*c);
+      for (const auto& b : i->branches) collect_block(b, expr);
+      collect_block(i->else_branch, expr);
+    } else if (const auto* p = s.as<ast::Print>(); p && p->is_error()) {
+      // Its arguments are only formatted by the interpreter, which runs the loop again.
+    } else {
+      give_up(s.span, std::string(ast::node_kind_name(s.kind)) + " statements in a compiled loop");
     }
   }
 
@@ -174,24 +229,25 @@ class SystemTracer {
     t_.sizes.push_back((rows ? "block rows of " : "components of ") + v->name + " (" +
                        std::to_string(n) + ")");
     b_.sizes.push_back({v, rows});
+    size_value_.push_back(n);
     return sizes_[key] = static_cast<int>(t_.sizes.size() - 1);
   }
 
   // Ops: consecutive scalar statements share one Scalar op.
   void scalar_stmt(Stmt s) {
     if (sink_) return sink_->push_back(std::move(s));
-    if (t_.body.empty() || t_.body.back().kind != VectorOp::Kind::Scalar ||
-        t_.body.back().guard != guard_) {
-      t_.body.emplace_back();
-      t_.body.back().guard = guard_;
+    if (ops_->empty() || ops_->back().kind != VectorOp::Kind::Scalar ||
+        ops_->back().guard != guard_) {
+      ops_->emplace_back();
+      ops_->back().guard = guard_;
     }
-    t_.body.back().body.push_back(std::move(s));
+    ops_->back().body.push_back(std::move(s));
   }
   // A loop over vectors, under the guard of the branch being traced.
   void push_op(VectorOp op, const SourceSpan& at) {
     if (sink_) give_up(at, "a vector operation inside an if in a compiled loop");
     op.guard = guard_;
-    t_.body.push_back(std::move(op));
+    ops_->push_back(std::move(op));
   }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
     Stmt s;
@@ -391,15 +447,7 @@ class SystemTracer {
       case ast::NodeKind::VarRef: {
         auto it = vector_slot_.find(e.as<ast::VarRef>()->var);
         if (it == vector_slot_.end()) give_up(e.span, "an unknown vector");
-        Expr l;
-        l.kind = ExprKind::Load;
-        l.slot = it->second;
-        Expr k;
-        k.kind = ExprKind::Element;
-        k.ty = Ty::I32;
-        l.ops = {make(k)};
-        l.span = e.span;
-        return make(std::move(l));
+        return load(it->second, e.span);
       }
       case ast::NodeKind::Transpose: return component(*e.as<ast::Transpose>()->operand);
       case ast::NodeKind::Unary: {
@@ -413,6 +461,7 @@ class SystemTracer {
       case ast::NodeKind::Binary: {
         const auto& b = *e.as<ast::Binary>();
         using Op = ast::Binary::Op;
+        if (b.op == Op::Mul && b.lhs->type && is_matrix(*b.lhs->type)) return product(b, e.span);
         const bool lv = is_vector(*b.lhs->type), rv = is_vector(*b.rhs->type);
         BinOp op;
         switch (b.op) {
@@ -460,33 +509,10 @@ class SystemTracer {
     // `y = A * x`: a sparse product.
     if (const auto* b = value.as<ast::Binary>(); b && b->op == ast::Binary::Op::Mul) {
       const auto* a = b->lhs->as<ast::VarRef>();
-      const auto* x = b->rhs->as<ast::VarRef>();
       if (a && matrix_.count(a->var)) {
-        if (!x || !vector_slot_.count(x->var))
-          give_up(at, "a matrix times something other than a vector variable");
-        if (x->var == &target) give_up(at, "a product written into its own operand");
-        const Mat& m = matrix_.at(a->var);
-        if (block_of_.count(x->var) && block_of_.at(x->var) != m.block)
-          give_up(at, "vector blocks differ from the matrix's");
-        const runtime::SystemMatrix& mv = *in_.variable(*a->var).matrix();
-        const Value& xv = in_.variable(*x->var);
-        if (xv.empty() || static_cast<int64_t>(xv.tensor().size()) != mv.scalar_cols() ||
-            t_.sizes.empty() || size_of_.at(&target) != size_of_.at(x->var) ||
-            mv.scalar_rows() != mv.scalar_cols())
-          give_up(at, "a product whose lengths do not match");
-        VectorOp op;
-        op.kind = VectorOp::Kind::SpMV;
-        op.row_ptr = m.row_ptr;
-        op.cols = m.cols;
-        op.values = m.values;
-        op.rows = m.rows;
-        op.block = m.block;
-        op.group = m.block;
-        op.x = vector_slot_.at(x->var);
-        op.y = vt->second;
-        op.length = size_of_.at(&target);
-        push_op(std::move(op), at);
-        return;
+        const auto* x = b->rhs->as<ast::VarRef>();
+        if (x && x->var == &target) give_up(at, "a product written into its own operand");
+        return spmv(matrix_.at(a->var), *b->rhs, vt->second, size_of_.at(&target), at);
       }
     }
     const int n = size_of_.at(&target);
@@ -507,6 +533,93 @@ class SystemTracer {
     s.span = at;
     pass.body.push_back(std::move(s));
     push_op(std::move(pass), at);
+  }
+
+  // arrays[y] = m * x, x a vector expression (computed into a scratch vector first unless it
+  // is a vector variable), y an array of `length` components.
+  void spmv(const Mat& m, const ast::Expr& x, int y, int length, const SourceSpan& at) {
+    if (!x.type || !is_vector(*x.type)) give_up(at, "a matrix times something other than a vector");
+    const int n = length_of(x);
+    if (size_value_[static_cast<size_t>(n)] != m.length ||
+        size_value_[static_cast<size_t>(length)] != m.length)
+      give_up(at, "a product whose lengths do not match");
+    if (group_of(x) != m.block) give_up(at, "vector blocks differ from the matrix's");
+    VectorOp op;
+    op.kind = VectorOp::Kind::SpMV;
+    op.row_ptr = m.row_ptr;
+    op.cols = m.cols;
+    op.values = m.values;
+    op.rows = m.rows;
+    op.block = m.block;
+    op.group = m.block;
+    op.x = vector_operand(x, n, at);
+    op.y = y;
+    op.length = length;
+    push_op(std::move(op), at);
+    first_product_ = std::min(first_product_, at_);
+  }
+
+  // A product inside a vector expression (`b - A * x`): into a scratch vector, read back
+  // component by component.
+  ExprRef product(const ast::Binary& b, const SourceSpan& at) {
+    const auto* a = b.lhs->as<ast::VarRef>();
+    if (!a || !matrix_.count(a->var)) give_up(at, "a product of a matrix expression");
+    const Mat& m = matrix_.at(a->var);
+    const int n = length_of(*b.rhs);
+    const int y = scratch(n);
+    spmv(m, *b.rhs, y, n, at);
+    return load(y, at);
+  }
+
+  // The array slot that holds a vector expression: a vector variable's own, or a scratch
+  // vector a pass fills.
+  int vector_operand(const ast::Expr& x, int n, const SourceSpan& at) {
+    if (const auto* r = x.as<ast::VarRef>())
+      if (auto it = vector_slot_.find(r->var); it != vector_slot_.end()) return it->second;
+    const int slot = scratch(n);
+    VectorOp pass;
+    pass.kind = VectorOp::Kind::Pass;
+    pass.length = n;
+    Stmt s;
+    s.kind = StmtKind::Store;
+    s.slot = slot;
+    Expr k;
+    k.kind = ExprKind::Element;
+    k.ty = Ty::I32;
+    s.index = make(k);
+    s.value = component(x);
+    s.span = at;
+    pass.body.push_back(std::move(s));
+    push_op(std::move(pass), at);
+    return slot;
+  }
+
+  int scratch(int n) {
+    ArraySlot a;
+    a.kind = ArraySlot::Kind::Vector;
+    a.ty = Ty::F64;
+    a.components = 1;
+    a.written = true;
+    a.name = "scratch" + std::to_string(scratch_count_++);
+    t_.arrays.push_back(a);
+    SystemBinding::Array b;
+    b.part = SystemBinding::Array::Part::Scratch;
+    b.size = n;
+    b_.arrays.push_back(b);
+    return static_cast<int>(t_.arrays.size() - 1);
+  }
+
+  ExprRef load(int slot, const SourceSpan& at) {
+    Expr l;
+    l.kind = ExprKind::Load;
+    l.ty = Ty::F64;
+    l.slot = slot;
+    Expr k;
+    k.kind = ExprKind::Element;
+    k.ty = Ty::I32;
+    l.ops = {make(k)};
+    l.span = at;
+    return make(std::move(l));
   }
 
   void stmt(const ast::Stmt& s) {
@@ -618,27 +731,34 @@ class SystemTracer {
     scalar_stmt(std::move(s));
   }
 
-  struct Mat {
-    int row_ptr, cols, values, rows, block;
-    int64_t length;
-  };
-
-  const ast::While& loop_;
+  const std::vector<const ast::Stmt*>& run_;
   interp::Interpreter& in_;
+  size_t at_ = 0;                    // the statement of the run being collected or traced
+  size_t first_product_ = SIZE_MAX;  // the first statement with a sparse product
   SystemTrace t_;
+  std::vector<VectorOp>* ops_ = &t_.before;  // the section being traced
   SystemBinding b_;
   std::map<const ast::Variable*, int> scalar_local_, vector_slot_, size_of_, block_of_;
   std::map<const ast::Variable*, Mat> matrix_;
   std::map<std::pair<bool, int64_t>, int> sizes_;
+  std::vector<int64_t> size_value_;  // per size: the length it was traced for
+  int scratch_count_ = 0;
   std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
   int guard_ = -1;            // the Bool local the ops traced now run under (guarded_if), or -1
-  std::vector<Stmt> starts_;  // the sums' +0.0 starts, first in the loop's body
+  std::vector<Stmt> starts_;  // the section's sums' +0.0 starts, first in it
 };
 
 }  // namespace
 
-TracedSystem trace_system(const ast::While& loop, interp::Interpreter& in) {
-  return SystemTracer(loop, in).run();
+std::string run_lines(const std::vector<const ast::Stmt*>& run) {
+  const SourceSpan &a = run.front()->span, &b = run.back()->span;
+  if (!a.valid() || !b.valid()) return "?";
+  return std::to_string(a.start().line) + "-" +
+         std::to_string(b.file->locate(b.end > b.begin ? b.end - 1 : b.begin).line);
+}
+
+TracedSystem trace_system(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in) {
+  return SystemTracer(run, in).run();
 }
 
 }  // namespace simit::jit

@@ -1,6 +1,7 @@
-// The system tracer: lowers a while loop of system-level statements (a CG iteration) to a
-// SystemTrace: scalar statements, passes over vector components and sparse products, with
-// the interpreter's variables bound to its arrays, sizes and scalar slots.
+// The system tracer: lowers a run of system-level statements (a CG function's set-up, its
+// while loop and its residual, or the loop alone) to a SystemTrace: scalar statements, passes
+// over vector components and sparse products, with the interpreter's variables bound to its
+// arrays, sizes and scalar slots.
 #pragma once
 
 #include <optional>
@@ -18,8 +19,11 @@ struct SystemBinding {
   std::vector<const frontend::ast::Variable*> scalars;  // per scalar local
   std::vector<Ty> scalar_types;
   struct Array {
-    const frontend::ast::Variable* var = nullptr;
-    enum class Part : uint8_t { Vector, RowPtr, Cols, Values } part = Part::Vector;
+    const frontend::ast::Variable* var = nullptr;  // null for Scratch
+    // Scratch: a vector of the trace's own (a product inside an expression, `b - A * x`),
+    // of the length sizes[size], that no variable holds.
+    enum class Part : uint8_t { Vector, RowPtr, Cols, Values, Scratch } part = Part::Vector;
+    int size = -1;  // Scratch: index into the sizes
   };
   std::vector<Array> arrays;  // per array slot
   struct Size {
@@ -35,9 +39,16 @@ struct SystemBinding {
 struct TracedSystem {
   std::optional<SystemTrace> trace;
   std::string reason;
+  size_t failed_at = 0;  // without a trace: the statement (index into the run) that gave up
   SystemBinding binding;
 };
 
-TracedSystem trace_system(const frontend::ast::While& loop, interp::Interpreter& in);
+// "FIRST-LAST": the lines a run of statements covers.
+std::string run_lines(const std::vector<const frontend::ast::Stmt*>& run);
+
+// Traces consecutive statements of one block (system-level ones; at most one while loop),
+// reading the shapes of vectors and matrices from the interpreter's variables.
+TracedSystem trace_system(const std::vector<const frontend::ast::Stmt*>& run,
+                          interp::Interpreter& in);
 
 }  // namespace simit::jit

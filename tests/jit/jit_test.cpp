@@ -1105,7 +1105,9 @@ TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
     }
   }
   // The loop: the product with p'Ap, one pass for x, r and r'r, one for p.
-  const std::string loop = dump.substr(dump.find("system trace"));
+  const size_t begin = dump.find("  while ");
+  ASSERT_NE(begin, std::string::npos) << dump;
+  const std::string loop = dump.substr(begin, dump.find("  after", begin) - begin);
   auto count = [&](const std::string& what) {
     size_t c = 0;
     for (size_t at = loop.find(what); at != std::string::npos; at = loop.find(what, at + 1)) ++c;
@@ -1113,8 +1115,14 @@ TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
   };
   EXPECT_EQ(count(" = spmv("), 1u) << loop;
   EXPECT_EQ(count("pass over"), 2u) << loop;
-  // Six loops before fusion (the product, p'Ap, x, r, r'r, p), three after.
-  EXPECT_NE(stats.find("3 loops fused away"), std::string::npos) << stats;
+  // Six loops before fusion (the product, p'Ap, x, r, r'r, p), three after; the set-up before
+  // the loop (x, r, p and r'r) is one pass.
+  EXPECT_NE(stats.find(" compiled"), std::string::npos) << stats;
+  const size_t setup_at = dump.find("  before");
+  ASSERT_LT(setup_at, begin) << dump;
+  const std::string setup = dump.substr(setup_at, begin - setup_at);
+  EXPECT_NE(setup.find("pass over"), std::string::npos) << setup;
+  EXPECT_EQ(setup.find("pass over", setup.find("pass over") + 1), std::string::npos) << setup;
   ASSERT_EQ(results[0][1].as_int(), results[1][1].as_int());
   EXPECT_GT(results[0][1].as_int(), 5);  // CG took real iterations
   expect_same(results[0][0], results[1][0], "x");
@@ -1647,12 +1655,19 @@ PcgRun run_pcg(ExecutorKind kind, bool check, const std::vector<int>& stops) {
   return run;
 }
 
-// The stats line of the while loop at `line`.
+// The stats line of the trace that runs the while loop at `line`: the loop alone, or a run
+// of statements whose lines hold it.
 std::string loop_stats(const std::string& stats, int line) {
-  const std::string site = "while (line " + std::to_string(line) + ")";
-  const size_t at = stats.find(site);
-  if (at == std::string::npos) return "";
-  return stats.substr(at, stats.find('\n', at) - at);
+  std::istringstream in(stats);
+  std::string l;
+  while (std::getline(in, l)) {
+    int first = 0, last = 0;
+    if (l.find("  while (line " + std::to_string(line) + ")") == 0 ||
+        (std::sscanf(l.c_str(), "  statements (lines %d-%d)", &first, &last) == 2 &&
+         first <= line && line <= last))
+      return l;
+  }
+  return "";
 }
 
 // The 1-based line of the first line of `text` that contains `what`.
@@ -1791,6 +1806,229 @@ TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
   const size_t first = stats.find("reached an error statement");
   EXPECT_EQ(stats.find("reached an error statement", first + 1), std::string::npos) << stats;
   EXPECT_NE(loop_stats(stats, line_of(kHalving, "while k")).find(" compiled"), std::string::npos)
+      << stats;
+}
+
+// Runs of system-level statements: a CG function's set-up (with a product inside an
+// expression), loop and residual compiled as one trace; a run cut before a statement the JIT
+// does not compile (a field write); the interpreter's bits either way.
+const char* const kRuns = R"(element Point
+  b : float;
+  d : float;
+  c : float;
+end
+element Link
+  k : float;
+end
+extern points : set{Point};
+extern links : set{Link}(points, points);
+
+func stiffness(l : Link, p : (Point * 2)) -> A : matrix[points,points](float)
+  A(p(0), p(0)) = l.k;
+  A(p(1), p(1)) = l.k;
+  A(p(0), p(1)) = -0.5 * l.k;
+  A(p(1), p(0)) = -0.5 * l.k;
+end
+
+func diagonal(q : Point) -> D : matrix[points,points](float)
+  D(q, q) = q.d;
+end
+
+func cg(A : matrix[points,points](float), b : vector[points](float),
+        x0 : vector[points](float)) -> (x : vector[points](float), iterations : int,
+                                        residual : float)
+  x = x0;
+  var r = b - A * x;
+  var p = r;
+  var rr = r' * r;
+  while (rr > 1e-20) and (iterations < 50)
+    Ap = A * p;
+    alpha = rr / (p' * Ap);
+    x = x + alpha * p;
+    r = r - alpha * Ap;
+    rr_new = r' * r;
+    p = r + (rr_new / rr) * p;
+    rr = rr_new;
+    iterations = iterations + 1;
+  end
+  residual = sqrt(rr / (b' * b));
+end
+
+export func solve() -> (x : vector[points](float), iterations : int, residual : float,
+                        s : vector[points](float), t : vector[points](float))
+  A = (map stiffness to links reduce +) + (map diagonal to points reduce +);
+  b = points.b;
+  x0 = 0.25 * b;
+  x, iterations, residual = cg(A, b, x0);
+  s = 2.0 * x + b;
+  t = s - x;
+  points.c = t;
+  s = s + t;
+end
+)";
+
+struct RunsRun {
+  std::vector<Value> results;
+  std::vector<double> c;  // points.c
+  std::string stats, dump;
+};
+
+RunsRun run_runs(ExecutorKind kind, bool check) {
+  auto compiled = CompiledProgram::from_source("runs.sim", kRuns);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  runtime::Set links("links", {&points, &points});
+  const int n = 40;
+  points.add_many(n);
+  for (const char* f : {"b", "d", "c"})
+    points.add_field(f, runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < n; ++i) {
+    points.field(0).at<double>(i)[0] = std::sin(0.3 * i);
+    points.field(1).at<double>(i)[0] = 0.1 + 0.01 * i;
+    if (i + 1 < n) links.add({i, i + 1});
+  }
+  links.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int e = 0; e < links.size(); ++e) links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
+  EngineOptions o;
+  o.executor = kind;
+  o.jit.threshold = 0;
+  o.jit.check = check;
+  std::ostringstream dump;
+  o.jit.dump = &dump;
+  o.jit.dump_loop_ir = true;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  engine.bind_set(*compiled->find_extern("links"), links);
+  RunsRun run;
+  for (int call = 0; call < 2; ++call) run.results = engine.call(*compiled->find_func("solve"), {});
+  run.c.assign(points.field(2).data<double>(), points.field(2).data<double>() + n);
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  run.stats = os.str();
+  run.dump = dump.str();
+  return run;
+}
+
+// The stats line of the trace of the statements from the line holding `first` to the line
+// holding `last`.
+std::string run_stats(const std::string& stats, const char* text, const char* first,
+                      const char* last) {
+  const std::string site = "  statements (lines " + std::to_string(line_of(text, first)) + "-" +
+                           std::to_string(line_of(text, last)) + ")";
+  const size_t at = stats.find(site);
+  return at == std::string::npos ? "" : stats.substr(at, stats.find('\n', at) - at);
+}
+
+void expect_same_runs(const RunsRun& in, const RunsRun& jit) {
+  ASSERT_EQ(in.results.size(), 5u);
+  ASSERT_EQ(jit.results.size(), 5u);
+  expect_same(in.results[0], jit.results[0], "x");
+  EXPECT_EQ(in.results[1].as_int(), jit.results[1].as_int());
+  const double residual[2] = {in.results[2].as_float(), jit.results[2].as_float()};
+  expect_same_bits(&residual[0], &residual[1], 1, "residual");
+  expect_same(in.results[3], jit.results[3], "s");
+  expect_same(in.results[4], jit.results[4], "t");
+  expect_same_bits(in.c.data(), jit.c.data(), in.c.size(), "points.c");
+}
+
+TEST(Jit, ARunOfStatementsCompilesAsOneTraceWithItsLoop) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const RunsRun in = run_runs(ExecutorKind::Interpreter, false);
+  const RunsRun jit = run_runs(ExecutorKind::Jit, false);
+  expect_same_runs(in, jit);
+  EXPECT_GT(in.results[1].as_int(), 5);  // CG took real iterations
+  EXPECT_GT(in.results[2].as_float(), 0.0);
+  // cg's six statements are one trace, called twice; its loop is not compiled on its own.
+  const std::string cg = run_stats(jit.stats, kRuns, "x = x0", "residual = sqrt");
+  EXPECT_NE(cg.find(" compiled"), std::string::npos) << jit.stats;
+  EXPECT_NE(cg.find(" 2 "), std::string::npos) << cg;
+  EXPECT_EQ(jit.stats.find("  while (line"), std::string::npos) << jit.stats;
+  // The set-up's product (b - A * x) goes into a scratch vector; the residual's b'b is after.
+  const size_t trace =
+      jit.dump.find("system trace statements:" + std::to_string(line_of(kRuns, "x = x0")));
+  ASSERT_NE(trace, std::string::npos) << jit.dump;
+  const std::string ir = jit.dump.substr(trace);
+  const size_t before = ir.find("  before"), loop = ir.find("  while "), after = ir.find("  after");
+  ASSERT_TRUE(before < loop && loop < after) << ir;
+  EXPECT_NE(ir.find("scratch"), std::string::npos) << ir;
+  EXPECT_NE(ir.substr(before, loop - before).find(" = spmv("), std::string::npos) << ir;
+  EXPECT_NE(ir.substr(after).find("pass over"), std::string::npos) << ir;
+  // `s = ...; t = ...` compile; the field write ends the run and runs interpreted.
+  const std::string st = run_stats(jit.stats, kRuns, "s = 2.0", "t = s - x");
+  EXPECT_NE(st.find(" compiled"), std::string::npos) << jit.stats;
+}
+
+TEST(Jit, CheckModeComparesARunOfStatements) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const RunsRun in = run_runs(ExecutorKind::Interpreter, false);
+  const RunsRun jit = run_runs(ExecutorKind::Jit, true);
+  expect_same_runs(in, jit);
+  const std::string cg = run_stats(jit.stats, kRuns, "x = x0", "residual = sqrt");
+  EXPECT_NE(cg.find(" compiled"), std::string::npos) << jit.stats;
+  EXPECT_EQ(jit.stats.find("  while (line"), std::string::npos) << jit.stats;
+}
+
+// A run whose loop reaches an error statement: the interpreter runs the statements again
+// from the first and stops at the error; neither the rest of the run nor the loop alone is
+// compiled for it.
+const char* const kRunError = R"(element P
+  b : float;
+end
+extern ps : set{P};
+
+func grow(b : vector[ps](float)) -> x : vector[ps](float)
+  x = 0.0 * b;
+  var y = b + b;
+  var n = b' * b;
+  while n < 100.0
+    x = x + y;
+    n = x' * x;
+    if n > 40.0
+      error "x'x = ", n, " above 40";
+    end
+  end
+end
+
+export func main() -> x : vector[ps](float)
+  x = grow(ps.b);
+end
+)";
+
+TEST(Jit, ARunWhoseLoopReachesAnErrorStatementIsInterpretedOnce) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  std::string message[2], stats;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source("grow.sim", kRunError);
+    ASSERT_TRUE(compiled->ok());
+    runtime::Set ps("ps");
+    ps.add_many(2);
+    ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    ps.field(0).at<double>(0)[0] = 1.0;
+    ps.field(0).at<double>(1)[0] = 2.0;
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("ps"), ps);
+    try {
+      engine.call(*compiled->find_func("main"), {});
+    } catch (const interp::RuntimeError& e) {
+      message[k] = e.render();
+    }
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) stats = os.str();
+  }
+  // y = [2, 4]: x'x is 20, then 80.
+  EXPECT_NE(message[0].find("runtime error: x'x = 80"), std::string::npos) << message[0];
+  EXPECT_NE(message[0].find(" above 40"), std::string::npos) << message[0];
+  EXPECT_EQ(message[1], message[0]);
+  EXPECT_NE(stats.find("1 call reached an error statement and ran again interpreted"),
+            std::string::npos)
+      << stats;
+  EXPECT_EQ(stats.find("  while (line"), std::string::npos) << stats;
+  EXPECT_EQ(stats.find("statements (lines " + std::to_string(line_of(kRunError, "var y"))),
+            std::string::npos)
       << stats;
 }
 

@@ -256,7 +256,8 @@ void Emitter::run_of(const VectorOp& op, Value* first, int group) {
 }
 
 // int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes): the program's
-// scalars in and out through `scalars`, the while loop in between.
+// scalars in and out through `scalars`, the ops before the loop, the while loop and the ops
+// after it in between.
 llvm::Function* Emitter::run_system(const std::string& name) {
   llvm::Type* ptr = b_.getPtrTy();
   auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr}, false);
@@ -280,16 +281,20 @@ llvm::Function* Emitter::run_system(const std::string& name) {
   for (size_t i = 0; i < st_->sizes.size(); ++i)
     sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
                                   b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
-  auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
-  auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
-  auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
-  b_.CreateBr(head);
-  b_.SetInsertPoint(head);
-  b_.CreateCondBr(expr(*st_->condition), body, done);
-  b_.SetInsertPoint(body);
-  for (const VectorOp& op : st_->body) guarded_op(op, sizes);
-  b_.CreateBr(head);
-  b_.SetInsertPoint(done);
+  for (const VectorOp& op : st_->before) guarded_op(op, sizes);
+  if (st_->condition) {
+    auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
+    auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
+    auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
+    b_.CreateBr(head);
+    b_.SetInsertPoint(head);
+    b_.CreateCondBr(expr(*st_->condition), body, done);
+    b_.SetInsertPoint(body);
+    for (const VectorOp& op : st_->body) guarded_op(op, sizes);
+    b_.CreateBr(head);
+    b_.SetInsertPoint(done);
+  }
+  for (const VectorOp& op : st_->after) guarded_op(op, sizes);
   for (int i = 0; i < st_->scalars; ++i) {
     const Ty t = local_types_[i];
     Value* v = b_.CreateLoad(type(t), locals_[i]);
