@@ -10,6 +10,7 @@
 
 #include "interp/interpreter.h"
 #include "interp/runtime_error.h"
+#include "interp/set_binding.h"
 #include "jit/decompose_call.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
@@ -83,8 +84,14 @@ struct TraceController::Pending {
   std::vector<std::vector<double>> results;
   std::vector<std::pair<int, std::vector<std::byte>>> fields;
   const Trace* trace = nullptr;
-  // Loop: per written variable its value as compiled.
+  // Loop: per written variable its value as compiled; per written field ("S.f") its values.
   std::vector<std::pair<const ast::Variable*, Value>> variables;
+  struct RunField {
+    const runtime::Field* field;
+    std::string name;
+    std::vector<double> values;
+  };
+  std::vector<RunField> run_fields;
 };
 
 namespace {
@@ -101,7 +108,14 @@ std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& 
   std::vector<int64_t> out;
   for (const SystemBinding::Size& s : b.sizes) {
     const Value& v = in.variable(*s.var);
-    if (s.rows)
+    if (s.field >= 0) {
+      const bool bound = v.kind() == Value::Kind::Set && v.binding() && v.binding()->set;
+      out.push_back(bound ? static_cast<int64_t>(v.binding()->set->size()) *
+                                std::as_const(*v.binding()->set)
+                                    .field(v.binding()->fields[s.field])
+                                    .components()
+                          : -1);
+    } else if (s.rows)
       out.push_back(v.kind() == Value::Kind::Matrix && v.matrix() ? v.matrix()->rows() : -1);
     else
       out.push_back(v.is_tensor() ? static_cast<int64_t>(v.tensor().size()) : -1);
@@ -618,6 +632,12 @@ namespace {
 
 using Saved = std::vector<std::pair<const ast::Variable*, Value>>;
 
+// The field a Field array of a system trace names (its set is bound: the sizes matched).
+runtime::Field& bound_field(const SystemBinding::Array& a, interp::Interpreter& in) {
+  const interp::SetBinding& b = *in.variable(*a.var).binding();
+  return b.set->field(b.fields[a.field]);
+}
+
 // The variables a loop writes, as shared copies: a vector the kernel writes is copied by
 // its first write (copy on write), so keeping the old value costs one copy of each written
 // vector per call, and only for loops that may stop.
@@ -625,7 +645,8 @@ Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
                           const std::vector<bool>& writes_scalar, interp::Interpreter& in) {
   Saved out;
   for (size_t i = 0; i < b.arrays.size(); ++i)
-    if (t.arrays[i].written && b.arrays[i].var)
+    if (t.arrays[i].written && b.arrays[i].var &&
+        b.arrays[i].part != SystemBinding::Array::Part::Field)
       out.emplace_back(b.arrays[i].var, in.variable(*b.arrays[i].var));
   for (size_t i = 0; i < b.scalars.size(); ++i)
     if (writes_scalar[i]) out.emplace_back(b.scalars[i], in.variable(*b.scalars[i]));
@@ -647,12 +668,19 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
   if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
   // A vector first assigned in the loop or run is made with the shape of its model: a value
   // left from an earlier run through the same statements may have another.
-  for (const auto& [var, like] : b.created) {
-    const runtime::Tensor& shape = in.variable(*like).tensor();
-    const Value& now = in.variable(*var);
+  for (const SystemBinding::Created& c : b.created) {
+    runtime::Shape shape;
+    if (c.like_field >= 0) {
+      const interp::SetBinding& sb = *in.variable(*c.like).binding();
+      shape =
+          runtime::Shape::blocked(std::vector<int>{sb.set->size()}, sb.field_shapes[c.like_field]);
+    } else {
+      shape = in.variable(*c.like).tensor().shape();
+    }
+    const Value& now = in.variable(*c.var);
     if (now.empty() || !now.is_tensor() || now.tensor().size() != shape.size() ||
-        now.tensor().kind() != shape.kind())
-      in.variable(*var) = Value::of_tensor(runtime::Tensor(shape.kind(), shape.shape()));
+        now.tensor().kind() != runtime::ComponentKind::Float)
+      in.variable(*c.var) = Value::of_tensor(runtime::Tensor(runtime::ComponentKind::Float, shape));
   }
   std::vector<void*> arrays(b.arrays.size(), nullptr);
   for (int pass = 0; pass < 2; ++pass)
@@ -684,6 +712,13 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
         }
         case Part::Cols: arrays[i] = e->pruned[b.arrays[i].var].cols.data(); break;
         case Part::Values: arrays[i] = e->pruned[b.arrays[i].var].values.data(); break;
+        case Part::Field: {
+          runtime::Field& f = bound_field(b.arrays[i], in);
+          // A write counts in the field's write version (and unshares its array).
+          arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<double>())
+                                          : const_cast<double*>(std::as_const(f).data<double>());
+          break;
+        }
         case Part::Scratch: break;
       }
     }
@@ -864,7 +899,18 @@ void TraceController::site_done(interp::SiteCall& call) {
 // False when the kernel reached an error statement (and put the variables back).
 bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   const SystemBinding& b = e.traced.binding;
-  Saved before = save_loop_variables(b, *e.traced.trace, e.writes_scalar, in);
+  const SystemTrace& t = *e.traced.trace;
+  Saved before = save_loop_variables(b, t, e.writes_scalar, in);
+  // Written fields, as they were (a run that writes one holds no error statement).
+  std::vector<Pending::RunField> fields;
+  for (size_t i = 0; i < b.arrays.size(); ++i) {
+    if (!t.arrays[i].written || b.arrays[i].part != SystemBinding::Array::Part::Field) continue;
+    const runtime::Field& f = bound_field(b.arrays[i], in);
+    const double* v = f.data<double>();
+    const size_t n =
+        static_cast<size_t>(in.variable(*b.arrays[i].var).binding()->set->size()) * f.components();
+    fields.push_back(Pending::RunField{&f, t.arrays[i].name, std::vector<double>(v, v + n)});
+  }
   if (!run_loop_kernel(e, in)) return false;  // an error: the interpreter reports it
   auto p = std::make_unique<Pending>();
   p->at = e.run.back();
@@ -872,6 +918,14 @@ bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   for (auto& [var, value] : before) {
     p->variables.emplace_back(var, in.variable(*var));
     in.variable(*var) = std::move(value);
+  }
+  for (Pending::RunField& f : fields) {
+    runtime::Field& field = const_cast<runtime::Field&>(*f.field);
+    double* now = field.data<double>();
+    std::vector<double> compiled(now, now + f.values.size());
+    std::copy(f.values.begin(), f.values.end(), now);
+    f.values = std::move(compiled);
+    p->run_fields.push_back(std::move(f));
   }
   pending_ = std::move(p);
   if (e.run.size() > 1 || !e.run.front()->is<ast::While>()) checking_run_ = e.run.back();
@@ -882,6 +936,17 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter&
   if (!pending_ || pending_->at != &stmt) return;
   checking_run_ = nullptr;
   const std::unique_ptr<Pending> p = std::move(pending_);
+  for (const Pending::RunField& f : p->run_fields) {
+    const double* got = f.field->data<double>();
+    const size_t per = std::max<size_t>(f.field->components(), 1);
+    for (size_t c = 0; c < f.values.size(); ++c)
+      if (!same_bits(got[c], f.values[c]))
+        throw interp::RuntimeError(
+            stmt.span,
+            "--check-jit: the compiled " + p->name + " differs from the interpreter in '" + f.name +
+                "' component " + std::to_string(c) + " (element " + std::to_string(c / per) +
+                "): interpreted " + number(got[c]) + ", compiled " + number(f.values[c]));
+  }
   for (const auto& [var, jit] : p->variables) {
     const Value& got = in.variable(*var);
     auto differ = [&](const std::string& where, double a, double b) {

@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <utility>
 
 #include "frontend/ast_walk.h"
+#include "interp/set_binding.h"
 #include "jit/ir_build.h"
 
 namespace simit::jit {
@@ -66,6 +68,12 @@ class SystemTracer {
         at_ = first_product_;
         give_up(run_[at_]->span, "a product outside a loop (the matrix would be copied for it)");
       }
+      // A kernel that reaches an error statement puts the variables back for the interpreter
+      // to run the statements again; it could not put a field back.
+      if (!t_.errors.empty() && first_field_write_ < run_.size()) {
+        at_ = first_field_write_;
+        give_up(run_[at_]->span, "a field write in a run that may stop at an error statement");
+      }
       name(loop);
       t_.scalars = static_cast<int>(b_.scalars.size());
     } catch (const GiveUp& g) {
@@ -116,6 +124,7 @@ class SystemTracer {
   // Every variable the run reads or writes, classified by its type.
   void collect() {
     std::function<void(const ast::Expr&)> expr = [&](const ast::Expr& e) {
+      if (const auto* f = e.as<ast::FieldRead>(); f && f->of_set) return note_field(*f);
       if (const auto* r = e.as<ast::VarRef>()) note(*r->var, r->span);
       ast::for_each_child(e, [&](const ast::Expr& c) { expr(c); });
     };
@@ -128,17 +137,29 @@ class SystemTracer {
       }
     }
     at_ = 0;
-    // Vectors first assigned in the run borrow the shape of a vector of the same type.
+    // Vectors first assigned in the run borrow the shape of a vector, or a field of a set, of
+    // the same type.
     for (auto& [v, slot] : vector_slot_) {
       const Value& val = in_.variable(*v);
       if (!val.empty()) continue;
-      const ast::Variable* like = nullptr;
+      SystemBinding::Created c{v};
       for (auto& [w, s2] : vector_slot_)
-        if (!in_.variable(*w).empty() && frontend::types_equal(*w->type, *v->type)) like = w;
-      if (!like)
+        if (!in_.variable(*w).empty() && frontend::types_equal(*w->type, *v->type)) c.like = w;
+      if (c.like) {
+        size_of_[v] = size_of_[c.like];
+        if (block_of_.count(c.like)) block_of_[v] = block_of_.at(c.like);
+      } else {
+        for (const auto& [key, type] : field_type_)
+          if (!c.like && frontend::types_equal(*type, *v->type)) {
+            c.like = key.first;
+            c.like_field = key.second;
+            size_of_[v] = field_size_.at(key);
+            block_of_[v] = field_block_.at(key);
+          }
+      }
+      if (!c.like)
         give_up(v->span, "vector '" + v->name + "' has no value and no vector gives its shape");
-      b_.created.emplace_back(v, like);
-      size_of_[v] = size_of_[like];
+      b_.created.push_back(c);
     }
   }
 
@@ -211,6 +232,33 @@ class SystemTracer {
     give_up(at, "'" + v.name + "' of type " + frontend::to_string(t) + " in a compiled loop");
   }
 
+  // `S.f`, a field of a set as a vector: its array, read or written in place (a binary64
+  // field only; the interpreter converts a binary32 one at each read).
+  void note_field(const ast::FieldRead& f) {
+    const auto* set = f.base->as<ast::VarRef>();
+    if (!set) give_up(f.span, "a field of a set expression");
+    const FieldKey key{set->var, f.field_index};
+    if (field_slot_.count(key)) return;
+    const Value& sv = in_.variable(*set->var);
+    if (sv.kind() != Value::Kind::Set || !sv.binding() || !sv.binding()->set)
+      give_up(f.span, "set '" + set->var->name + "' is not bound");
+    const interp::SetBinding& b = *sv.binding();
+    const runtime::Field& field = std::as_const(*b.set).field(b.fields[f.field_index]);
+    if (field.type().kind != runtime::ComponentKind::Float || field.type().single)
+      give_up(f.span, "field '" + f.field + "' is not stored as binary64 floats");
+    const int slot =
+        array(set->var, SystemBinding::Array::Part::Field, Ty::F64, set->var->name + "." + f.field);
+    b_.arrays.back().field = f.field_index;
+    field_slot_[key] = slot;
+    const int64_t n = static_cast<int64_t>(b.set->size()) * field.components();
+    field_size_[key] = size(set->var, false, n, f.field_index);
+    field_block_[key] = static_cast<int>(field.components());
+    field_type_[key] = f.type.get();
+  }
+  static std::pair<const ast::Variable*, int> field_key(const ast::FieldRead& f) {
+    return {f.base->as<ast::VarRef>()->var, f.field_index};
+  }
+
   int array(const ast::Variable* v, SystemBinding::Array::Part part, Ty ty, std::string name) {
     ArraySlot a;
     a.kind = ArraySlot::Kind::Vector;
@@ -223,12 +271,12 @@ class SystemTracer {
   }
   // Sizes are shared by value: passes over vectors of equal length may fuse. The controller
   // keys kernels by every length, so a length that changes gets a new trace.
-  int size(const ast::Variable* v, bool rows, int64_t n) {
+  int size(const ast::Variable* v, bool rows, int64_t n, int field = -1) {
     const std::pair<bool, int64_t> key{rows, n};
     if (auto it = sizes_.find(key); it != sizes_.end()) return it->second;
     t_.sizes.push_back((rows ? "block rows of " : "components of ") + v->name + " (" +
                        std::to_string(n) + ")");
-    b_.sizes.push_back({v, rows});
+    b_.sizes.push_back({v, rows, field});
     size_value_.push_back(n);
     return sizes_[key] = static_cast<int>(t_.sizes.size() - 1);
   }
@@ -266,6 +314,8 @@ class SystemTracer {
     if (const auto* r = e.as<ast::VarRef>()) {
       if (auto it = size_of_.find(r->var); it != size_of_.end()) return it->second;
     }
+    if (const auto* f = e.as<ast::FieldRead>(); f && f->of_set)
+      return field_size_.at(field_key(*f));
     if (const auto* t = e.as<ast::Transpose>()) return length_of(*t->operand);
     if (const auto* b = e.as<ast::Binary>()) {
       const bool lv = b->lhs->type && is_vector(*b->lhs->type);
@@ -277,10 +327,10 @@ class SystemTracer {
 
   // Components per element of a vector expression: the runs an inner product sums first.
   int group_of(const ast::Expr& e) {
+    if (const auto* f = e.as<ast::FieldRead>(); f && f->of_set)
+      return field_block_.at(field_key(*f));
     if (const auto* r = e.as<ast::VarRef>()) {
       if (auto it = block_of_.find(r->var); it != block_of_.end()) return it->second;
-      for (const auto& [v, like] : b_.created)
-        if (v == r->var && block_of_.count(like)) return block_of_.at(like);
     }
     if (const auto* t = e.as<ast::Transpose>()) return group_of(*t->operand);
     if (const auto* b = e.as<ast::Binary>()) {
@@ -449,6 +499,9 @@ class SystemTracer {
         if (it == vector_slot_.end()) give_up(e.span, "an unknown vector");
         return load(it->second, e.span);
       }
+      case ast::NodeKind::FieldRead:
+        if (!e.as<ast::FieldRead>()->of_set) break;
+        return load(field_slot_.at(field_key(*e.as<ast::FieldRead>())), e.span);
       case ast::NodeKind::Transpose: return component(*e.as<ast::Transpose>()->operand);
       case ast::NodeKind::Unary: {
         const auto& u = *e.as<ast::Unary>();
@@ -503,19 +556,40 @@ class SystemTracer {
     // The controller makes such a vector before the loop runs, where the interpreter would
     // leave it without a value when the branch does not run.
     if (guard_ >= 0)
-      for (const auto& [v, like] : b_.created)
-        if (v == &target) give_up(at, "a vector first assigned inside an if");
-    t_.arrays[vt->second].written = true;
-    // `y = A * x`: a sparse product.
-    if (const auto* b = value.as<ast::Binary>(); b && b->op == ast::Binary::Op::Mul) {
-      const auto* a = b->lhs->as<ast::VarRef>();
-      if (a && matrix_.count(a->var)) {
-        const auto* x = b->rhs->as<ast::VarRef>();
-        if (x && x->var == &target) give_up(at, "a product written into its own operand");
-        return spmv(matrix_.at(a->var), *b->rhs, vt->second, size_of_.at(&target), at);
-      }
+      for (const SystemBinding::Created& c : b_.created)
+        if (c.var == &target) give_up(at, "a vector first assigned inside an if");
+    if (is_product(value))
+      if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::VarRef>(); x && x->var == &target)
+        give_up(at, "a product written into its own operand");
+    store_vector(vt->second, size_of_.at(&target), value, at);
+  }
+
+  // `S.f = v`: the field's array, written in place.
+  void assign_field(const ast::FieldRead& target, const ast::Expr& value, const SourceSpan& at) {
+    const auto key = field_key(target);
+    if (is_product(value))
+      if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::FieldRead>();
+          x && x->of_set && field_key(*x) == key)
+        give_up(at, "a product written into its own operand");
+    first_field_write_ = std::min(first_field_write_, at_);
+    store_vector(field_slot_.at(key), field_size_.at(key), value, at);
+  }
+
+  // `A * x` with A a matrix variable of the run.
+  bool is_product(const ast::Expr& value) const {
+    const auto* b = value.as<ast::Binary>();
+    if (!b || b->op != ast::Binary::Op::Mul) return false;
+    const auto* a = b->lhs->as<ast::VarRef>();
+    return a && matrix_.count(a->var);
+  }
+
+  // Array `slot` (of `n` components) = value: a sparse product `A * x`, or a pass.
+  void store_vector(int slot, int n, const ast::Expr& value, const SourceSpan& at) {
+    t_.arrays[slot].written = true;
+    if (is_product(value)) {
+      const auto& b = *value.as<ast::Binary>();
+      return spmv(matrix_.at(b.lhs->as<ast::VarRef>()->var), *b.rhs, slot, n, at);
     }
-    const int n = size_of_.at(&target);
     if (value.type && is_vector(*value.type) && length_of(value) != n)
       give_up(at, "an assignment of another length");
     ExprRef v = component(value);
@@ -524,7 +598,7 @@ class SystemTracer {
     pass.length = n;
     Stmt s;
     s.kind = StmtKind::Store;
-    s.slot = vt->second;
+    s.slot = slot;
     Expr k;
     k.kind = ExprKind::Element;
     k.ty = Ty::I32;
@@ -576,6 +650,8 @@ class SystemTracer {
   int vector_operand(const ast::Expr& x, int n, const SourceSpan& at) {
     if (const auto* r = x.as<ast::VarRef>())
       if (auto it = vector_slot_.find(r->var); it != vector_slot_.end()) return it->second;
+    if (const auto* f = x.as<ast::FieldRead>(); f && f->of_set)
+      return field_slot_.at(field_key(*f));
     const int slot = scratch(n);
     VectorOp pass;
     pass.kind = VectorOp::Kind::Pass;
@@ -632,6 +708,8 @@ class SystemTracer {
     const auto& a = *s.as<ast::Assign>();
     if (a.index_notation || a.targets.size() != 1)
       give_up(s.span, "this assignment in a compiled loop");
+    if (const auto* f = a.targets[0]->as<ast::FieldRead>(); f && f->of_set)
+      return assign_field(*f, *a.value, s.span);
     const auto* target = a.targets[0]->as<ast::VarRef>();
     if (!target) give_up(s.span, "an assignment to part of a variable");
     assign(*target->var, *a.value, s.span);
@@ -733,8 +811,12 @@ class SystemTracer {
 
   const std::vector<const ast::Stmt*>& run_;
   interp::Interpreter& in_;
-  size_t at_ = 0;                    // the statement of the run being collected or traced
-  size_t first_product_ = SIZE_MAX;  // the first statement with a sparse product
+  size_t at_ = 0;                        // the statement of the run being collected or traced
+  size_t first_product_ = SIZE_MAX;      // the first statement with a sparse product
+  size_t first_field_write_ = SIZE_MAX;  // the first statement that writes a field
+  using FieldKey = std::pair<const ast::Variable*, int>;  // a set and its field's index
+  std::map<FieldKey, int> field_slot_, field_size_, field_block_;
+  std::map<FieldKey, const frontend::Type*> field_type_;
   SystemTrace t_;
   std::vector<VectorOp>* ops_ = &t_.before;  // the section being traced
   SystemBinding b_;

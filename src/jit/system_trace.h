@@ -19,21 +19,30 @@ struct SystemBinding {
   std::vector<const frontend::ast::Variable*> scalars;  // per scalar local
   std::vector<Ty> scalar_types;
   struct Array {
-    const frontend::ast::Variable* var = nullptr;  // null for Scratch
-    // Scratch: a vector of the trace's own (a product inside an expression, `b - A * x`),
-    // of the length sizes[size], that no variable holds.
-    enum class Part : uint8_t { Vector, RowPtr, Cols, Values, Scratch } part = Part::Vector;
-    int size = -1;  // Scratch: index into the sizes
+    const frontend::ast::Variable* var = nullptr;  // the set for Field; null for Scratch
+    // Field: the array of field `field` of the set `var` (`S.f`, in place). Scratch: a vector
+    // of the trace's own (a product inside an expression, `b - A * x`), of the length
+    // sizes[size], that no variable holds.
+    enum class Part : uint8_t { Vector, RowPtr, Cols, Values, Field, Scratch } part = Part::Vector;
+    int size = -1;   // Scratch: index into the sizes
+    int field = -1;  // Field: the field's index among its element's fields
   };
   std::vector<Array> arrays;  // per array slot
   struct Size {
     const frontend::ast::Variable* var = nullptr;
     bool rows = false;  // a matrix's block rows; else a vector's components
+    int field = -1;     // the components of this field of the set `var`
   };
   std::vector<Size> sizes;
-  // Vectors the loop assigns that may have no value before it: created (zero) with the
-  // shape of `like` before the kernel runs.
-  std::vector<std::pair<const frontend::ast::Variable*, const frontend::ast::Variable*>> created;
+  // Vectors the loop assigns that may have no value before it: created (zero) before the
+  // kernel runs, with the shape of the vector `like`, or of field `like_field` of the set
+  // `like` (`b = points.b`).
+  struct Created {
+    const frontend::ast::Variable* var = nullptr;
+    const frontend::ast::Variable* like = nullptr;
+    int like_field = -1;
+  };
+  std::vector<Created> created;
 };
 
 struct TracedSystem {

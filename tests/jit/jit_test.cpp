@@ -1809,9 +1809,10 @@ TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
       << stats;
 }
 
-// Runs of system-level statements: a CG function's set-up (with a product inside an
-// expression), loop and residual compiled as one trace; a run cut before a statement the JIT
-// does not compile (a field write); the interpreter's bits either way.
+// Runs of system-level statements: a field read and a vector update; a CG function's set-up
+// (with a product inside an expression), loop and residual compiled as one trace; a run with
+// a field write and read, cut before a statement the JIT does not compile (a matrix made by
+// the run); the interpreter's bits either way.
 const char* const kRuns = R"(element Point
   b : float;
   d : float;
@@ -1855,7 +1856,7 @@ func cg(A : matrix[points,points](float), b : vector[points](float),
 end
 
 export func solve() -> (x : vector[points](float), iterations : int, residual : float,
-                        s : vector[points](float), t : vector[points](float))
+                        s : vector[points](float), w : vector[points](float))
   A = (map stiffness to links reduce +) + (map diagonal to points reduce +);
   b = points.b;
   x0 = 0.25 * b;
@@ -1863,7 +1864,11 @@ export func solve() -> (x : vector[points](float), iterations : int, residual : 
   s = 2.0 * x + b;
   t = s - x;
   points.c = t;
-  s = s + t;
+  s = s + points.c;
+  var u = s - b;
+  w = u + u;
+  B = 2.0 * A;
+  w = w - u;
 end
 )";
 
@@ -1927,7 +1932,7 @@ void expect_same_runs(const RunsRun& in, const RunsRun& jit) {
   const double residual[2] = {in.results[2].as_float(), jit.results[2].as_float()};
   expect_same_bits(&residual[0], &residual[1], 1, "residual");
   expect_same(in.results[3], jit.results[3], "s");
-  expect_same(in.results[4], jit.results[4], "t");
+  expect_same(in.results[4], jit.results[4], "w");
   expect_same_bits(in.c.data(), jit.c.data(), in.c.size(), "points.c");
 }
 
@@ -1953,9 +1958,16 @@ TEST(Jit, ARunOfStatementsCompilesAsOneTraceWithItsLoop) {
   EXPECT_NE(ir.find("scratch"), std::string::npos) << ir;
   EXPECT_NE(ir.substr(before, loop - before).find(" = spmv("), std::string::npos) << ir;
   EXPECT_NE(ir.substr(after).find("pass over"), std::string::npos) << ir;
-  // `s = ...; t = ...` compile; the field write ends the run and runs interpreted.
-  const std::string st = run_stats(jit.stats, kRuns, "s = 2.0", "t = s - x");
-  EXPECT_NE(st.find(" compiled"), std::string::npos) << jit.stats;
+  // `b = points.b; x0 = 0.25 * b` compile; from `s = ...` the statements before `B = 2.0 * A`
+  // (which makes a matrix) compile, the field write among them.
+  EXPECT_NE(run_stats(jit.stats, kRuns, "b = points.b", "x0 = 0.25").find(" compiled"),
+            std::string::npos)
+      << jit.stats;
+  EXPECT_NE(run_stats(jit.stats, kRuns, "s = 2.0", "w = u + u").find(" compiled"),
+            std::string::npos)
+      << jit.stats;
+  EXPECT_NE(jit.dump.find("points.c f64 written"), std::string::npos) << jit.dump;
+  for (double c : in.c) EXPECT_NE(c, 0.0);  // the field was written
 }
 
 TEST(Jit, CheckModeComparesARunOfStatements) {
@@ -1966,6 +1978,9 @@ TEST(Jit, CheckModeComparesARunOfStatements) {
   const std::string cg = run_stats(jit.stats, kRuns, "x = x0", "residual = sqrt");
   EXPECT_NE(cg.find(" compiled"), std::string::npos) << jit.stats;
   EXPECT_EQ(jit.stats.find("  while (line"), std::string::npos) << jit.stats;
+  EXPECT_NE(run_stats(jit.stats, kRuns, "s = 2.0", "w = u + u").find(" compiled"),
+            std::string::npos)
+      << jit.stats;
 }
 
 // A run whose loop reaches an error statement: the interpreter runs the statements again
