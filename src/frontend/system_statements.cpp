@@ -29,6 +29,19 @@ bool calls_user_code(const ast::Expr& e) {
   return found;
 }
 
+bool is_scalar(const Type* t) { return t && t->kind == Type::Kind::Scalar; }
+
+// A declaration of a scalar with a value, or an assignment to scalar variables.
+bool assigns_scalars(const ast::Stmt& s) {
+  if (const auto* d = s.as<ast::VarDecl>())
+    return d->init && d->var && is_scalar(d->var->type.get());
+  const auto& a = *s.as<ast::Assign>();
+  if (a.index_notation || a.targets.empty()) return false;
+  for (const auto& t : a.targets)
+    if (!t->is<ast::VarRef>() || !is_scalar(t->type.get())) return false;
+  return is_scalar(a.value->type.get());
+}
+
 struct Marks {
   bool system = false;  // some statement computes on system tensors
   bool calls = false;   // some expression calls a user function or maps
@@ -52,6 +65,9 @@ Marks mark_stmt(ast::Stmt& s) {
   switch (s.kind) {
     case ast::NodeKind::Assign:
     case ast::NodeKind::VarDecl:
+      s.system_level = m.system && !m.calls;
+      s.scalar_level = !m.system && !m.calls && assigns_scalars(s);
+      break;
     case ast::NodeKind::ExprStmt: s.system_level = m.system && !m.calls; break;
     case ast::NodeKind::While:
     case ast::NodeKind::DoWhile: s.system_level = m.system && !m.calls; break;

@@ -13,11 +13,11 @@
 //      (field arrays and matrix values are the runtime's own, so nothing is copied), and
 //      returns true; returning false leaves the site to the interpreter.
 //   3. Statements the frontend marked system-level (frontend/system_statements.h: vector
-//      updates, `A * p`, a whole CG loop) are offered too: each maximal run of two or more
-//      consecutive ones in a block through run_statements (a CG function's set-up, loop and
-//      residual as one), then each statement the run's executor did not take through
-//      run_statement; the executor reads and writes the running function's variables
-//      through Interpreter::variable.
+//      updates, `A * p`, a whole CG loop) are offered too: each maximal run of consecutive
+//      ones in a block (with the scalar assignments among them) through run_statements (a
+//      CG function's set-up, loop and residual as one), then each statement the run's
+//      executor did not take through run_statement; the executor reads and writes the
+//      running function's variables through Interpreter::variable.
 //   4. While the debugger's trap point is armed (a breakpoint, a watch, stepping, Ctrl-C),
 //      nothing is offered: every statement must run interpreted so that it can stop.
 #pragma once
@@ -79,10 +79,11 @@ class SiteHook {
     (void)stmt, (void)in;
     return false;
   }
-  // Runs statements block[first, first + count), consecutive system-level statements, or a
-  // prefix of them, and returns how many it ran. The interpreter offers each maximal run of
-  // two or more; when the hook returns 0 it runs block[first] and offers the rest of the run
-  // (while two or more remain), and the statements it runs are offered one by one.
+  // Runs statements block[first, first + count), or a prefix of them, and returns how many
+  // it ran. The interpreter offers each maximal run of two or more consecutive statements
+  // that are system-level or assign scalars (Stmt::scalar_level), at least one of them
+  // system-level; when the hook returns 0 it runs block[first] and offers the rest of the
+  // run (while it is still one), and the statements it runs are offered one by one.
   virtual size_t run_statements(const frontend::ast::Block& block, size_t first, size_t count,
                                 Interpreter& in) {
     (void)block, (void)first, (void)count, (void)in;

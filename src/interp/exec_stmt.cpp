@@ -12,28 +12,38 @@ namespace simit::interp {
 namespace ast = frontend::ast;
 using frontend::Type;
 
+namespace {
+
+// Whether a statement may be part of a run offered to the executor (exec_run).
+bool joins_run(const ast::Stmt& s) { return s.system_level || s.scalar_level; }
+
+}  // namespace
+
 void Interpreter::exec_block(const ast::Block& b) {
   const size_t n = b.size();
   for (size_t i = 0; i < n; ++i) {
     const ast::Stmt& s = *b[i];
-    // The first statement of a run of system-level statements: the run is offered whole.
-    if (s.system_level && options_.sites && i + 1 < n && b[i + 1]->system_level &&
-        (i == 0 || !b[i - 1]->system_level)) [[unlikely]]
+    // The first statement of a run: the run is offered whole.
+    if (joins_run(s) && options_.sites && i + 1 < n && joins_run(*b[i + 1]) &&
+        (i == 0 || !joins_run(*b[i - 1]))) [[unlikely]]
       i += exec_run(b, i) - 1;
     else
       exec(s);
   }
 }
 
-// Offers the run of system-level statements that starts at b[first] (at least two) and
-// returns how many statements from `first` ran. What the executor declines runs interpreted
-// one statement at a time, and the rest of the run (while two or more remain) is offered
-// again: a run whose first statement cannot be compiled may compile from its second.
+// Offers the run that starts at b[first]: two or more consecutive statements that are
+// system-level or assign scalars, the last of them system-level (a hook that checks a run
+// compares when it is done: SiteHook::statement_done). Returns how many statements from
+// `first` ran. What the executor declines runs interpreted one statement at a time, and the
+// rest of the run (while it is still a run) is offered again: a run whose first statement
+// cannot be compiled may compile from its second.
 [[gnu::noinline]] size_t Interpreter::exec_run(const ast::Block& b, size_t first) {
-  size_t end = first + 1;
-  while (end < b.size() && b[end]->system_level) ++end;
+  size_t end = first;
+  while (end < b.size() && joins_run(*b[end])) ++end;
+  while (end > first && !b[end - 1]->system_level) --end;
   size_t i = first;
-  while (end - i >= 2) {
+  while (end >= i + 2) {
 #if SIMIT_STATEMENT_HOOK
     if (trap_->armed()) break;
 #endif
@@ -41,7 +51,7 @@ void Interpreter::exec_block(const ast::Block& b) {
       return i + ran - first;
     exec(*b[i++]);
   }
-  if (i == first) exec(*b[i++]);
+  if (i == first) exec(*b[i++]);  // no run after all: scalar statements alone, or one statement
   return i - first;
 }
 

@@ -535,8 +535,14 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
          true);
   } else {
     e->traced = trace_system(run, in);
-    while (!e->traced.trace && run.size() > 2 && e->traced.failed_at >= 2) {
-      run.resize(e->traced.failed_at);
+    // A prefix ends with a system-level statement, as runs do (--check-jit compares after
+    // it), and has two statements or more.
+    auto prefix = [&](size_t n) {
+      while (n > 0 && !run[n - 1]->system_level) --n;
+      return n;
+    };
+    while (!e->traced.trace && run.size() > 2 && prefix(e->traced.failed_at) >= 2) {
+      run.resize(prefix(e->traced.failed_at));
       s.length = run.size();
       e->traced = trace_system(run, in);
     }

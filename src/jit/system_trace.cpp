@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <set>
 #include <utility>
 
 #include "frontend/ast_walk.h"
@@ -554,10 +555,12 @@ class SystemTracer {
     auto vt = vector_slot_.find(&target);
     if (vt == vector_slot_.end()) give_up(at, "an assignment to '" + target.name + "'");
     // The controller makes such a vector before the loop runs, where the interpreter would
-    // leave it without a value when the branch does not run.
-    if (guard_ >= 0)
+    // leave it without a value when the branch does not run (unless the run assigned it
+    // before, outside any if).
+    if (guard_ >= 0 && !assigned_.count(&target))
       for (const SystemBinding::Created& c : b_.created)
         if (c.var == &target) give_up(at, "a vector first assigned inside an if");
+    if (guard_ < 0) assigned_.insert(&target);
     if (is_product(value))
       if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::VarRef>(); x && x->var == &target)
         give_up(at, "a product written into its own operand");
@@ -825,7 +828,8 @@ class SystemTracer {
   std::map<std::pair<bool, int64_t>, int> sizes_;
   std::vector<int64_t> size_value_;  // per size: the length it was traced for
   int scratch_count_ = 0;
-  std::vector<Stmt>* sink_ = nullptr;  // where scalar statements go inside an if's branch
+  std::set<const ast::Variable*> assigned_;  // vectors assigned so far outside any if
+  std::vector<Stmt>* sink_ = nullptr;        // where scalar statements go inside an if's branch
   int guard_ = -1;            // the Bool local the ops traced now run under (guarded_if), or -1
   std::vector<Stmt> starts_;  // the section's sums' +0.0 starts, first in it
 };

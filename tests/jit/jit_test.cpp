@@ -1698,11 +1698,19 @@ TEST(Jit, ALoopWithIfsOnScalarsIsCompiledAndComputesTheInterpretersBits) {
   const std::string loop = loop_stats(jit.stats, line_of(kPcg, "while going"));
   EXPECT_NE(loop.find(" compiled"), std::string::npos) << jit.stats;
   EXPECT_NE(loop.find(" 2 "), std::string::npos) << loop;  // both calls ran the kernel
+  // The set-up from `b = points.b` is in the loop's run: `var going = rz > ...` (scalars
+  // alone) joins it.
+  EXPECT_EQ(loop.find("  statements (lines " + std::to_string(line_of(kPcg, "b = points.b")) + "-"),
+            0u)
+      << jit.stats;
   for (int call = 0; call < 2; ++call) expect_same_pcg_results(in.results[call], jit.results[call]);
   // The restart's two updates of p are passes under guards; the breakdown test is an if in a
   // scalar op.
   const std::string loop_ir = jit.dump.substr(jit.dump.find("system trace"));
-  EXPECT_NE(loop_ir.find("pass over n1 when %"), std::string::npos) << loop_ir;
+  const size_t guarded = loop_ir.find(" when %");
+  ASSERT_NE(guarded, std::string::npos) << loop_ir;
+  const size_t line = loop_ir.rfind('\n', guarded) + 1;
+  EXPECT_EQ(loop_ir.compare(line, 13, "    pass over"), 0) << loop_ir.substr(line, guarded - line);
   EXPECT_NE(loop_ir.find("check false else error 0"), std::string::npos) << loop_ir;
   // The branches ran: CG took real iterations, some slow and some not.
   const std::vector<Value>& r = in.results[0];

@@ -1050,8 +1050,8 @@ struct Cg {
 std::string ProgramGen::cg_text(const Cg& c) {
   std::ostringstream s;
   const std::string in = "  ", i2 = "    ", bound = std::to_string(c.iterations);
-  // The scalars first or after the vectors: first, the vectors' set-up and the loop are one
-  // run of system-level statements (compiled as one trace); after, `var it = 0` ends the run.
+  // The scalars first or after the vectors: either way the set-up and the loop are one run
+  // of statements (compiled as one trace), starting with scalar or with vector work.
   std::ostringstream scalars;
   if (!c.own_function) scalars << in << "var " << c.it << " = 0;\n";
   if (c.extra_scalar) scalars << in << "var " << c.acc << " = 0.0;\n";
