@@ -23,8 +23,9 @@ void Interpreter::exec_block(const ast::Block& b) {
   const size_t n = b.size();
   for (size_t i = 0; i < n; ++i) {
     const ast::Stmt& s = *b[i];
-    // The first statement of a run: the run is offered whole.
-    if (joins_run(s) && options_.sites && i + 1 < n && joins_run(*b[i + 1]) &&
+    // The first statement of a run: the run is offered whole (not in a mapped function,
+    // whose element-wise writes to its results are the map's business).
+    if (joins_run(s) && options_.sites && !map_ && i + 1 < n && joins_run(*b[i + 1]) &&
         (i == 0 || !joins_run(*b[i - 1]))) [[unlikely]]
       i += exec_run(b, i) - 1;
     else
