@@ -85,7 +85,7 @@ void add_test(CLI::App& app, Commands& c) {
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
       "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...); "
-      "with --backend jit, hot maps and solver loops run compiled.\n"
+      "with --backend jit, hot maps and runs of system statements (solver loops) run compiled.\n"
       "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
       "otherwise, 2 on a usage error.\n");
 }

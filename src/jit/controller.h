@@ -52,7 +52,7 @@ class TraceController : public interp::SiteHook {
   ~TraceController() override;
 
   bool run_site(interp::SiteCall& call) override;
-  // A while loop of system-level statements (a CG loop), compiled as a whole.
+  // A while loop of system-level statements (a CG loop) outside any compiled run, as a whole.
   bool run_statement(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
   // A run of system-level statements (a CG function's set-up, loop and residual), compiled
   // as one trace; when a statement of it cannot be compiled, the statements before it.
