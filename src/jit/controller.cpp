@@ -567,6 +567,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
       } else {
         e->stats.status = "compiled";
         e->stats.compile_ms = e->kernel->compile_ms;
+        e->stats.ir_nodes = node_count(t);
         if (options_.dump && options_.dump_loop_ir) print(*options_.dump, t);
         if (options_.dump && options_.dump_llvm) *options_.dump << e->kernel->llvm_ir;
       }

@@ -459,4 +459,11 @@ std::string verify(const SystemTrace& st) {
 
 size_t node_count(const Trace& t) { return count_block(t.body); }
 
+size_t node_count(const SystemTrace& t) {
+  size_t n = t.condition ? count_expr(*t.condition) : 0;
+  for (const auto* ops : {&t.before, &t.body, &t.after})
+    for (const VectorOp& op : *ops) n += 1 + count_block(op.body);
+  return n;
+}
+
 }  // namespace simit::jit

@@ -221,5 +221,6 @@ std::string verify(const Trace& t);
 std::string verify(const SystemTrace& t);
 // Counts the nodes of a trace (for size limits and statistics).
 size_t node_count(const Trace& t);
+size_t node_count(const SystemTrace& t);  // its ops (one each) and their statements
 
 }  // namespace simit::jit

@@ -1958,6 +1958,12 @@ TEST(Jit, ARunOfStatementsCompilesAsOneTraceWithItsLoop) {
   const std::string cg = run_stats(jit.stats, kRuns, "x = x0", "residual = sqrt");
   EXPECT_NE(cg.find(" compiled"), std::string::npos) << jit.stats;
   EXPECT_NE(cg.find(" 2 "), std::string::npos) << cg;
+  // Its loop-IR size, the last number before the status.
+  std::istringstream fields(cg.substr(cg.find(')') + 1));
+  double compile_ms = 0, run_ms = 0, cpu_ms = 0;
+  long calls = 0, nodes = 0;
+  fields >> compile_ms >> calls >> run_ms >> cpu_ms >> nodes;
+  EXPECT_GT(nodes, 20) << cg;
   EXPECT_EQ(jit.stats.find("  while (line"), std::string::npos) << jit.stats;
   // The set-up's product (b - A * x) goes into a scratch vector; the residual's b'b is after.
   const size_t trace =
