@@ -21,11 +21,13 @@ bool joins_run(const ast::Stmt& s) { return s.system_level || s.scalar_level; }
 
 void Interpreter::exec_block(const ast::Block& b) {
   const size_t n = b.size();
+  // Runs are offered to a compiled executor, not in a mapped function (whose element-wise
+  // writes to its results are the map's business).
+  const bool offer = options_.sites && !map_;
   for (size_t i = 0; i < n; ++i) {
     const ast::Stmt& s = *b[i];
-    // The first statement of a run: the run is offered whole (not in a mapped function,
-    // whose element-wise writes to its results are the map's business).
-    if (joins_run(s) && options_.sites && !map_ && i + 1 < n && joins_run(*b[i + 1]) &&
+    // The first statement of a run: the run is offered whole.
+    if (offer && joins_run(s) && i + 1 < n && joins_run(*b[i + 1]) &&
         (i == 0 || !joins_run(*b[i - 1]))) [[unlikely]]
       i += exec_run(b, i) - 1;
     else

@@ -586,10 +586,12 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
 bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
   const auto* loop = stmt.as<ast::While>();
   if (!loop) return false;
-  loop_of_body_[&loop->body] = loop;
-  if (checking_run_) return false;
   auto& state = loops_[loop];
-  if (!state) state = std::make_unique<LoopState>();
+  if (!state) {
+    state = std::make_unique<LoopState>();
+    loop_of_body_[&loop->body] = loop;
+  }
+  if (checking_run_) return false;
   if (++state->runs <= options_.threshold) return false;
   LoopEntry* e = system_entry_for(*state, {loop}, in);
   if (!e) return false;
@@ -609,17 +611,17 @@ bool TraceController::in_loop_to_compile(const ast::Block& block) const {
 
 size_t TraceController::run_statements(const ast::Block& block, size_t first, size_t count,
                                        interp::Interpreter& in) {
-  for (size_t i = first; i < first + count; ++i)
-    if (const auto* loop = block[i]->as<ast::While>()) loop_of_body_[&loop->body] = loop;
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
   if (!backend_ || options_.check_finite || options_.float32) return 0;
-  if (checking_run_ || in_loop_to_compile(block)) return 0;
   auto& state = runs_[block[first].get()];
   if (!state) {
     state = std::make_unique<LoopState>();
     state->length = count;
+    for (size_t i = first; i < first + count; ++i)
+      if (const auto* loop = block[i]->as<ast::While>()) loop_of_body_[&loop->body] = loop;
   }
+  if (checking_run_ || in_loop_to_compile(block)) return 0;
   if (++state->runs <= options_.threshold) return 0;
   std::vector<const ast::Stmt*> run;
   for (size_t i = first; i < first + std::min(count, state->length); ++i)

@@ -595,18 +595,19 @@ class SystemTracer {
     }
     if (value.type && is_vector(*value.type) && length_of(value) != n)
       give_up(at, "an assignment of another length");
-    ExprRef v = component(value);
+    store_pass(slot, n, component(value), at);
+  }
+
+  // A pass over `n` components storing `value` (the visited component's) into array `slot`.
+  void store_pass(int slot, int n, ExprRef value, const SourceSpan& at) {
     VectorOp pass;
     pass.kind = VectorOp::Kind::Pass;
     pass.length = n;
     Stmt s;
     s.kind = StmtKind::Store;
     s.slot = slot;
-    Expr k;
-    k.kind = ExprKind::Element;
-    k.ty = Ty::I32;
-    s.index = make(k);
-    s.value = v;
+    s.index = element();
+    s.value = std::move(value);
     s.span = at;
     pass.body.push_back(std::move(s));
     push_op(std::move(pass), at);
@@ -656,20 +657,7 @@ class SystemTracer {
     if (const auto* f = x.as<ast::FieldRead>(); f && f->of_set)
       return field_slot_.at(field_key(*f));
     const int slot = scratch(n);
-    VectorOp pass;
-    pass.kind = VectorOp::Kind::Pass;
-    pass.length = n;
-    Stmt s;
-    s.kind = StmtKind::Store;
-    s.slot = slot;
-    Expr k;
-    k.kind = ExprKind::Element;
-    k.ty = Ty::I32;
-    s.index = make(k);
-    s.value = component(x);
-    s.span = at;
-    pass.body.push_back(std::move(s));
-    push_op(std::move(pass), at);
+    store_pass(slot, n, component(x), at);
     return slot;
   }
 
@@ -693,12 +681,17 @@ class SystemTracer {
     l.kind = ExprKind::Load;
     l.ty = Ty::F64;
     l.slot = slot;
+    l.ops = {element()};
+    l.span = at;
+    return make(std::move(l));
+  }
+
+  // The visited component of a pass.
+  static ExprRef element() {
     Expr k;
     k.kind = ExprKind::Element;
     k.ty = Ty::I32;
-    l.ops = {make(k)};
-    l.span = at;
-    return make(std::move(l));
+    return make(k);
   }
 
   void stmt(const ast::Stmt& s) {

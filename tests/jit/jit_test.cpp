@@ -1026,18 +1026,9 @@ end
   EXPECT_EQ(os.str().find("statements (lines"), std::string::npos) << os.str();
 }
 
-// A CG loop compiled whole: three loops per iteration after fusion, the interpreter's bits.
-const char* kSolver = R"(
-element Point
-  b : float;
-  d : float;
-end
-element Link
-  k : float;
-end
-extern points : set{Point};
-extern links : set{Link}(points, points);
-
+// The matrix of a chain of links between points (springs and a diagonal), for the solver
+// tests: the program declares Point (with b and d), Link (with k), points and links.
+const char* const kChainMatrix = R"(
 func stiffness(l : Link, p : (Point * 2)) -> A : matrix[points,points](float)
   A(p(0), p(0)) = l.k;
   A(p(1), p(1)) = l.k;
@@ -1048,7 +1039,21 @@ end
 func diagonal(q : Point) -> D : matrix[points,points](float)
   D(q, q) = q.d;
 end
+)";
 
+// A CG loop compiled whole: three loops per iteration after fusion, the interpreter's bits.
+const std::string kSolver = R"(
+element Point
+  b : float;
+  d : float;
+end
+element Link
+  k : float;
+end
+extern points : set{Point};
+extern links : set{Link}(points, points);
+)" + std::string(kChainMatrix) +
+                            R"(
 export func solve() -> (x : vector[points](float), iterations : int)
   A = (map stiffness to links reduce +) + (map diagonal to points reduce +);
   b = points.b;
@@ -1674,8 +1679,7 @@ std::string loop_stats(const std::string& stats, int line) {
 }
 
 // The 1-based line of the first line of `text` that contains `what`.
-int line_of(const char* text, const std::string& what) {
-  const std::string s = text;
+int line_of(const std::string& s, const std::string& what) {
   const size_t at = s.find(what);
   return 1 + static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(at), '\n'));
 }
@@ -1824,7 +1828,7 @@ TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
 // (with a product inside an expression), loop and residual compiled as one trace; a run with
 // a field write and read, cut before a statement the JIT does not compile (a matrix made by
 // the run); the interpreter's bits either way.
-const char* const kRuns = R"(element Point
+const std::string kRuns = R"(element Point
   b : float;
   d : float;
   c : float;
@@ -1834,18 +1838,8 @@ element Link
 end
 extern points : set{Point};
 extern links : set{Link}(points, points);
-
-func stiffness(l : Link, p : (Point * 2)) -> A : matrix[points,points](float)
-  A(p(0), p(0)) = l.k;
-  A(p(1), p(1)) = l.k;
-  A(p(0), p(1)) = -0.5 * l.k;
-  A(p(1), p(0)) = -0.5 * l.k;
-end
-
-func diagonal(q : Point) -> D : matrix[points,points](float)
-  D(q, q) = q.d;
-end
-
+)" + std::string(kChainMatrix) +
+                          R"(
 func cg(A : matrix[points,points](float), b : vector[points](float),
         x0 : vector[points](float)) -> (x : vector[points](float), iterations : int,
                                         residual : float)
@@ -1927,7 +1921,7 @@ RunsRun run_runs(ExecutorKind kind, bool check) {
 
 // The stats line of the trace of the statements from the line holding `first` to the line
 // holding `last`.
-std::string run_stats(const std::string& stats, const char* text, const char* first,
+std::string run_stats(const std::string& stats, const std::string& text, const char* first,
                       const char* last) {
   const std::string site = "  statements (lines " + std::to_string(line_of(text, first)) + "-" +
                            std::to_string(line_of(text, last)) + ")";
