@@ -121,6 +121,11 @@ void print_expr(std::ostream& os, const Expr& e) {
       }
       os << ")";
       return;
+    case ExprKind::Scratch:
+      os << "s" << e.slot << "[";
+      print_expr(os, *e.ops[0]);
+      os << "]";
+      return;
   }
 }
 
@@ -184,6 +189,17 @@ void print_block(std::ostream& os, const std::vector<Stmt>& body, int indent) {
         os << ") else error " << s.error;
         break;
       }
+      case StmtKind::Put:
+        os << "s" << s.slot << "[";
+        print_expr(os, *s.index);
+        os << "] = ";
+        print_expr(os, *s.value);
+        break;
+      case StmtKind::For:
+        os << "for %" << s.slot << " < " << s.n << line_of(s.span) << "\n";
+        print_block(os, s.body, indent + 1);
+        os << pad << "end\n";
+        continue;
     }
     os << line_of(s.span) << "\n";
   }
@@ -308,7 +324,15 @@ class Verifier {
       case ExprKind::Math:
         for (const ExprRef& o : e.ops) need(o, Ty::F64, math_name(static_cast<MathFn>(e.op)));
         return;
+      case ExprKind::Scratch:
+        scratch(e.slot, "scratch read");
+        if (e.ty != Ty::F64) fail("scratch read not of type f64");
+        return need(e.ops.at(0), Ty::I32, "scratch index");
     }
+  }
+  void scratch(int slot, const char* where) {
+    if (slot < 0 || static_cast<size_t>(slot) >= t_.scratch.size())
+      fail(std::string(where) + ": scratch array " + std::to_string(slot) + " out of range");
   }
   void block(const std::vector<Stmt>& body) {
     for (const Stmt& s : body) stmt(s);
@@ -361,6 +385,22 @@ class Verifier {
             return fail("decomposition result local");
           set_[l] = true;
         }
+        return;
+      }
+      case StmtKind::Put:
+        scratch(s.slot, "put");
+        need(s.index, Ty::I32, "put index");
+        return need(s.value, Ty::F64, "put");
+      case StmtKind::For: {
+        if (s.slot < 0 || static_cast<size_t>(s.slot) >= t_.locals.size() ||
+            t_.locals[s.slot] != Ty::I32)
+          return fail("for over a local that is not an i32");
+        if (s.n < 0) return fail("for with a negative trip count");
+        // What the body sets counts only inside it: its values are per iteration.
+        const std::vector<bool> before = set_;
+        set_[s.slot] = true;
+        block(s.body);
+        set_ = before;
         return;
       }
     }

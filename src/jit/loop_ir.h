@@ -1,9 +1,11 @@
 // The loop IR a traced map site is compiled from: scalar expressions and statements run once
 // per element of the target set, with every array the kernel touches named by a slot.
 //
-// A trace is straight-line scalar code: the tracer (jit/trace_site.h) has already inlined the
-// calls, unrolled the loops over constant ranges and split every small dense tensor into its
+// A trace is scalar code: the tracer (jit/trace_site.h) has already inlined the calls,
+// unrolled the loops over constant ranges and split every small dense tensor into its
 // components, so what is left is arithmetic, loads, guarded blocks and the assembly writes.
+// The one exception is a product too large to unroll (tiled dense tensors): its operands and
+// result lie in per-element scratch arrays, and it runs as loops over 12 x 12 tiles.
 // Every node keeps the source span it came from, so a failing check names the `.sim` line.
 #pragma once
 
@@ -35,14 +37,17 @@ const char* ty_name(Ty t);
   X(Binary)   /* ops[0] op ops[1]                                               */ \
   X(Compare)  /* ops[0] op ops[1], a Bool                                       */ \
   X(Select)   /* ops[0] ? ops[1] : ops[2]                                       */ \
-  X(Math)     /* C library function `op` of ops                                 */
+  X(Math)     /* C library function `op` of ops                                 */ \
+  X(Scratch)  /* component ops[0] (an I32) of the element's scratch array `slot`  */
 #define SIMIT_LOOP_STMTS(X)                                                           \
   X(SetLocal)  /* local `slot` = value                                            */  \
   X(Store)     /* array `slot` at element `index`, component `comp` = value       */  \
   X(Assemble)  /* result `slot` += (or =) value, at a vector element or a block    */ \
   X(If)        /* if value then body else orelse                                  */  \
   X(Check)     /* if not value: stop with error `error`                           */  \
-  X(Decompose) /* outs = decomposition `fn` of the n x n matrix args, or error   */
+  X(Decompose) /* outs = decomposition `fn` of the n x n matrix args, or error   */   \
+  X(Put)       /* scratch array `slot` at component `index` = value (an F64)      */  \
+  X(For)       /* for I32 local `slot` = 0 .. n - 1: body                          */
 
 enum class ExprKind : uint8_t {
 #define SIMIT_LOOP_ENUM(n) n,
@@ -85,7 +90,7 @@ struct Expr {
   ExprKind kind = ExprKind::Const;
   Ty ty = Ty::F64;
   uint8_t op = 0;  // UnOp, BinOp, CmpOp or MathFn by kind
-  int slot = 0;    // Scalar, Endpoint, Load, Local
+  int slot = 0;    // Scalar, Endpoint, Load, Local, Scratch
   int comp = 0;    // Load
   double f = 0.0;  // Const F64
   int64_t i = 0;   // Const I32 / Bool
@@ -97,15 +102,19 @@ struct Expr {
 
 struct Stmt {
   StmtKind kind = StmtKind::SetLocal;
-  int slot = 0;                    // SetLocal: local; Store: array; Assemble: result array
+  // SetLocal, For: local; Store: array; Assemble: result array; Put: scratch array
+  int slot = 0;
   int comp = 0;                    // Store / Assemble: component within the element's block
   int pair = -1;                   // Assemble into a matrix: the (row member, column member) pair
   int error = -1;                  // Check: index into Trace::errors
-  ExprRef index;                   // Store / Assemble into a vector: the element written
-  ExprRef value;                   // SetLocal, Store, Assemble: the value; If, Check: the condition
-  std::vector<Stmt> body, orelse;  // If
-  // Decompose: a decomposition of the runtime (Decomposition) of the n x n matrix `args`,
-  // row-major, into the locals `outs` (its results one after another, each row-major).
+  // Store / Assemble into a vector: the element written; Put: the component written.
+  ExprRef index;
+  // SetLocal, Store, Assemble, Put: the value; If, Check: the condition.
+  ExprRef value;
+  std::vector<Stmt> body, orelse;  // If; For (body only)
+  // For: the trip count n. Decompose: a decomposition of the runtime (Decomposition) of the
+  // n x n matrix `args`, row-major, into the locals `outs` (its results one after another,
+  // each row-major).
   int fn = 0, n = 0;
   std::vector<ExprRef> args;
   std::vector<int> outs;
@@ -157,6 +166,9 @@ struct Trace {
   std::vector<int> pairs;  // per matrix result (by result index): pairs per element, or 0
   std::vector<Stmt> body;
   std::vector<ErrorSite> errors;
+  // Components of each per-element scratch array (binary64), by slot: the operands and
+  // results of tiled products, rewritten for every element.
+  std::vector<int> scratch;
   bool writes_fields = false;  // some Store (an apply with inout fields)
   bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
 };

@@ -470,6 +470,19 @@ class Tracer {
   Sym elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at);
   Sym blocked_product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
   Sym product(const Sym& l, bool lrow, const Sym& r, bool rrow, const SourceSpan& at);
+  // Tiled tensors: a product too large to unroll runs as loops over tiles of scratch arrays.
+  struct ScratchView {
+    int array = -1;           // the scratch array the matrix's components are read from
+    bool transposed = false;  // the matrix is the transpose of the array's
+  };
+  ScratchView scratch_view(const Sym& s) const;
+  ScratchView in_scratch(const Sym& s, const SourceSpan& at);
+  Sym tiled_product(const Sym& l, const Sym& r, const SourceSpan& at);
+  ExprRef local_i32(ExprRef value, const SourceSpan& at) {
+    const int l = new_local(Ty::I32, false);
+    set_local(l, std::move(value), at);
+    return read_local(l);
+  }
   ExprRef det(const std::vector<ExprRef>& a, int n, const std::vector<int>& rows,
               const std::vector<int>& cols);
 
@@ -826,6 +839,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   if (lo == 2 && ro == 2) {
     const int m = l.dims[0], n = l.dims[1], p = r.dims[1];
     if (r.dims[0] != n) give_up(at, "matrix dimensions do not match");
+    if (static_cast<size_t>(m) * n * p > kMaxUnrolledProduct) return tiled_product(l, r, at);
     std::vector<ExprRef> c;
     for (int i = 0; i < m; ++i)
       for (int j = 0; j < p; ++j)
@@ -833,6 +847,153 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
     return tensor(Ty::F64, {m, p}, std::move(c));
   }
   give_up(at, "products of tensors of order 3 or more are not compiled");
+}
+
+ExprRef scratch_read(int array, ExprRef index, const SourceSpan& at) {
+  Expr e;
+  e.kind = ExprKind::Scratch;
+  e.ty = Ty::F64;
+  e.slot = array;
+  e.ops = {std::move(index)};
+  e.span = at;
+  return make(std::move(e));
+}
+
+ExprRef i32_add(ExprRef a, int64_t k, const SourceSpan& at) {
+  return k == 0 ? a : binary(BinOp::Add, Ty::I32, std::move(a), iconst(k), at);
+}
+ExprRef i32_mul(ExprRef a, int64_t k, const SourceSpan& at) {
+  return binary(BinOp::Mul, Ty::I32, std::move(a), iconst(k), at);
+}
+
+// The largest tile extent up to kTile that divides n, so that every tile is whole.
+int tile_extent(int n) {
+  for (int t = std::min(n, kTile); t > 1; --t)
+    if (n % t == 0) return t;
+  return 1;
+}
+
+// Whether matrix s reads its components from one scratch array in order (or transposed),
+// component k at a constant position.
+Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
+  if (s.kind != Sym::Kind::Tensor || s.blocked() || s.dims.size() != 2 || s.c.empty() ||
+      s.c[0]->kind != ExprKind::Scratch)
+    return {};
+  const int array = s.c[0]->slot;
+  if (static_cast<size_t>(trace_.scratch[static_cast<size_t>(array)]) != s.size()) return {};
+  auto at = [&](size_t k, size_t want) {
+    const Expr& e = *s.c[k];
+    return e.kind == ExprKind::Scratch && e.slot == array && is_const(e.ops[0]) &&
+           static_cast<size_t>(e.ops[0]->i) == want && !e.loose;
+  };
+  const size_t rows = static_cast<size_t>(s.dims[0]), cols = static_cast<size_t>(s.dims[1]);
+  bool straight = true, transposed = true;
+  for (size_t i = 0; i < rows; ++i)
+    for (size_t j = 0; j < cols; ++j) {
+      straight = straight && at(i * cols + j, i * cols + j);
+      transposed = transposed && at(i * cols + j, j * rows + i);
+    }
+  if (straight) return {array, false};
+  if (transposed) return {array, true};
+  return {};
+}
+
+// Matrix s in a scratch array: where it already lies, or put there now.
+Tracer::ScratchView Tracer::in_scratch(const Sym& s, const SourceSpan& at) {
+  if (ScratchView v = scratch_view(s); v.array >= 0) return v;
+  // A zero folded into a component may have the other sign (jit/zero_fold.h): the product's
+  // loops cannot follow it, so folding stops for this site.
+  if (zero_fold) ZeroFold::require_exact(s.c, "a tiled product");
+  trace_.scratch.push_back(static_cast<int>(s.size()));
+  const int array = static_cast<int>(trace_.scratch.size() - 1);
+  for (size_t k = 0; k < s.size(); ++k) {
+    Stmt put;
+    put.kind = StmtKind::Put;
+    put.slot = array;
+    put.index = iconst(static_cast<int64_t>(k));
+    put.value = s.c[k];
+    put.span = at;
+    emit(std::move(put));
+    check_size();
+  }
+  return {array, false};
+}
+
+// An m x n by n x p product too large to unroll: loops over the result's tiles (up to
+// kTile x kTile), and within a tile over k, each tile component summed from +0.0 in
+// ascending k like the unrolled product, so the bits are the same.
+Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
+  const int m = l.dims[0], n = l.dims[1], p = r.dims[1];
+  const ScratchView lv = in_scratch(l, at), rv = in_scratch(r, at);
+  if (static_cast<size_t>(m) * p > kMaxDenseComponents)
+    give_up(at, "a product of " + std::to_string(static_cast<size_t>(m) * p) +
+                    " components (more than " + std::to_string(kMaxDenseComponents) +
+                    ") is not compiled");
+  trace_.scratch.push_back(m * p);
+  const int out = static_cast<int>(trace_.scratch.size() - 1);
+  const int tr = tile_extent(m), tc = tile_extent(p);
+  // Component (i, k) of l lies at i * li + k * lk of its array; (k, j) of r at k * rk + j * rj.
+  const int li = lv.transposed ? 1 : n, lk = lv.transposed ? m : 1;
+  const int rk = rv.transposed ? 1 : p, rj = rv.transposed ? n : 1;
+  auto loop = [&](int trips, auto&& body) {
+    Stmt f;
+    f.kind = StmtKind::For;
+    f.slot = new_local(Ty::I32, false);
+    f.n = trips;
+    f.span = at;
+    std::vector<Stmt>* outer = out_;
+    out_ = &f.body;
+    body(read_local(f.slot));
+    out_ = outer;
+    emit(std::move(f));
+  };
+  auto put = [&](const ExprRef& index, ExprRef value) {
+    Stmt s;
+    s.kind = StmtKind::Put;
+    s.slot = out;
+    s.index = index;
+    s.value = std::move(value);
+    s.span = at;
+    emit(std::move(s));
+  };
+  loop(m / tr, [&](const ExprRef& ti) {
+    const ExprRef l_rows = local_i32(i32_mul(ti, static_cast<int64_t>(tr) * li, at), at);
+    const ExprRef o_rows = local_i32(i32_mul(ti, static_cast<int64_t>(tr) * p, at), at);
+    loop(p / tc, [&](const ExprRef& tj) {
+      const ExprRef r_cols = local_i32(i32_mul(tj, static_cast<int64_t>(tc) * rj, at), at);
+      const ExprRef o_tile =
+          local_i32(binary(BinOp::Add, Ty::I32, o_rows, i32_mul(tj, tc, at), at), at);
+      std::vector<ExprRef> o_at;
+      for (int a = 0; a < tr; ++a)
+        for (int b = 0; b < tc; ++b) {
+          o_at.push_back(i32_add(o_tile, static_cast<int64_t>(a) * p + b, at));
+          put(o_at.back(), fconst(0.0));
+        }
+      loop(n, [&](const ExprRef& k) {
+        const ExprRef l_at =
+            local_i32(binary(BinOp::Add, Ty::I32, l_rows, i32_mul(k, lk, at), at), at);
+        const ExprRef r_at =
+            local_i32(binary(BinOp::Add, Ty::I32, r_cols, i32_mul(k, rk, at), at), at);
+        std::vector<ExprRef> lc, rc;
+        for (int a = 0; a < tr; ++a)
+          lc.push_back(scratch_read(lv.array, i32_add(l_at, static_cast<int64_t>(a) * li, at), at));
+        for (int b = 0; b < tc; ++b)
+          rc.push_back(scratch_read(rv.array, i32_add(r_at, static_cast<int64_t>(b) * rj, at), at));
+        for (int a = 0; a < tr; ++a)
+          for (int b = 0; b < tc; ++b) {
+            const ExprRef& o = o_at[static_cast<size_t>(a) * tc + b];
+            put(o, binary(BinOp::Add, Ty::F64, scratch_read(out, o, at),
+                          binary(BinOp::Mul, Ty::F64, lc[static_cast<size_t>(a)],
+                                 rc[static_cast<size_t>(b)], at),
+                          at));
+          }
+      });
+    });
+  });
+  check_size();
+  std::vector<ExprRef> c;
+  for (int k = 0; k < m * p; ++k) c.push_back(scratch_read(out, iconst(k), at));
+  return tensor(Ty::F64, {m, p}, std::move(c));
 }
 
 // Products of blocked tensors are products of their unblocked forms, blocked level by level

@@ -14,9 +14,15 @@ inline constexpr int kMaxFailures = 3;
 // Statements a trace may hold after inlining and unrolling.
 inline constexpr size_t kMaxTraceStatements = 200000;
 // Components a dense tensor of a traced function may have, blocked or not: the tracer makes
-// each one a value of its own. The fem Hessian's element matrix, 4 x 4 blocks of 3 x 3, has
-// 144; a larger tensor leaves its site interpreted.
-inline constexpr size_t kMaxDenseComponents = 144;
+// each one a value of its own (the fem Hessian's element matrix, 4 x 4 blocks of 3 x 3, has
+// 144; a hexahedron's 24 x 24 element matrix 576). A larger tensor leaves its site
+// interpreted.
+inline constexpr size_t kMaxDenseComponents = 1024;
+// Multiplications a matrix product may unroll (a 12 x 12 by 12 x 12 product has 1728). A
+// larger product is tiled: its operands and result lie in per-element scratch arrays, and it
+// runs as loops over kTile x kTile tiles of its result (loop_ir.h).
+inline constexpr size_t kMaxUnrolledProduct = 1728;
+inline constexpr int kTile = 12;
 // Calls inlined inside one another.
 inline constexpr int kMaxInlineDepth = 32;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).

@@ -15,7 +15,7 @@ using Inputs = std::set<int>;
 
 class Deciders {
  public:
-  explicit Deciders(const Trace& t) : t_(t), locals_(t.locals.size()) {}
+  explicit Deciders(const Trace& t) : t_(t), locals_(t.locals.size()), scratch_(t.scratch.size()) {}
 
   Inputs run() {
     // Locals assigned in branches may be read before a later assignment adds to what they
@@ -36,6 +36,8 @@ class Deciders {
     if (e.kind == ExprKind::Load) in.insert(e.slot);
     if (e.kind == ExprKind::Scalar) in.insert(-1 - e.slot);
     if (e.kind == ExprKind::Local) in = locals_[static_cast<size_t>(e.slot)];
+    // A scratch array's component depends on everything put into the array.
+    if (e.kind == ExprKind::Scratch) in = scratch_[static_cast<size_t>(e.slot)];
     for (const ExprRef& op : e.ops) {
       const Inputs& o = of(*op);
       in.insert(o.begin(), o.end());
@@ -78,6 +80,12 @@ class Deciders {
           for (int out : s.outs) add(locals_[static_cast<size_t>(out)], in);
           break;
         }
+        case StmtKind::Put:
+          add(scratch_[static_cast<size_t>(s.slot)], of(*s.value));
+          add(scratch_[static_cast<size_t>(s.slot)], of(*s.index));
+          add(scratch_[static_cast<size_t>(s.slot)], control);
+          break;
+        case StmtKind::For: walk(s.body, control); break;  // trip counts are constants
         case StmtKind::Store:
         case StmtKind::Check: break;
       }
@@ -85,7 +93,7 @@ class Deciders {
   }
 
   const Trace& t_;
-  std::vector<Inputs> locals_;
+  std::vector<Inputs> locals_, scratch_;
   std::unordered_map<const Expr*, Inputs> memo_;
   Inputs deciders_;
   bool grew_ = false;

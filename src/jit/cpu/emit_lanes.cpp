@@ -14,7 +14,10 @@ namespace simit::jit::cpu {
 // Reads are speculative across branches: loads of fields and arguments at the element's own
 // endpoints are always in range, and no operation traps.
 bool lanes_fit(const Trace& t) {
-  if (kLanes <= 1 || t.writes_fields || t.local_mutable.size() < t.locals.size()) return false;
+  // Tiled tensors' scratch arrays and loops are one element's: not in lanes.
+  if (kLanes <= 1 || t.writes_fields || !t.scratch.empty() ||
+      t.local_mutable.size() < t.locals.size())
+    return false;
   for (bool m : t.local_mutable)
     if (m) return false;
   std::function<bool(const std::vector<Stmt>&)> fits = [&](const std::vector<Stmt>& body) {

@@ -122,6 +122,7 @@ Value* Emitter::expr(const Expr& e) {
     case ExprKind::Local:
       if (!locals_[e.slot]) return ssa_[e.slot];
       return b_.CreateLoad(type(e.ty), locals_[e.slot]);
+    case ExprKind::Scratch: return b_.CreateLoad(b_.getDoubleTy(), scratch_at(e.slot, *e.ops[0]));
     default: {
       std::vector<Value*> args;
       for (const ExprRef& o : e.ops) args.push_back(expr(*o));
@@ -176,7 +177,19 @@ void Emitter::stmt(const Stmt& s) {
     }
     case StmtKind::Decompose: return decompose(s);
     case StmtKind::Check: return fail_unless(expr(*s.value), s.error, "check");
+    case StmtKind::Put: b_.CreateStore(expr(*s.value), scratch_at(s.slot, *s.index)); return;
+    case StmtKind::For:
+      loop(b_.getInt32(0), b_.getInt32(static_cast<uint32_t>(s.n)), [&](Value* i) {
+        ssa_[s.slot] = i;
+        block(s.body);
+      });
+      return;
   }
+}
+
+Value* Emitter::scratch_at(int slot, const Expr& index) {
+  return b_.CreateInBoundsGEP(b_.getDoubleTy(), scratch_[static_cast<size_t>(slot)],
+                              b_.CreateSExt(expr(index), b_.getInt64Ty()));
 }
 
 // Where the element's block (or vector element) of an Assemble statement starts.
@@ -326,6 +339,11 @@ llvm::Function* Emitter::run(const std::string& name) {
   for (size_t i = 0; i < local_types_.size(); ++i) {
     const bool slot = i >= t_->local_mutable.size() || t_->local_mutable[i];
     locals_.push_back(slot ? b_.CreateAlloca(type(local_types_[i])) : nullptr);
+  }
+  for (int n : t_->scratch) {
+    llvm::AllocaInst* a = b_.CreateAlloca(b_.getDoubleTy(), b_.getInt32(static_cast<uint32_t>(n)));
+    a->setAlignment(llvm::Align(32));
+    scratch_.push_back(a);
   }
 
   auto* head = llvm::BasicBlock::Create(ctx_, "element", fn_);

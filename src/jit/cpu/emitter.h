@@ -71,6 +71,8 @@ class Emitter {
   Value* combine(const Expr& e, const std::vector<Value*>& args);
   Value* expr(const Expr& e);
   Value* load(const Expr& e, Value* index);
+  // Address of a component of a per-element scratch array (a tiled tensor).
+  Value* scratch_at(int slot, const Expr& index);
   // Element e's index and its endpoints become the values Element and Endpoint read.
   void visit(Value* e);
   // Lanes (a map kernel computing kLanes elements at once; see lanes_fit).
@@ -124,7 +126,8 @@ class Emitter {
   IRBuilder<> b_;
   llvm::Function* fn_ = nullptr;
   std::vector<Value*> arrays_, scalars_, locals_, endpoints_;
-  std::vector<Value*> ssa_;  // values of the locals set once
+  std::vector<Value*> ssa_;      // values of the locals set once
+  std::vector<Value*> scratch_;  // the scratch arrays, in the function's entry block
   Value* element_ = nullptr;
   Value* element_wide_ = nullptr;  // element_ as an i64, where a pass computed it so
   Value* failed_ = nullptr;
