@@ -242,6 +242,7 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
   if (!s.gave_up.empty()) return nullptr;
   auto e = std::make_unique<Entry>();
   e->stats.site = s.site;
+  e->stats.line = call.at.valid() ? static_cast<int>(call.at.start().line) : 0;
   e->stats.key = key;
   auto give_up = [&](std::string why) {
     e->stats.status = std::move(why);
@@ -577,6 +578,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
   e->stats.site = run.size() == 1 && first.is<ast::While>()
                       ? "while (line " + std::to_string(first.span.start().line) + ")"
                       : "statements (lines " + run_lines(run) + ")";
+  e->stats.line = static_cast<int>(first.span.start().line);
   e->run = std::move(run);
   LoopEntry* out = e.get();
   s.entries.push_back(std::move(e));
@@ -1018,6 +1020,9 @@ std::vector<TraceStats> TraceController::stats() const {
   for (const auto* states : {&runs_, &loops_})
     for (const auto& [at, s] : *states)
       for (const auto& e : s->entries) out.push_back(e->stats);
+  std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
+    return a.line != b.line ? a.line < b.line : a.site < b.site;
+  });
   return out;
 }
 

@@ -44,6 +44,7 @@ struct TraceStats {
   double cpu_ms = 0.0;  // this thread's CPU time in them (steadier on a busy machine)
   size_t ir_nodes = 0;
   std::string note;  // e.g. the fraction of matrix blocks a loop's products stream
+  int line = 0;      // the site's first line: stats() lists the sites in source order
 };
 
 class TraceController : public interp::SiteHook {

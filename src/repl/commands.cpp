@@ -31,6 +31,7 @@ const CommandHelp kCommands[] = {
     {"time", ":time STMT", "run a statement and print how long it took"},
     {"run", ":run FUNC [N]", "run a function without parameters N times (default 1)"},
     {"set", ":set OPTION VALUE", "float32 on|off, check_finite on|off, print_limit N, backend interpreter|jit"},
+    {"jit", ":jit", "what the JIT compiled for :run (backend jit): site, compile ms, calls, ms"},
     {"reset", ":reset", "forget every declaration, variable and scene"},
     {"quit", ":quit", "leave (Ctrl-D too)"},
 };
@@ -103,6 +104,7 @@ void Session::command(const std::string& line) {
     decls_.clear();
     vars_.clear();
     names_.clear();
+    drop_run_engine();
     scene_.reset();
     refresh_program();
   } else if (cmd == "type") {
@@ -124,6 +126,8 @@ void Session::command(const std::string& line) {
     run_command(arg);
   } else if (cmd == "set") {
     set_option(arg);
+  } else if (cmd == "jit") {
+    jit_command();
   }
 }
 
@@ -174,6 +178,7 @@ void Session::load_files(const std::string& cmd, const std::string& arg) {
   declarations("");  // refreshes the names and the program
   if (cmd == "reload" && scene_) {
     std::string path = scene_->path;
+    drop_run_engine();
     scene_.reset();
     scene(path);
   }
@@ -197,6 +202,7 @@ void Session::scene(const std::string& path) {
     load_files("load", data->program_path);
     if (std::find(files_.begin(), files_.end(), data->program_path) == files_.end()) return;
   }
+  drop_run_engine();
   scene_ = std::move(data);
   out_ << "scene " << path << ":";
   for (const auto& [name, set] : scene_->sets) out_ << " " << name << " (" << set->size() << ")";
@@ -226,6 +232,7 @@ void Session::set_option(const std::string& arg) {
       if (scene_) {
         out_ << "float32 " << (flag ? "on" : "off") << ": reloading the scene (fields start over)\n";
         std::string path = scene_->path;
+        drop_run_engine();
         scene_.reset();
         scene(path);
       }
@@ -288,7 +295,19 @@ void Session::run_command(const std::string& arg) {
     report(*c, offset);
     return;
   }
-  run_function(*c, w[0], times);
+  std::string key = c->source->text();
+  key += std::string(1, '\0') + (options_.float32 ? " float32" : "") +
+         (options_.check_finite ? " check_finite" : "") + " " + options_.backend;
+  if (key != run_.key || !run_.engine) run_ = RunEngine{std::move(key), std::move(c), nullptr};
+  run_function(*run_.program, w[0], times);
+}
+
+void Session::jit_command() {
+  if (!run_.engine || options_.backend != "jit") {
+    out_ << "no traces: :set backend jit, then :run a function\n";
+    return;
+  }
+  run_.engine->print_jit_stats(out_);
 }
 
 std::vector<std::string> Session::completions(const std::string& prefix) const {

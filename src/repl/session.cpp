@@ -224,9 +224,15 @@ void Session::bind_scene(api::Engine& in, const ast::Program& program) {
     if (g->kind != ast::Variable::Kind::Extern) continue;
     for (auto& [name, set] : scene_->sets)
       if (name == g->name) in.bind_set(*g, *set);
-    for (auto& [name, value] : scene_->tensors)
-      if (name == g->name) in.set_global(*g, value);
   }
+  bind_scene_tensors(in, program);
+}
+
+void Session::bind_scene_tensors(api::Engine& in, const ast::Program& program) {
+  if (!scene_) return;
+  for (const ast::Variable* g : program.globals)
+    for (auto& [name, value] : scene_->tensors)
+      if (g->kind == ast::Variable::Kind::Extern && name == g->name) in.set_global(*g, value);
 }
 
 void Session::keep_scene_tensors(const api::Engine& in, const ast::Program& program) {
@@ -318,7 +324,7 @@ void Session::run_function(const frontend::Compilation& c, const std::string& na
     return;
   }
   using Clock = std::chrono::steady_clock;
-  std::unique_ptr<api::Engine> in;  // one for all runs: it keeps matrix patterns
+  std::unique_ptr<api::Engine>& in = run_.engine;
   for (int k = 1; k <= times; ++k) {
     std::vector<interp::Value> res;
     const auto t0 = Clock::now();
@@ -326,6 +332,8 @@ void Session::run_function(const frontend::Compilation& c, const std::string& na
       if (!in) {
         in = std::make_unique<api::Engine>(*c.program, run_options());
         bind_scene(*in, *c.program);
+      } else if (k == 1) {
+        bind_scene_tensors(*in, *c.program);  // statements at the prompt may have set them
       }
       try {
         res = in->call(*f, {});
@@ -336,6 +344,7 @@ void Session::run_function(const frontend::Compilation& c, const std::string& na
       keep_scene_tensors(*in, *c.program);
     });
     if (!ran) {
+      in.reset();
       if (times > 1) err_ << ":run: stopped in run " << k << " of " << times << "\n";
       return;
     }

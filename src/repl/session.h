@@ -86,8 +86,10 @@ class Session {
   void refresh_program();
   void restore_program();
   void bind_scene(api::Engine& engine, const frontend::ast::Program& program);
+  void bind_scene_tensors(api::Engine& engine, const frontend::ast::Program& program);
   void keep_scene_tensors(const api::Engine& engine, const frontend::ast::Program& program);
-  // Runs `func` (no parameters) of `c` `times` times; prints its results after each run.
+  // Runs `func` (no parameters) of `c` `times` times on the shared `:run` engine; prints its
+  // results after each run.
   void run_function(const frontend::Compilation& c, const std::string& name, int times);
 
   // commands.cpp: the `:` commands
@@ -98,6 +100,7 @@ class Session {
   void set_option(const std::string& arg);
   void time_statement(const std::string& arg);
   void run_command(const std::string& arg);
+  void jit_command();
 
   // inspect.cpp: :sets, :fields, :print over the bound scene
   void list_sets();
@@ -123,6 +126,17 @@ class Session {
   Debugger::LineSource line_source_;
   Debugger debugger_;
   std::unique_ptr<frontend::Compilation> program_;  // see refresh_program
+  // The engine `:run` commands share while the program text, the scene and the options stay
+  // the same: what the JIT compiled and the matrix patterns carry over from one `:run` to
+  // the next. A run that fails drops it.
+  struct RunEngine {
+    std::string key;
+    std::unique_ptr<frontend::Compilation> program;
+    std::unique_ptr<api::Engine> engine;
+  };
+  RunEngine run_;
+  // Before the scene changes: the engine holds the scene's sets.
+  void drop_run_engine() { run_ = RunEngine{}; }
 };
 
 }  // namespace simit::repl
