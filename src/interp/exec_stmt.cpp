@@ -69,9 +69,10 @@ void Interpreter::exec(const ast::Stmt& s) {
   exec_node(s);
 }
 
-// Out of line: only programs run with a compiled executor get here.
+// Out of line: only programs run with a compiled executor get here. A statement alone is
+// not offered in a mapped function (its writes to its results are the map's).
 [[gnu::noinline]] void Interpreter::exec_offered(const ast::Stmt& s) {
-  if (options_.sites->run_statement(s, *this)) return;
+  if ((!map_ || s.is<ast::While>()) && options_.sites->run_statement(s, *this)) return;
   exec_node(s);
   options_.sites->statement_done(s, *this);
 }

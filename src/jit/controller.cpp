@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <functional>
 #include <sstream>
 
 #include "interp/interpreter.h"
@@ -119,6 +120,15 @@ std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& 
       out.push_back(v.kind() == Value::Kind::Matrix && v.matrix() ? v.matrix()->rows() : -1);
     else
       out.push_back(v.is_tensor() ? static_cast<int64_t>(v.tensor().size()) : -1);
+  }
+  // A kernel reads each field in the storage it was traced for (binary32 or binary64).
+  for (const SystemBinding::Array& a : b.arrays) {
+    if (a.part != SystemBinding::Array::Part::Field) continue;
+    const Value& v = in.variable(*a.var);
+    const bool bound = v.kind() == Value::Kind::Set && v.binding() && v.binding()->set;
+    out.push_back(
+        bound ? std::as_const(*v.binding()->set).field(v.binding()->fields[a.field]).type().single
+              : -1);
   }
   return out;
 }
@@ -530,12 +540,10 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
   };
   if (!backend_) {
     fail("no code generator: " + backend_error_, true);
-  } else if (options_.check_finite || options_.float32) {
-    fail(options_.check_finite ? "--check-finite runs system statements in the interpreter"
-                               : "float32 runs system statements in the interpreter",
-         true);
+  } else if (options_.check_finite) {
+    fail("--check-finite runs system statements in the interpreter", true);
   } else {
-    e->traced = trace_system(run, in);
+    e->traced = trace_system(run, in, options_.float32);
     // A prefix ends with a system-level statement, as runs do (--check-jit compares after
     // it), and has two statements or more.
     auto prefix = [&](size_t n) {
@@ -545,7 +553,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
     while (!e->traced.trace && run.size() > 2 && prefix(e->traced.failed_at) >= 2) {
       run.resize(prefix(e->traced.failed_at));
       s.length = run.size();
-      e->traced = trace_system(run, in);
+      e->traced = trace_system(run, in, options_.float32);
     }
     if (!e->traced.trace) {
       fail(e->traced.reason, true);
@@ -575,9 +583,10 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
     }
   }
   const ast::Stmt& first = *run.front();
-  e->stats.site = run.size() == 1 && first.is<ast::While>()
-                      ? "while (line " + std::to_string(first.span.start().line) + ")"
-                      : "statements (lines " + run_lines(run) + ")";
+  const std::string line = std::to_string(first.span.start().line);
+  e->stats.site = run.size() > 1           ? "statements (lines " + run_lines(run) + ")"
+                  : first.is<ast::While>() ? "while (line " + line + ")"
+                                           : "statement (line " + line + ")";
   e->stats.line = static_cast<int>(first.span.start().line);
   e->run = std::move(run);
   LoopEntry* out = e.get();
@@ -587,11 +596,11 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
 
 bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
   const auto* loop = stmt.as<ast::While>();
-  if (!loop) return false;
+  if (!loop) return run_alone(stmt, in);
   auto& state = loops_[loop];
   if (!state) {
     state = std::make_unique<LoopState>();
-    loop_of_body_[&loop->body] = loop;
+    note_loop(*loop);
   }
   if (checking_run_) return false;
   if (++state->runs <= options_.threshold) return false;
@@ -606,22 +615,64 @@ bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& 
 
 bool TraceController::in_loop_to_compile(const ast::Block& block) const {
   const auto loop = loop_of_body_.find(&block);
-  if (loop == loop_of_body_.end()) return false;
-  const auto state = loops_.find(loop->second);
+  return loop != loop_of_body_.end() && may_compile(*loop->second);
+}
+
+bool TraceController::may_compile(const ast::While& loop) const {
+  const auto state = loops_.find(&loop);
   return state == loops_.end() || state->second->gave_up.empty();
+}
+
+void TraceController::note_loop(const ast::While& loop) {
+  loop_of_body_[&loop.body] = &loop;
+  std::function<void(const ast::Block&)> walk = [&](const ast::Block& b) {
+    for (const auto& s : b) {
+      loop_of_stmt_.emplace(s.get(), &loop);
+      if (const auto* i = s->as<ast::If>()) {
+        for (const ast::Block& branch : i->branches) walk(branch);
+        walk(i->else_branch);
+      } else if (const auto* w = s->as<ast::While>()) {
+        walk(w->body);
+      }
+    }
+  };
+  walk(loop.body);
+}
+
+// A system statement that is no part of a run (`verts.x = verts.x + h * verts.v`): a run of
+// one, unless it lies in a loop that may itself still compile. One that does not compile is
+// left out of the stats (the interpreter runs most system statements, matrix sums among them).
+bool TraceController::run_alone(const ast::Stmt& stmt, interp::Interpreter& in) {
+  if (!backend_ || options_.check_finite || checking_run_) return false;
+  if (auto loop = loop_of_stmt_.find(&stmt);
+      loop != loop_of_stmt_.end() && may_compile(*loop->second))
+    return false;
+  auto& state = runs_[&stmt];
+  if (!state) {
+    state = std::make_unique<LoopState>();
+    state->length = 1;
+  }
+  if (++state->runs <= options_.threshold) return false;
+  LoopEntry* e = system_entry_for(*state, {&stmt}, in);
+  if (!e) return false;
+  if (options_.check) {
+    check_system(*e, in);
+    return false;
+  }
+  return run_loop_kernel(*e, in);
 }
 
 size_t TraceController::run_statements(const ast::Block& block, size_t first, size_t count,
                                        interp::Interpreter& in) {
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
-  if (!backend_ || options_.check_finite || options_.float32) return 0;
+  if (!backend_ || options_.check_finite) return 0;
   auto& state = runs_[block[first].get()];
   if (!state) {
     state = std::make_unique<LoopState>();
     state->length = count;
     for (size_t i = first; i < first + count; ++i)
-      if (const auto* loop = block[i]->as<ast::While>()) loop_of_body_[&loop->body] = loop;
+      if (const auto* loop = block[i]->as<ast::While>()) note_loop(*loop);
   }
   if (checking_run_ || in_loop_to_compile(block)) return 0;
   if (++state->runs <= options_.threshold) return 0;
@@ -647,6 +698,22 @@ using Saved = std::vector<std::pair<const ast::Variable*, Value>>;
 runtime::Field& bound_field(const SystemBinding::Array& a, interp::Interpreter& in) {
   const interp::SetBinding& b = *in.variable(*a.var).binding();
   return b.set->field(b.fields[a.field]);
+}
+
+// The first n components of a float field as binary64 (binary32 storage widens exactly),
+// and back (binary32 storage takes values that came from it, exactly).
+std::vector<double> field_values(const runtime::Field& f, size_t n) {
+  if (!f.type().single) return std::vector<double>(f.data<double>(), f.data<double>() + n);
+  const float* v = f.data<float>();
+  return std::vector<double>(v, v + n);
+}
+void set_field_values(runtime::Field& f, const std::vector<double>& values) {
+  if (!f.type().single) {
+    std::copy(values.begin(), values.end(), f.data<double>());
+    return;
+  }
+  float* v = f.data<float>();
+  for (size_t k = 0; k < values.size(); ++k) v[k] = static_cast<float>(values[k]);
 }
 
 // The variables a loop writes, as shared copies: a vector the kernel writes is copied by
@@ -726,8 +793,12 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
         case Part::Field: {
           runtime::Field& f = bound_field(b.arrays[i], in);
           // A write counts in the field's write version (and unshares its array).
-          arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<double>())
-                                          : const_cast<double*>(std::as_const(f).data<double>());
+          if (f.type().single)
+            arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<float>())
+                                            : const_cast<float*>(std::as_const(f).data<float>());
+          else
+            arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<double>())
+                                            : const_cast<double*>(std::as_const(f).data<double>());
           break;
         }
         case Part::Scratch: break;
@@ -917,10 +988,9 @@ bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   for (size_t i = 0; i < b.arrays.size(); ++i) {
     if (!t.arrays[i].written || b.arrays[i].part != SystemBinding::Array::Part::Field) continue;
     const runtime::Field& f = bound_field(b.arrays[i], in);
-    const double* v = f.data<double>();
     const size_t n =
         static_cast<size_t>(in.variable(*b.arrays[i].var).binding()->set->size()) * f.components();
-    fields.push_back(Pending::RunField{&f, t.arrays[i].name, std::vector<double>(v, v + n)});
+    fields.push_back(Pending::RunField{&f, t.arrays[i].name, field_values(f, n)});
   }
   if (!run_loop_kernel(e, in)) return false;  // an error: the interpreter reports it
   auto p = std::make_unique<Pending>();
@@ -932,9 +1002,8 @@ bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   }
   for (Pending::RunField& f : fields) {
     runtime::Field& field = const_cast<runtime::Field&>(*f.field);
-    double* now = field.data<double>();
-    std::vector<double> compiled(now, now + f.values.size());
-    std::copy(f.values.begin(), f.values.end(), now);
+    std::vector<double> compiled = field_values(field, f.values.size());
+    set_field_values(field, f.values);
     f.values = std::move(compiled);
     p->run_fields.push_back(std::move(f));
   }
@@ -948,7 +1017,7 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter&
   checking_run_ = nullptr;
   const std::unique_ptr<Pending> p = std::move(pending_);
   for (const Pending::RunField& f : p->run_fields) {
-    const double* got = f.field->data<double>();
+    const std::vector<double> got = field_values(*f.field, f.values.size());
     const size_t per = std::max<size_t>(f.field->components(), 1);
     for (size_t c = 0; c < f.values.size(); ++c)
       if (!same_bits(got[c], f.values[c]))
@@ -1019,7 +1088,9 @@ std::vector<TraceStats> TraceController::stats() const {
     }
   for (const auto* states : {&runs_, &loops_})
     for (const auto& [at, s] : *states)
-      for (const auto& e : s->entries) out.push_back(e->stats);
+      for (const auto& e : s->entries)
+        if (e->kernel || e->run.size() > 1 || e->run.front()->is<ast::While>())
+          out.push_back(e->stats);
   std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
     return a.line != b.line ? a.line < b.line : a.site < b.site;
   });

@@ -98,6 +98,12 @@ class TraceController : public interp::SiteHook {
   // itself may still be (a cold loop's iterations would compile its body for nothing).
   std::map<const frontend::ast::Block*, const frontend::ast::While*> loop_of_body_;
   bool in_loop_to_compile(const frontend::ast::Block& block) const;
+  bool may_compile(const frontend::ast::While& loop) const;
+  // Every statement nested in a loop's body, to its loop: a statement alone is not compiled
+  // there while the loop may be.
+  std::map<const frontend::ast::Stmt*, const frontend::ast::While*> loop_of_stmt_;
+  void note_loop(const frontend::ast::While& loop);
+  bool run_alone(const frontend::ast::Stmt& stmt, interp::Interpreter& in);
   // While a checked run's statements run interpreted, up to this one, nothing is offered.
   const frontend::ast::Stmt* checking_run_ = nullptr;
 };

@@ -468,7 +468,8 @@ void print(std::ostream& os, const Trace& t) {
 void print(std::ostream& os, const SystemTrace& t) {
   os << "system trace " << t.name << "\n";
   for (size_t i = 0; i < t.arrays.size(); ++i)
-    os << "  a" << i << ": " << t.arrays[i].name << " " << ty_name(t.arrays[i].ty)
+    os << "  a" << i << ": " << t.arrays[i].name << " "
+       << (t.arrays[i].single ? "f32" : ty_name(t.arrays[i].ty))
        << (t.arrays[i].written ? " written" : "") << "\n";
   for (size_t i = 0; i < t.sizes.size(); ++i) os << "  n" << i << ": " << t.sizes[i] << "\n";
   if (!t.before.empty()) {

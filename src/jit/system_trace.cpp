@@ -43,8 +43,8 @@ bool is_row(const ast::Expr& e) { return e.type && is_vector(*e.type) && e.type-
 
 class SystemTracer {
  public:
-  SystemTracer(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in)
-      : run_(run), in_(in) {}
+  SystemTracer(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in, bool float32)
+      : run_(run), in_(in), float32_(float32) {}
 
   TracedSystem run() {
     TracedSystem out;
@@ -233,8 +233,8 @@ class SystemTracer {
     give_up(at, "'" + v.name + "' of type " + frontend::to_string(t) + " in a compiled loop");
   }
 
-  // `S.f`, a field of a set as a vector: its array, read or written in place (a binary64
-  // field only; the interpreter converts a binary32 one at each read).
+  // `S.f`, a field of a set as a vector: its array, read or written in place (a binary32
+  // field widened at each read and rounded at each write, as the interpreter converts it).
   void note_field(const ast::FieldRead& f) {
     const auto* set = f.base->as<ast::VarRef>();
     if (!set) give_up(f.span, "a field of a set expression");
@@ -245,10 +245,12 @@ class SystemTracer {
       give_up(f.span, "set '" + set->var->name + "' is not bound");
     const interp::SetBinding& b = *sv.binding();
     const runtime::Field& field = std::as_const(*b.set).field(b.fields[f.field_index]);
-    if (field.type().kind != runtime::ComponentKind::Float || field.type().single)
-      give_up(f.span, "field '" + f.field + "' is not stored as binary64 floats");
+    if (field.type().kind != runtime::ComponentKind::Float)
+      give_up(f.span, "field '" + f.field + "' does not hold floats");
+    const bool single = field.type().single;
     const int slot =
         array(set->var, SystemBinding::Array::Part::Field, Ty::F64, set->var->name + "." + f.field);
+    t_.arrays[static_cast<size_t>(slot)].single = single;
     b_.arrays.back().field = f.field_index;
     field_slot_[key] = slot;
     const int64_t n = static_cast<int64_t>(b.set->size()) * field.components();
@@ -378,6 +380,14 @@ class SystemTracer {
     return local(t, Ty::F64);
   }
 
+  // An operator's, call's or literal's value as the interpreter's float32 mode leaves it.
+  ExprRef rounded(ExprRef v, const SourceSpan& at) const {
+    if (!float32_ || v->ty != Ty::F64) return v;
+    if (v->kind == ExprKind::Const) return fconst(static_cast<double>(static_cast<float>(v->f)));
+    return node(ExprKind::Unary, Ty::F64, static_cast<uint8_t>(UnOp::Round32), {std::move(v)}, at);
+  }
+  bool single(int slot) const { return t_.arrays[static_cast<size_t>(slot)].single; }
+
   Ty scalar_ty(const ast::Expr& e) {
     if (!e.type || e.type->kind != Type::Kind::Scalar)
       give_up(e.span, "a non-scalar where a scalar was expected");
@@ -394,7 +404,7 @@ class SystemTracer {
     switch (e.kind) {
       case ast::NodeKind::IntLit:
         return iconst(static_cast<int32_t>(e.as<ast::IntLit>()->value), Ty::I32);
-      case ast::NodeKind::FloatLit: return fconst(e.as<ast::FloatLit>()->value);
+      case ast::NodeKind::FloatLit: return rounded(fconst(e.as<ast::FloatLit>()->value), e.span);
       case ast::NodeKind::BoolLit: return iconst(e.as<ast::BoolLit>()->value, Ty::Bool);
       case ast::NodeKind::VarRef: {
         const ast::Variable& v = *e.as<ast::VarRef>()->var;
@@ -423,7 +433,7 @@ class SystemTracer {
         const auto& b = *e.as<ast::Binary>();
         using Op = ast::Binary::Op;
         if (b.op == Op::Mul && is_row(*b.lhs) && b.rhs->type && is_vector(*b.rhs->type))
-          return dot(*b.lhs, *b.rhs, e.span);
+          return rounded(dot(*b.lhs, *b.rhs, e.span), e.span);
         ExprRef l = scalar(*b.lhs), r = scalar(*b.rhs);
         if (l->ty != r->ty) give_up(e.span, "operands of different types");
         BinOp op;
@@ -442,7 +452,8 @@ class SystemTracer {
           case Op::Xor: op = BinOp::Xor; break;
           default: give_up(e.span, "this operator in a compiled loop");
         }
-        return node(ExprKind::Binary, l->ty, static_cast<uint8_t>(op), {l, r}, e.span);
+        return rounded(node(ExprKind::Binary, l->ty, static_cast<uint8_t>(op), {l, r}, e.span),
+                       e.span);
       }
       case ast::NodeKind::Compare: {
         const auto& c = *e.as<ast::Compare>();
@@ -463,10 +474,13 @@ class SystemTracer {
       case ast::NodeKind::Call: {
         const auto& c = *e.as<ast::Call>();
         using frontend::Intrinsic;
-        if (c.intrinsic == Intrinsic::Dot) return dot(*c.args[0], *c.args[1], e.span);
+        if (c.intrinsic == Intrinsic::Dot)
+          return rounded(dot(*c.args[0], *c.args[1], e.span), e.span);
         if (c.intrinsic == Intrinsic::Norm) {
           ExprRef d = dot(*c.args[0], *c.args[0], e.span);
-          return node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sqrt), {d}, e.span);
+          return rounded(
+              node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sqrt), {d}, e.span),
+              e.span);
         }
         MathFn f;
         switch (c.intrinsic) {
@@ -484,7 +498,9 @@ class SystemTracer {
           args.push_back(scalar(*a));
           if (args.back()->ty != Ty::F64) give_up(e.span, "a math function of a non-float");
         }
-        return node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(f), std::move(args), e.span);
+        return rounded(
+            node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(f), std::move(args), e.span),
+            e.span);
       }
       default: break;
     }
@@ -498,6 +514,7 @@ class SystemTracer {
       case ast::NodeKind::VarRef: {
         auto it = vector_slot_.find(e.as<ast::VarRef>()->var);
         if (it == vector_slot_.end()) give_up(e.span, "an unknown vector");
+        check_has_value(*e.as<ast::VarRef>()->var, e.span);
         return load(it->second, e.span);
       }
       case ast::NodeKind::FieldRead:
@@ -538,7 +555,8 @@ class SystemTracer {
         ExprRef l = component(*b.lhs), r = component(*b.rhs);
         if (l->ty != Ty::F64 || r->ty != Ty::F64)
           give_up(e.span, "a vector operation on non-floats");
-        return node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(op), {l, r}, e.span);
+        return rounded(node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(op), {l, r}, e.span),
+                       e.span);
       }
       default: break;
     }
@@ -560,11 +578,20 @@ class SystemTracer {
     if (guard_ >= 0 && !assigned_.count(&target))
       for (const SystemBinding::Created& c : b_.created)
         if (c.var == &target) give_up(at, "a vector first assigned inside an if");
-    if (guard_ < 0) assigned_.insert(&target);
     if (is_product(value))
       if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::VarRef>(); x && x->var == &target)
         give_up(at, "a product written into its own operand");
     store_vector(vt->second, size_of_.at(&target), value, at);
+    if (guard_ < 0) assigned_.insert(&target);
+  }
+
+  // A vector without a value when the run starts (one the controller makes) may be read only
+  // after the run has assigned it: the interpreter stops at an earlier read (an unbound
+  // extern, a variable not yet set).
+  void check_has_value(const ast::Variable& v, const SourceSpan& at) const {
+    if (assigned_.count(&v)) return;
+    for (const SystemBinding::Created& c : b_.created)
+      if (c.var == &v) give_up(at, "'" + v.name + "' is read before it has a value");
   }
 
   // `S.f = v`: the field's array, written in place.
@@ -591,7 +618,10 @@ class SystemTracer {
     t_.arrays[slot].written = true;
     if (is_product(value)) {
       const auto& b = *value.as<ast::Binary>();
-      return spmv(matrix_.at(b.lhs->as<ast::VarRef>()->var), *b.rhs, slot, n, at);
+      if (!single(slot))
+        return spmv(matrix_.at(b.lhs->as<ast::VarRef>()->var), *b.rhs, slot, n, at);
+      // A product writes binary64 rows: a binary32 field takes them through a scratch vector.
+      return store_pass(slot, n, product(b, at), at);
     }
     if (value.type && is_vector(*value.type) && length_of(value) != n)
       give_up(at, "an assignment of another length");
@@ -633,6 +663,16 @@ class SystemTracer {
     op.x = vector_operand(x, n, at);
     op.y = y;
     op.length = length;
+    if (float32_) {
+      // The product's value is rounded, component by component, before anything reads it.
+      Stmt s;
+      s.kind = StmtKind::Store;
+      s.slot = y;
+      s.index = element();
+      s.value = rounded(load(y, at), at);
+      s.span = at;
+      op.body.push_back(std::move(s));
+    }
     push_op(std::move(op), at);
     first_product_ = std::min(first_product_, at_);
   }
@@ -653,9 +693,14 @@ class SystemTracer {
   // vector a pass fills.
   int vector_operand(const ast::Expr& x, int n, const SourceSpan& at) {
     if (const auto* r = x.as<ast::VarRef>())
-      if (auto it = vector_slot_.find(r->var); it != vector_slot_.end()) return it->second;
-    if (const auto* f = x.as<ast::FieldRead>(); f && f->of_set)
-      return field_slot_.at(field_key(*f));
+      if (auto it = vector_slot_.find(r->var); it != vector_slot_.end()) {
+        check_has_value(*r->var, x.span);
+        return it->second;
+      }
+    if (const auto* f = x.as<ast::FieldRead>(); f && f->of_set) {
+      const int field = field_slot_.at(field_key(*f));
+      if (!single(field)) return field;  // a product reads binary64 operands
+    }
     const int slot = scratch(n);
     store_pass(slot, n, component(x), at);
     return slot;
@@ -807,6 +852,7 @@ class SystemTracer {
 
   const std::vector<const ast::Stmt*>& run_;
   interp::Interpreter& in_;
+  bool float32_ = false;
   size_t at_ = 0;                        // the statement of the run being collected or traced
   size_t first_product_ = SIZE_MAX;      // the first statement with a sparse product
   size_t first_field_write_ = SIZE_MAX;  // the first statement that writes a field
@@ -836,8 +882,9 @@ std::string run_lines(const std::vector<const ast::Stmt*>& run) {
          std::to_string(b.file->locate(b.end > b.begin ? b.end - 1 : b.begin).line);
 }
 
-TracedSystem trace_system(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in) {
-  return SystemTracer(run, in).run();
+TracedSystem trace_system(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in,
+                          bool float32) {
+  return SystemTracer(run, in, float32).run();
 }
 
 }  // namespace simit::jit

@@ -56,8 +56,10 @@ struct TracedSystem {
 std::string run_lines(const std::vector<const frontend::ast::Stmt*>& run);
 
 // Traces consecutive statements of one block (system-level ones; at most one while loop),
-// reading the shapes of vectors and matrices from the interpreter's variables.
+// reading the shapes of vectors and matrices from the interpreter's variables. Under
+// `float32` every operator, call and literal is rounded to binary32, as the interpreter's
+// float32 mode rounds them (docs/arithmetic.md).
 TracedSystem trace_system(const std::vector<const frontend::ast::Stmt*>& run,
-                          interp::Interpreter& in);
+                          interp::Interpreter& in, bool float32 = false);
 
 }  // namespace simit::jit

@@ -1544,6 +1544,7 @@ struct Tally {
   int programs = 0, runtime_errors = 0, nans = 0;
   int sites_compiled = 0, sites_interpreted = 0, loops_compiled = 0, loops_interpreted = 0;
   int runs_compiled = 0, runs_interpreted = 0;  // runs of statements (a loop and its set-up)
+  int statements_compiled = 0;                  // system statements compiled alone
   std::map<std::string, int> reasons;
 
   void add(const std::string& stats) {
@@ -1557,8 +1558,12 @@ struct Tally {
         continue;
       const bool loop = l.rfind("  while (line", 0) == 0;
       const bool run = l.rfind("  statements (lines", 0) == 0;
+      const bool alone = l.rfind("  statement (line", 0) == 0;  // listed when compiled
       if (l.size() >= 9 && l.compare(l.size() - 9, 9, " compiled") == 0) {
-        ++(run ? runs_compiled : loop ? loops_compiled : sites_compiled);
+        ++(alone  ? statements_compiled
+           : run  ? runs_compiled
+           : loop ? loops_compiled
+                  : sites_compiled);
         continue;
       }
       size_t at = l.find("interpreted: ");
@@ -1641,9 +1646,10 @@ TEST(RandomPrograms, TheJitComputesTheInterpretersBits) {
               tally.nans);
   std::printf(
       "map/apply sites: %d compiled, %d interpreted; while loops alone: %d compiled, %d "
-      "interpreted; runs of statements: %d compiled, %d interpreted\nwhy interpreted:\n",
+      "interpreted; runs of statements: %d compiled, %d interpreted; statements alone: %d "
+      "compiled\nwhy interpreted:\n",
       tally.sites_compiled, tally.sites_interpreted, tally.loops_compiled, tally.loops_interpreted,
-      tally.runs_compiled, tally.runs_interpreted);
+      tally.runs_compiled, tally.runs_interpreted, tally.statements_compiled);
   std::vector<std::pair<int, std::string>> reasons;
   for (const auto& [why, n] : tally.reasons) reasons.push_back({n, why});
   std::sort(reasons.rbegin(), reasons.rend());
