@@ -1031,10 +1031,18 @@ TEST(Jit, BlockedElementMatricesAndMatrixBlockReadsComputeTheInterpretersBits) {
   EXPECT_GT(change, 1e-3);
 }
 
+// The 1-based line of the first line of `text` that contains `what`.
+int line_of(const std::string& s, const std::string& what) {
+  const size_t at = s.find(what);
+  return 1 + static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(at), '\n'));
+}
+
 // Products too large to unroll run as loops over tiles of scratch arrays: a 26 x 7 by 7 x 13
-// product (tiles of 2 x 1: the largest extents up to 12 that divide 26 and 13), then P'P,
-// read from P's array transposed. Each component is summed from +0.0 in ascending k like
-// the interpreter's, so the bits equal both the interpreter's and a plain C++ loop's.
+// product (tiles of 2 x 1: the largest extents up to 12 that divide 26 and 13), in one branch
+// of an if, or its transpose's transpose in the other (the same bits: each term is a
+// product of the same two factors), then P'P. Each component is summed from +0.0 in
+// ascending k like the interpreter's, so the bits equal both the interpreter's and a plain
+// C++ loop's.
 TEST(Jit, ProductsTooLargeToUnrollRunTiledWithTheInterpretersBits) {
   if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
   const char* program = R"(
@@ -1058,7 +1066,12 @@ func tiles(p : Point) -> r : vector[points](vector[4](float))
       R(k, j) = cos(w) + p.a;
     end
   end
-  P = L * R;
+  var P : matrix[26,13](float);
+  if p.a > 0.0
+    P = L * R;
+  else
+    P = (R' * L')';
+  end
   Q = P' * P;
   var v : vector[4](float);
   v(0) = P(25, 12);
@@ -1094,7 +1107,9 @@ end
     engine.print_jit_stats(os);
     if (k) stats = os.str(), dump = dumped.str();
   }
-  EXPECT_NE(stats.find("tiles (line 32)"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("tiles (line " + std::to_string(line_of(program, "map tiles")) + ")"),
+            std::string::npos)
+      << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
   EXPECT_NE(dump.find("for %"), std::string::npos) << dump;
   expect_same(results[0][0], results[1][0], "r");
@@ -1816,11 +1831,7 @@ std::string loop_stats(const std::string& stats, int line) {
   return "";
 }
 
-// The 1-based line of the first line of `text` that contains `what`.
-int line_of(const std::string& s, const std::string& what) {
-  const size_t at = s.find(what);
-  return 1 + static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(at), '\n'));
-}
+
 
 void expect_same_pcg_results(const std::vector<Value>& a, const std::vector<Value>& b) {
   ASSERT_EQ(a.size(), 5u);
