@@ -370,11 +370,13 @@ class Tracer {
     s.span = at;
     emit(std::move(s));
   }
-  // A value that later statements may read: constants and reads of locals nothing rewrites
-  // stay as they are; anything else is computed into a new local now.
+  // A value that later statements may read: constants, reads of locals nothing rewrites and
+  // components of scratch arrays (each is filled once per element, before any read) stay as
+  // they are; anything else is computed into a new local now.
   ExprRef settle(const ExprRef& e, const SourceSpan& at) {
     if (is_const(e) || (e->kind == ExprKind::Local && !mutable_[e->slot]) ||
-        e->kind == ExprKind::Element || e->kind == ExprKind::Scalar)
+        e->kind == ExprKind::Element || e->kind == ExprKind::Scalar ||
+        (e->kind == ExprKind::Scratch && is_const(e->ops[0])))
       return e;
     const int l = new_local(e->ty, false);
     set_local(l, e, at);
@@ -478,6 +480,34 @@ class Tracer {
   ScratchView scratch_view(const Sym& s) const;
   ScratchView in_scratch(const Sym& s, const SourceSpan& at);
   Sym tiled_product(const Sym& l, const Sym& r, const SourceSpan& at);
+  bool tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at, Sym& out);
+  // A For statement of `trips` iterations whose body `body(k)` emits, k its I32 local.
+  template <class F>
+  void for_loop(int trips, const SourceSpan& at, F body) {
+    Stmt f;
+    f.kind = StmtKind::For;
+    f.slot = new_local(Ty::I32, false);
+    f.n = trips;
+    f.span = at;
+    std::vector<Stmt>* outer = out_;
+    out_ = &f.body;
+    body(read_local(f.slot));
+    out_ = outer;
+    emit(std::move(f));
+  }
+  void put(int array, ExprRef index, ExprRef value, const SourceSpan& at) {
+    Stmt s;
+    s.kind = StmtKind::Put;
+    s.slot = array;
+    s.index = std::move(index);
+    s.value = std::move(value);
+    s.span = at;
+    emit(std::move(s));
+  }
+  int new_scratch(size_t n) {
+    trace_.scratch.push_back(static_cast<int>(n));
+    return static_cast<int>(trace_.scratch.size() - 1);
+  }
   ExprRef local_i32(ExprRef value, const SourceSpan& at) {
     const int l = new_local(Ty::I32, false);
     set_local(l, std::move(value), at);
@@ -786,6 +816,7 @@ Sym Tracer::elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& 
   if (l.ty != r.ty) give_up(at, "operands of different component types");
   if (!l.scalar() && !r.scalar() && !l.same_shape(r))
     give_up(at, "element-wise operation on different shapes");
+  if (Sym tiled; tiled_elementwise(op, l, r, at, tiled)) return tiled;
   const Sym& shape = l.scalar() ? r : l;
   std::vector<ExprRef> c;
   for (size_t i = 0; i < shape.size(); ++i)
@@ -904,19 +935,40 @@ Tracer::ScratchView Tracer::in_scratch(const Sym& s, const SourceSpan& at) {
   // A zero folded into a component may have the other sign (jit/zero_fold.h): the product's
   // loops cannot follow it, so folding stops for this site.
   if (zero_fold) ZeroFold::require_exact(s.c, "a tiled product");
-  trace_.scratch.push_back(static_cast<int>(s.size()));
-  const int array = static_cast<int>(trace_.scratch.size() - 1);
+  const int array = new_scratch(s.size());
   for (size_t k = 0; k < s.size(); ++k) {
-    Stmt put;
-    put.kind = StmtKind::Put;
-    put.slot = array;
-    put.index = iconst(static_cast<int64_t>(k));
-    put.value = s.c[k];
-    put.span = at;
-    emit(std::move(put));
+    put(array, iconst(static_cast<int64_t>(k)), s.c[k], at);
     check_size();
   }
   return {array, false};
+}
+
+// An element-wise operation on a matrix of more than kTileAbove components whose operands lie
+// in scratch arrays in order (a tiled product's result, a scalar): one loop over the
+// components into a new scratch array, each the interpreter's one operation. False where
+// it does not apply (the operation is then unrolled).
+bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at,
+                               Sym& out) {
+  const Sym& shape = l.scalar() ? r : l;
+  if (l.ty != Ty::F64 || shape.size() <= kTileAbove) return false;
+  auto array_of = [&](const Sym& s) {
+    if (s.scalar()) return s.c[0]->loose ? -2 : -1;  // a loose zero folds: not here
+    const ScratchView v = scratch_view(s);
+    return v.array >= 0 && !v.transposed ? v.array : -2;
+  };
+  const int la = array_of(l), ra = array_of(r);
+  if (la == -2 || ra == -2) return false;
+  const int result = new_scratch(shape.size());
+  for_loop(static_cast<int>(shape.size()), at, [&](const ExprRef& k) {
+    ExprRef a = la >= 0 ? scratch_read(la, k, at) : l.c[0];
+    ExprRef b = ra >= 0 ? scratch_read(ra, k, at) : r.c[0];
+    put(result, k, node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(op), {a, b}, at), at);
+  });
+  std::vector<ExprRef> c;
+  for (size_t k = 0; k < shape.size(); ++k)
+    c.push_back(scratch_read(result, iconst(static_cast<int64_t>(k)), at));
+  out = tensor(Ty::F64, shape.dims, std::move(c), shape.block);
+  return true;
 }
 
 // An m x n by n x p product too large to unroll: loops over the result's tiles (up to
@@ -929,32 +981,14 @@ Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
     give_up(at, "a product of " + std::to_string(static_cast<size_t>(m) * p) +
                     " components (more than " + std::to_string(kMaxDenseComponents) +
                     ") is not compiled");
-  trace_.scratch.push_back(m * p);
-  const int out = static_cast<int>(trace_.scratch.size() - 1);
+  const int out = new_scratch(static_cast<size_t>(m) * p);
   const int tr = tile_extent(m), tc = tile_extent(p);
   // Component (i, k) of l lies at i * li + k * lk of its array; (k, j) of r at k * rk + j * rj.
   const int li = lv.transposed ? 1 : n, lk = lv.transposed ? m : 1;
   const int rk = rv.transposed ? 1 : p, rj = rv.transposed ? n : 1;
-  auto loop = [&](int trips, auto&& body) {
-    Stmt f;
-    f.kind = StmtKind::For;
-    f.slot = new_local(Ty::I32, false);
-    f.n = trips;
-    f.span = at;
-    std::vector<Stmt>* outer = out_;
-    out_ = &f.body;
-    body(read_local(f.slot));
-    out_ = outer;
-    emit(std::move(f));
-  };
+  auto loop = [&](int trips, auto&& body) { for_loop(trips, at, body); };
   auto put = [&](const ExprRef& index, ExprRef value) {
-    Stmt s;
-    s.kind = StmtKind::Put;
-    s.slot = out;
-    s.index = index;
-    s.value = std::move(value);
-    s.span = at;
-    emit(std::move(s));
+    this->put(out, index, std::move(value), at);
   };
   loop(m / tr, [&](const ExprRef& ti) {
     const ExprRef l_rows = local_i32(i32_mul(ti, static_cast<int64_t>(tr) * li, at), at);
