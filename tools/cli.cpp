@@ -75,7 +75,8 @@ void add_test(CLI::App& app, Commands& c) {
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
   c.test
       ->add_option("--backend", c.test_options.backend,
-                   "What runs the sections: interpreter (default) or jit (hot maps compiled)")
+                   "What runs the sections: interpreter (default) or jit (hot maps and system "
+                   "statements compiled)")
       ->check(CLI::IsMember({"interpreter", "jit"}));
   c.test
       ->add_option("--jit-threshold", c.test_options.jit_threshold,
@@ -123,8 +124,9 @@ void add_run(CLI::App& app, Commands& c) {
                   "every frame; the frames before it stay written)");
   c.run
       ->add_option("--backend", o.backend,
-                   "What runs the program: interpreter (default) or jit (hot map and apply sites "
-                   "compiled to native code with LLVM; the rest interpreted)")
+                   "What runs the program: interpreter (default) or jit (hot map and apply sites, "
+                   "solver loops and other system statements compiled to native code with LLVM; "
+                   "the rest interpreted)")
       ->check(CLI::IsMember({"interpreter", "jit"}));
   c.run
       ->add_option("--jit-threshold", o.jit_threshold,
