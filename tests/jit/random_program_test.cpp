@@ -180,6 +180,7 @@ class ProgramGen {
   std::string fscalar(Fn& f, int depth);
   std::string fvector(Fn& f, Shape s, int depth);
   std::string fmatrix(Fn& f, Shape s, int depth);
+  std::string big_product(Fn& f, Shape s, int depth);
   std::string denominator(Fn& f, int depth);
   bool helper_tail(Fn& f, const Helper& h, std::string& arg);
   std::string helper_args(Fn& f, const Helper& h, int depth, bool& ok);
@@ -441,7 +442,21 @@ std::string ProgramGen::fscalar(Fn& f, int d) {
   }
 }
 
+// A value of shape s through a product too large to unroll (the JIT tiles it): K x K outer
+// products multiplied, scaled and added element-wise (loops over their scratch arrays), then
+// brought to s through products with K-vectors.
+std::string ProgramGen::big_product(Fn& f, Shape s, int d) {
+  const int k = pick(13, 24);
+  auto kv = [&] { return literal({k, 0}); };
+  auto big = [&] { return "((" + kv() + " * " + kv() + "') * (" + kv() + " * " + kv() + "'))"; };
+  const std::string mixed = "(" + fexpr(f, {}, d) + " * " + big() + " + " + big() + ")";
+  const std::string left = "(" + fexpr(f, {s.rows, 0}, d) + " * " + kv() + "')";
+  if (s.vector()) return "(" + left + " * (" + mixed + " * " + kv() + "))";
+  return "(" + left + " * (" + mixed + " * (" + kv() + " * " + fexpr(f, {s.cols, 0}, d) + "')))";
+}
+
 std::string ProgramGen::fvector(Fn& f, Shape s, int d) {
+  if (coin(0.01)) return big_product(f, s, d);
   auto e = [&] { return fexpr(f, s, d); };
   switch (pick(0, 11)) {
     case 0: return "(" + e() + " + " + e() + ")";
@@ -471,6 +486,7 @@ std::string ProgramGen::fvector(Fn& f, Shape s, int d) {
 }
 
 std::string ProgramGen::fmatrix(Fn& f, Shape s, int d) {
+  if (coin(0.02)) return big_product(f, s, d);
   auto e = [&] { return fexpr(f, s, d); };
   switch (pick(0, 10)) {
     case 0: return "(" + e() + " + " + e() + ")";
