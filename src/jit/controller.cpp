@@ -647,7 +647,7 @@ bool TraceController::run_alone(const ast::Stmt& stmt, interp::Interpreter& in) 
   if (auto loop = loop_of_stmt_.find(&stmt);
       loop != loop_of_stmt_.end() && may_compile(*loop->second))
     return false;
-  auto& state = runs_[&stmt];
+  auto& state = alone_[&stmt];
   if (!state) {
     state = std::make_unique<LoopState>();
     state->length = 1;
@@ -1088,9 +1088,10 @@ std::vector<TraceStats> TraceController::stats() const {
     }
   for (const auto* states : {&runs_, &loops_})
     for (const auto& [at, s] : *states)
-      for (const auto& e : s->entries)
-        if (e->kernel || e->run.size() > 1 || e->run.front()->is<ast::While>())
-          out.push_back(e->stats);
+      for (const auto& e : s->entries) out.push_back(e->stats);
+  for (const auto& [at, s] : alone_)
+    for (const auto& e : s->entries)
+      if (e->kernel) out.push_back(e->stats);
   std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
     return a.line != b.line ? a.line < b.line : a.site < b.site;
   });

@@ -94,6 +94,7 @@ class TraceController : public interp::SiteHook {
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
   std::map<const void*, std::unique_ptr<LoopState>> loops_;  // by while loop
   std::map<const void*, std::unique_ptr<LoopState>> runs_;   // by a run's first statement
+  std::map<const void*, std::unique_ptr<LoopState>> alone_;  // statements alone, by statement
   // The body of each system-level while loop seen: a run in it is not compiled while the loop
   // itself may still be (a cold loop's iterations would compile its body for nothing).
   std::map<const frontend::ast::Block*, const frontend::ast::While*> loop_of_body_;
