@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -951,13 +952,20 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
                                Sym& out) {
   const Sym& shape = l.scalar() ? r : l;
   if (l.ty != Ty::F64 || shape.size() <= kTileAbove) return false;
+  // -1: one value for every component (a scalar, or a tensor of one constant, as a sum that
+  // starts from zeros is); -2: neither that nor a scratch array.
   auto array_of = [&](const Sym& s) {
-    if (s.scalar()) return s.c[0]->loose ? -2 : -1;  // a loose zero folds: not here
+    if (s.c[0]->loose) return -2;  // a loose zero folds: not here
+    if (s.scalar()) return -1;
     const ScratchView v = scratch_view(s);
-    return v.array >= 0 && !v.transposed ? v.array : -2;
+    if (v.array >= 0 && !v.transposed) return v.array;
+    for (const ExprRef& e : s.c)
+      if (!is_const(e) || e->loose || std::memcmp(&e->f, &s.c[0]->f, sizeof(double)) != 0)
+        return -2;
+    return -1;
   };
   const int la = array_of(l), ra = array_of(r);
-  if (la == -2 || ra == -2) return false;
+  if (la == -2 || ra == -2 || (la == -1 && ra == -1)) return false;
   const int result = new_scratch(shape.size());
   for_loop(static_cast<int>(shape.size()), at, [&](const ExprRef& k) {
     ExprRef a = la >= 0 ? scratch_read(la, k, at) : l.c[0];
