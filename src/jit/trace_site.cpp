@@ -329,6 +329,16 @@ size_t offset_of(const std::vector<int>& dims, const std::vector<int64_t>& idx,
 
 // ---------------------------------------------------------------------------
 
+ExprRef scratch_read(int array, ExprRef index, const SourceSpan& at) {
+  Expr e;
+  e.kind = ExprKind::Scratch;
+  e.ty = Ty::F64;
+  e.slot = array;
+  e.ops = {std::move(index)};
+  e.span = at;
+  return make(std::move(e));
+}
+
 class Tracer {
  public:
   Tracer(const SiteShape& shape, bool fold) : in_(shape), fold_(fold) {}
@@ -505,9 +515,19 @@ class Tracer {
     s.span = at;
     emit(std::move(s));
   }
-  int new_scratch(size_t n) {
+  // A scratch array; `loose`: it may hold zeros of the other sign (jit/zero_fold.h), and so
+  // may every value read from it.
+  int new_scratch(size_t n, bool loose) {
     trace_.scratch.push_back(static_cast<int>(n));
+    scratch_loose_.push_back(loose);
     return static_cast<int>(trace_.scratch.size() - 1);
+  }
+  ExprRef read_scratch(int array, ExprRef index, const SourceSpan& at) {
+    ExprRef e = scratch_read(array, std::move(index), at);
+    if (!scratch_loose_[static_cast<size_t>(array)]) return e;
+    Expr copy = *e;
+    copy.loose = true;
+    return make(std::move(copy));
   }
   ExprRef local_i32(ExprRef value, const SourceSpan& at) {
     const int l = new_local(Ty::I32, false);
@@ -549,6 +569,7 @@ class Tracer {
   int next_block_ = 1;
   SourceSpan error_at_;  // the first error statement traced
   std::map<std::tuple<int, int, int>, CachedLoad> loads_;
+  std::vector<bool> scratch_loose_;  // per scratch array (new_scratch)
   size_t statements_ = 0;
   int inline_depth_ = 0;
 };
@@ -881,16 +902,6 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   give_up(at, "products of tensors of order 3 or more are not compiled");
 }
 
-ExprRef scratch_read(int array, ExprRef index, const SourceSpan& at) {
-  Expr e;
-  e.kind = ExprKind::Scratch;
-  e.ty = Ty::F64;
-  e.slot = array;
-  e.ops = {std::move(index)};
-  e.span = at;
-  return make(std::move(e));
-}
-
 ExprRef i32_add(ExprRef a, int64_t k, const SourceSpan& at) {
   return k == 0 ? a : binary(BinOp::Add, Ty::I32, std::move(a), iconst(k), at);
 }
@@ -916,7 +927,8 @@ Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
   auto at = [&](size_t k, size_t want) {
     const Expr& e = *s.c[k];
     return e.kind == ExprKind::Scratch && e.slot == array && is_const(e.ops[0]) &&
-           static_cast<size_t>(e.ops[0]->i) == want && !e.loose;
+           static_cast<size_t>(e.ops[0]->i) == want &&
+           e.loose == scratch_loose_[static_cast<size_t>(array)];
   };
   const size_t rows = static_cast<size_t>(s.dims[0]), cols = static_cast<size_t>(s.dims[1]);
   bool straight = true, transposed = true;
@@ -933,10 +945,11 @@ Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
 // Matrix s in a scratch array: where it already lies, or put there now.
 Tracer::ScratchView Tracer::in_scratch(const Sym& s, const SourceSpan& at) {
   if (ScratchView v = scratch_view(s); v.array >= 0) return v;
-  // A zero folded into a component may have the other sign (jit/zero_fold.h): the product's
-  // loops cannot follow it, so folding stops for this site.
-  if (zero_fold) ZeroFold::require_exact(s.c, "a tiled product");
-  const int array = new_scratch(s.size());
+  // A zero folded into a component may have the other sign (jit/zero_fold.h): the array is
+  // loose, and so is what is computed from it.
+  bool loose = false;
+  for (const ExprRef& e : s.c) loose = loose || e->loose;
+  const int array = new_scratch(s.size(), loose);
   for (size_t k = 0; k < s.size(); ++k) {
     put(array, iconst(static_cast<int64_t>(k)), s.c[k], at);
     check_size();
@@ -955,10 +968,12 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
   // -1: one value for every component (a scalar, or a tensor of one constant, as a sum that
   // starts from zeros is); -2: neither that nor a scratch array.
   auto array_of = [&](const Sym& s) {
+    if (!s.scalar()) {
+      const ScratchView v = scratch_view(s);
+      if (v.array >= 0) return v.transposed ? -2 : v.array;
+    }
     if (s.c[0]->loose) return -2;  // a loose zero folds: not here
     if (s.scalar()) return -1;
-    const ScratchView v = scratch_view(s);
-    if (v.array >= 0 && !v.transposed) return v.array;
     for (const ExprRef& e : s.c)
       if (!is_const(e) || e->loose || std::memcmp(&e->f, &s.c[0]->f, sizeof(double)) != 0)
         return -2;
@@ -966,7 +981,12 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
   };
   const int la = array_of(l), ra = array_of(r);
   if (la == -2 || ra == -2 || (la == -1 && ra == -1)) return false;
-  const int result = new_scratch(shape.size());
+  // A division by a loose zero depends on its sign (as unrolled, ZeroFold stops there).
+  if (op == BinOp::Div && ra >= 0 && scratch_loose_[static_cast<size_t>(ra)])
+    throw FoldConflict{"a division by a tiled tensor that may hold a folded zero"};
+  const bool loose = (la >= 0 && scratch_loose_[static_cast<size_t>(la)]) ||
+                     (ra >= 0 && scratch_loose_[static_cast<size_t>(ra)]);
+  const int result = new_scratch(shape.size(), loose);
   for_loop(static_cast<int>(shape.size()), at, [&](const ExprRef& k) {
     ExprRef a = la >= 0 ? scratch_read(la, k, at) : l.c[0];
     ExprRef b = ra >= 0 ? scratch_read(ra, k, at) : r.c[0];
@@ -974,14 +994,14 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
   });
   std::vector<ExprRef> c;
   for (size_t k = 0; k < shape.size(); ++k)
-    c.push_back(scratch_read(result, iconst(static_cast<int64_t>(k)), at));
+    c.push_back(read_scratch(result, iconst(static_cast<int64_t>(k)), at));
   out = tensor(Ty::F64, shape.dims, std::move(c), shape.block);
   return true;
 }
 
 // An m x n by n x p product too large to unroll: loops over the result's tiles (up to
-// kTile x kTile), and within a tile over k, each tile component summed from +0.0 in
-// ascending k like the unrolled product, so the bits are the same.
+// kTile x kTile), a tile's rows, and k, each component summed from +0.0 in ascending k like
+// the unrolled product, so the bits are the same. A row's kTile sums share each l(i, k).
 Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
   const int m = l.dims[0], n = l.dims[1], p = r.dims[1];
   const ScratchView lv = in_scratch(l, at), rv = in_scratch(r, at);
@@ -989,7 +1009,9 @@ Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
     give_up(at, "a product of " + std::to_string(static_cast<size_t>(m) * p) +
                     " components (more than " + std::to_string(kMaxDenseComponents) +
                     ") is not compiled");
-  const int out = new_scratch(static_cast<size_t>(m) * p);
+  const int out =
+      new_scratch(static_cast<size_t>(m) * p, scratch_loose_[static_cast<size_t>(lv.array)] ||
+                                                  scratch_loose_[static_cast<size_t>(rv.array)]);
   const int tr = tile_extent(m), tc = tile_extent(p);
   // Component (i, k) of l lies at i * li + k * lk of its array; (k, j) of r at k * rk + j * rj.
   const int li = lv.transposed ? 1 : n, lk = lv.transposed ? m : 1;
@@ -1005,36 +1027,37 @@ Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
       const ExprRef r_cols = local_i32(i32_mul(tj, static_cast<int64_t>(tc) * rj, at), at);
       const ExprRef o_tile =
           local_i32(binary(BinOp::Add, Ty::I32, o_rows, i32_mul(tj, tc, at), at), at);
-      std::vector<ExprRef> o_at;
-      for (int a = 0; a < tr; ++a)
+      // The tile row by row: each row's tc sums over k, the row's value of l read once per k.
+      loop(tr, [&](const ExprRef& a) {
+        const ExprRef l_row =
+            local_i32(binary(BinOp::Add, Ty::I32, l_rows, i32_mul(a, li, at), at), at);
+        const ExprRef o_row =
+            local_i32(binary(BinOp::Add, Ty::I32, o_tile, i32_mul(a, p, at), at), at);
+        std::vector<ExprRef> o_at;
         for (int b = 0; b < tc; ++b) {
-          o_at.push_back(i32_add(o_tile, static_cast<int64_t>(a) * p + b, at));
+          o_at.push_back(i32_add(o_row, b, at));
           put(o_at.back(), fconst(0.0));
         }
-      loop(n, [&](const ExprRef& k) {
-        const ExprRef l_at =
-            local_i32(binary(BinOp::Add, Ty::I32, l_rows, i32_mul(k, lk, at), at), at);
-        const ExprRef r_at =
-            local_i32(binary(BinOp::Add, Ty::I32, r_cols, i32_mul(k, rk, at), at), at);
-        std::vector<ExprRef> lc, rc;
-        for (int a = 0; a < tr; ++a)
-          lc.push_back(scratch_read(lv.array, i32_add(l_at, static_cast<int64_t>(a) * li, at), at));
-        for (int b = 0; b < tc; ++b)
-          rc.push_back(scratch_read(rv.array, i32_add(r_at, static_cast<int64_t>(b) * rj, at), at));
-        for (int a = 0; a < tr; ++a)
+        loop(n, [&](const ExprRef& k) {
+          const ExprRef lk_at =
+              local_i32(binary(BinOp::Add, Ty::I32, l_row, i32_mul(k, lk, at), at), at);
+          const ExprRef r_at =
+              local_i32(binary(BinOp::Add, Ty::I32, r_cols, i32_mul(k, rk, at), at), at);
+          const ExprRef lval = scratch_read(lv.array, lk_at, at);
           for (int b = 0; b < tc; ++b) {
-            const ExprRef& o = o_at[static_cast<size_t>(a) * tc + b];
+            const ExprRef rval =
+                scratch_read(rv.array, i32_add(r_at, static_cast<int64_t>(b) * rj, at), at);
+            const ExprRef& o = o_at[static_cast<size_t>(b)];
             put(o, binary(BinOp::Add, Ty::F64, scratch_read(out, o, at),
-                          binary(BinOp::Mul, Ty::F64, lc[static_cast<size_t>(a)],
-                                 rc[static_cast<size_t>(b)], at),
-                          at));
+                          binary(BinOp::Mul, Ty::F64, lval, rval, at), at));
           }
+        });
       });
     });
   });
   check_size();
   std::vector<ExprRef> c;
-  for (int k = 0; k < m * p; ++k) c.push_back(scratch_read(out, iconst(k), at));
+  for (int k = 0; k < m * p; ++k) c.push_back(read_scratch(out, iconst(k), at));
   return tensor(Ty::F64, {m, p}, std::move(c));
 }
 

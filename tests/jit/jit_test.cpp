@@ -1114,12 +1114,12 @@ end
             std::string::npos)
       << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
-  // Three loops per product (tile rows, tile columns, k), one per element-wise operation
-  // (Z + S too: Z's zeros are one value for every component).
+  // Four loops per product (tiles down, tiles across, a tile's rows, k), one per element-wise
+  // operation (Z + S too: Z's zeros are one value for every component).
   size_t loops = 0;
   for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
     ++loops;
-  EXPECT_EQ(loops, 3u * 3u + 3u) << dump;
+  EXPECT_EQ(loops, 4u * 3u + 3u) << dump;
   expect_same(results[0][0], results[1][0], "r");
   // The reference: the same sums in plain C++.
   for (int e = 0; e < 3; ++e) {
