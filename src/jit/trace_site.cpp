@@ -492,6 +492,7 @@ class Tracer {
   ScratchView in_scratch(const Sym& s, const SourceSpan& at);
   Sym tiled_product(const Sym& l, const Sym& r, const SourceSpan& at);
   bool tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at, Sym& out);
+  bool tiled_matvec(const Sym& l, const Sym& r, const SourceSpan& at, Sym& out);
   // A For statement of `trips` iterations whose body `body(k)` emits, k its I32 local.
   template <class F>
   void for_loop(int trips, const SourceSpan& at, F body) {
@@ -876,6 +877,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   if (lo == 2 && ro == 1) {
     const int m = l.dims[0], n = l.dims[1];
     if (r.dims[0] != n) give_up(at, "matrix-vector dimensions do not match");
+    if (Sym tiled; tiled_matvec(l, r, at, tiled)) return tiled;
     std::vector<ExprRef> c;
     for (int i = 0; i < m; ++i)
       c.push_back(sum(n, [&](int k) { return mul(l.c[i * n + k], r.c[k]); }));
@@ -996,6 +998,38 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
   for (size_t k = 0; k < shape.size(); ++k)
     c.push_back(read_scratch(result, iconst(static_cast<int64_t>(k)), at));
   out = tensor(Ty::F64, shape.dims, std::move(c), shape.block);
+  return true;
+}
+
+// A matrix of more than kTileAbove components that lies in a scratch array (in order or
+// transposed) times a vector: one loop over the rows, each row's sum from +0.0 over k
+// unrolled in it, as the unrolled product sums. False where it does not apply.
+bool Tracer::tiled_matvec(const Sym& l, const Sym& r, const SourceSpan& at, Sym& out) {
+  const int m = l.dims[0], n = l.dims[1];
+  if (l.size() <= kTileAbove || l.blocked() || r.blocked()) return false;
+  const ScratchView v = scratch_view(l);
+  if (v.array < 0) return false;
+  for (const ExprRef& x : r.c)
+    if (x->loose) return false;  // a folded zero's product would fold inside the loop
+  const int li = v.transposed ? 1 : n, lk = v.transposed ? m : 1;
+  const int result =
+      new_scratch(static_cast<size_t>(m), scratch_loose_[static_cast<size_t>(v.array)]);
+  for_loop(m, at, [&](const ExprRef& i) {
+    const ExprRef row = local_i32(i32_mul(i, li, at), at);
+    ExprRef sum = fconst(0.0);
+    for (int k = 0; k < n; ++k) {
+      ExprRef term =
+          node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul),
+               {scratch_read(v.array, i32_add(row, static_cast<int64_t>(k) * lk, at), at),
+                r.c[static_cast<size_t>(k)]},
+               at);
+      sum = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, term}, at);
+    }
+    put(result, i, sum, at);
+  });
+  std::vector<ExprRef> c;
+  for (int i = 0; i < m; ++i) c.push_back(read_scratch(result, iconst(i), at));
+  out = tensor(Ty::F64, {m}, std::move(c));
   return true;
 }
 

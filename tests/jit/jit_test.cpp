@@ -1040,9 +1040,10 @@ int line_of(const std::string& s, const std::string& what) {
 // Products too large to unroll run as loops over tiles of scratch arrays: a 26 x 7 by 7 x 13
 // product (tiles of 2 x 1: the largest extents up to 12 that divide 26 and 13), in one branch
 // of an if, or its transpose's transpose in the other (the same bits: each term is a
-// product of the same two factors), then P'P, and 0.5 * Q + Q and zeros plus that as loops
-// over the arrays (169 components). Each component is summed from +0.0 in ascending k like the
-// interpreter's, so the bits equal both the interpreter's and a plain C++ loop's.
+// product of the same two factors), then P'P, 0.5 * Q + Q and zeros plus that as loops over
+// the arrays (169 components), and that matrix, and its transpose, times a vector. Each component
+// is summed from +0.0 in ascending k like the interpreter's, so the bits equal both the
+// interpreter's and a plain C++ loop's.
 TEST(Jit, ProductsTooLargeToUnrollRunTiledWithTheInterpretersBits) {
   if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
   const char* program = R"(
@@ -1050,7 +1051,7 @@ element Point
   a : float;
 end
 extern points : set{Point};
-func tiles(p : Point) -> r : vector[points](vector[4](float))
+func tiles(p : Point) -> r : vector[points](vector[6](float))
   var L : matrix[26,7](float);
   var R : matrix[7,13](float);
   var w = 0.0;
@@ -1076,14 +1077,22 @@ func tiles(p : Point) -> r : vector[points](vector[4](float))
   S = 0.5 * Q + Q;
   var Z : matrix[13,13](float);
   Z = Z + S;
-  var v : vector[4](float);
+  var x : vector[13](float);
+  for k in 0:13
+    x(k) = R(3, k) - p.a;
+  end
+  y = Z * x;
+  u = Z' * x;
+  var v : vector[6](float);
   v(0) = P(25, 12);
   v(1) = P(3, 7);
   v(2) = Q(12, 12);
   v(3) = Z(0, 5);
+  v(4) = y(11);
+  v(5) = u(4);
   r(p) = v;
 end
-export func step() -> r : vector[points](vector[4](float))
+export func step() -> r : vector[points](vector[6](float))
   r = map tiles to points;
 end
 )";
@@ -1115,11 +1124,12 @@ end
       << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
   // Four loops per product (tiles down, tiles across, a tile's rows, k), one per element-wise
-  // operation (Z + S too: Z's zeros are one value for every component).
+  // operation (Z + S too: Z's zeros are one value for every component) and one per
+  // matrix-vector product (Z * x, and Z' * x reading Z's array transposed).
   size_t loops = 0;
   for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
     ++loops;
-  EXPECT_EQ(loops, 4u * 3u + 3u) << dump;
+  EXPECT_EQ(loops, 4u * 3u + 3u + 2u) << dump;
   expect_same(results[0][0], results[1][0], "r");
   // The reference: the same sums in plain C++.
   for (int e = 0; e < 3; ++e) {
@@ -1138,8 +1148,14 @@ end
         Q[i][j] = 0.0;
         for (int k = 0; k < 26; ++k) Q[i][j] = Q[i][j] + P[k][i] * P[k][j];
       }
-    const double want[4] = {P[25][12], P[3][7], Q[12][12], 0.0 + (0.5 * Q[0][5] + Q[0][5])};
-    expect_same_bits(results[1][0].tensor().floats() + 4 * e, want, 4,
+    double Z[13][13], wv[13], y = 0.0, u = 0.0;
+    for (int i = 0; i < 13; ++i)
+      for (int j = 0; j < 13; ++j) Z[i][j] = 0.0 + (0.5 * Q[i][j] + Q[i][j]);
+    for (int k = 0; k < 13; ++k) wv[k] = R[3][k] - as[e];
+    for (int k = 0; k < 13; ++k) y = y + Z[11][k] * wv[k];
+    for (int k = 0; k < 13; ++k) u = u + Z[k][4] * wv[k];
+    const double want[6] = {P[25][12], P[3][7], Q[12][12], Z[0][5], y, u};
+    expect_same_bits(results[1][0].tensor().floats() + 6 * e, want, 6,
                      "element " + std::to_string(e));
   }
 }
