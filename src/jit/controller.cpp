@@ -12,7 +12,9 @@
 #include "interp/interpreter.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
+#include "runtime/system_ops.h"
 #include "jit/decompose_call.h"
+#include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
@@ -414,7 +416,9 @@ void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
     Entry::Special& s = e.special[i];
     if (s.marks.empty()) continue;
     interp::AssemblyPlan::Result& r = call.plan.results[i];
-    std::optional<SpecialisedPattern> p = specialise(r.pattern, s.marks, kSpecialiseAtMost);
+    std::optional<SpecialisedPattern> p =
+        specialise(r.pattern, s.marks, kSpecialiseAtMost,
+                   fused_sums(call.interpreter).keep_diagonal.count(call.plan.site) > 0);
     s.marks.clear();
     if (!p) {
       s.off = true;  // nearly every block is written: nothing to gain
@@ -595,6 +599,8 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
 }
 
 bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
+  if (const auto sum = fused_sums(in).at.find(&stmt); sum != fused_sums(in).at.end())
+    return run_fused_sum(stmt, sum->second, in);
   const auto* loop = stmt.as<ast::While>();
   if (!loop) return run_alone(stmt, in);
   auto& state = loops_[loop];
@@ -1051,6 +1057,67 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter&
   }
 }
 
+const FusedSums& TraceController::fused_sums(const interp::Interpreter& in) {
+  if (!fused_) fused_ = find_fused_sums(in.program());
+  return *fused_;
+}
+
+// `A = M - s * K` in K's storage (jit/matrix_sum.h). Declined under float32 and check-finite,
+// where the interpreter looks at s * K on its own, and when M has a block outside K's pattern.
+bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
+                                    interp::Interpreter& in) {
+  if (!backend_ || options_.float32 || options_.check_finite || checking_run_) return false;
+  SumState& s = sums_[&stmt];
+  if (s.stats.site.empty()) {
+    s.stats.line = static_cast<int>(stmt.span.start().line);
+    s.stats.site = "statement (line " + std::to_string(s.stats.line) + ")";
+    s.stats.key = sum.target->name + " = " + sum.base->name + (sum.subtract ? " - " : " + ") +
+                  "s * " + sum.scaled->name + " in the storage of " + sum.scaled->name +
+                  " (the map on line " + std::to_string(sum.producer_line) + ")";
+  }
+  if (++s.runs <= options_.threshold) return false;
+  const Value& kv = in.variable(*sum.scaled);
+  const Value& mv = in.variable(*sum.base);
+  if (kv.kind() != Value::Kind::Matrix || mv.kind() != Value::Kind::Matrix || !kv.matrix() ||
+      !mv.matrix())
+    return false;
+  const Value factor = in.evaluate(*sum.factor, 0);
+  if (factor.kind() != Value::Kind::Float) return false;
+  const double beta = sum.subtract ? -factor.as_float() : factor.as_float();
+  const std::shared_ptr<runtime::SystemMatrix> k = kv.matrix();
+  const std::shared_ptr<runtime::SystemMatrix> m = mv.matrix();
+  std::optional<runtime::SystemMatrix> want;
+  if (options_.check) want = runtime::add(*m, *k, 1.0, beta, &in.patterns());
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu = thread_cpu_ms();
+  if (!runtime::add_into(*m, 1.0, *k, beta)) {
+    s.stats.status = "interpreted: " + sum.base->name + " has blocks outside the pattern of " +
+                     sum.scaled->name;
+    return false;
+  }
+  s.stats.cpu_ms += thread_cpu_ms() - cpu;
+  s.stats.run_ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  ++s.stats.calls;
+  s.stats.status = "fused";
+  if (want) {
+    const runtime::MatrixPattern &pw = want->pattern(), &pk = k->pattern();
+    if (pw.row_ptr() != pk.row_ptr() || pw.col_idx() != pk.col_idx())
+      throw interp::RuntimeError(stmt.span, "--check-jit: the fused sum's pattern differs from "
+                                            "the interpreter's for '" + sum.target->name + "'");
+    for (size_t c = 0; c < want->value_count(); ++c)
+      if (!same_bits(want->values()[c], k->values()[c]))
+        throw interp::RuntimeError(
+            stmt.span, "--check-jit: the fused sum differs from the interpreter in '" +
+                           sum.target->name + "' component " + std::to_string(c) + " (block " +
+                           std::to_string(c / static_cast<size_t>(k->block_size())) +
+                           "): interpreted " + number(want->values()[c]) + ", compiled " +
+                           number(k->values()[c]));
+  }
+  in.variable(*sum.target) = Value::of_matrix(k);
+  return true;
+}
+
 std::vector<TraceStats> TraceController::stats() const {
   std::vector<TraceStats> out;
   for (const auto& [site, s] : sites_)
@@ -1092,6 +1159,8 @@ std::vector<TraceStats> TraceController::stats() const {
   for (const auto& [at, s] : alone_)
     for (const auto& e : s->entries)
       if (e->kernel) out.push_back(e->stats);
+  for (const auto& [at, s] : sums_)
+    if (!s.stats.status.empty()) out.push_back(s.stats);
   std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
     return a.line != b.line ? a.line < b.line : a.site < b.site;
   });

@@ -5,12 +5,14 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "interp/assembly_plan.h"
 #include "jit/backend.h"
+#include "jit/matrix_sum.h"
 #include "jit/system_trace.h"
 #include "jit/trace_site.h"
 #include "jit/tunables.h"
@@ -105,6 +107,15 @@ class TraceController : public interp::SiteHook {
   std::map<const frontend::ast::Stmt*, const frontend::ast::While*> loop_of_stmt_;
   void note_loop(const frontend::ast::While& loop);
   bool run_alone(const frontend::ast::Stmt& stmt, interp::Interpreter& in);
+  // The program's fused matrix sums (jit/matrix_sum.h), found on first use.
+  std::optional<FusedSums> fused_;
+  const FusedSums& fused_sums(const interp::Interpreter& in);
+  struct SumState {
+    long runs = 0;
+    TraceStats stats;
+  };
+  std::map<const frontend::ast::Stmt*, SumState> sums_;
+  bool run_fused_sum(const frontend::ast::Stmt& stmt, const FusedSum& sum, interp::Interpreter& in);
   // While a checked run's statements run interpreted, up to this one, nothing is offered.
   const frontend::ast::Stmt* checking_run_ = nullptr;
 };

@@ -6,7 +6,8 @@
 namespace simit::jit {
 
 std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
-                                             const std::vector<uint8_t>& marks, double max_kept) {
+                                             const std::vector<uint8_t>& marks, double max_kept,
+                                             bool keep_diagonal) {
   const auto start = std::chrono::steady_clock::now();
   const runtime::MatrixPattern& p = *full;
   const int64_t total = p.nnz();
@@ -14,8 +15,10 @@ std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
     return std::nullopt;
   std::vector<int32_t> position(static_cast<size_t>(total), -1);
   int32_t kept = 0;
-  for (int64_t k = 0; k < total; ++k)
-    if (marks[static_cast<size_t>(k)]) position[static_cast<size_t>(k)] = kept++;
+  for (int r = 0; r < p.rows(); ++r)
+    for (int32_t k = p.row_ptr()[r]; k < p.row_ptr()[r + 1]; ++k)
+      if (marks[static_cast<size_t>(k)] || (keep_diagonal && p.col_idx()[k] == r))
+        position[static_cast<size_t>(k)] = kept++;
   if (static_cast<double>(kept) > max_kept * static_cast<double>(total)) return std::nullopt;
   SpecialisedPattern s;
   s.full = full;

@@ -30,8 +30,11 @@ struct SpecialisedPattern {
 
 // The specialisation of `full` (a pattern with an assembly index) to its blocks marked
 // written (a byte per block), or nothing when it would keep more than `max_kept` of them.
+// With keep_diagonal, the blocks (r, r) of the full pattern are kept written or not (a fused
+// sum adds a diagonal matrix into the result's storage: jit/matrix_sum.h).
 std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
-                                             const std::vector<uint8_t>& marks, double max_kept);
+                                             const std::vector<uint8_t>& marks, double max_kept,
+                                             bool keep_diagonal = false);
 // Whether two specialisations keep the same blocks of the same pattern.
 bool same_blocks(const SpecialisedPattern& a, const SpecialisedPattern& b);
 

@@ -357,6 +357,56 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, dou
   return out;
 }
 
+namespace {
+
+// Whether every block of a lies in b's pattern (both canonical: ascending columns per row).
+bool blocks_within(const MatrixPattern& a, const MatrixPattern& b) {
+  if (!a.canonical() || !b.canonical() || a.rows() != b.rows() || a.cols() != b.cols())
+    return false;
+  const int32_t *ar = a.row_ptr().data(), *ac = a.col_idx().data();
+  const int32_t *br = b.row_ptr().data(), *bc = b.col_idx().data();
+  for (int r = 0; r < a.rows(); ++r) {
+    int32_t k = br[r];
+    for (int32_t i = ar[r]; i < ar[r + 1]; ++i) {
+      while (k < br[r + 1] && bc[k] < ac[i]) ++k;
+      if (k == br[r + 1] || bc[k] != ac[i]) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta) {
+  if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
+      a.block_cols() != b.block_cols())
+    return false;
+  const int bs = b.block_size();
+  double* vb = b.values();
+  const double* va = a.values();
+  if (a.shared_pattern() == b.shared_pattern()) {  // add()'s combine: no zero to add into
+    for (size_t i = 0; i < b.value_count(); ++i) vb[i] = alpha * va[i] + beta * vb[i];
+    return true;
+  }
+  if (!blocks_within(a.pattern(), b.pattern())) return false;
+  // add()'s sum over the union, whose blocks are b's: 0.0 + alpha a where a has the block
+  // (+0.0 where it has none), then + beta b.
+  const MatrixPattern &pa = a.pattern(), &pb = b.pattern();
+  for (int r = 0; r < pb.rows(); ++r) {
+    int32_t i = pa.row_ptr()[r];
+    for (int32_t k = pb.row_ptr()[r]; k < pb.row_ptr()[r + 1]; ++k) {
+      double* o = vb + static_cast<size_t>(k) * bs;
+      if (i < pa.row_ptr()[r + 1] && pa.col_idx()[i] == pb.col_idx()[k]) {
+        const double* x = va + static_cast<size_t>(i++) * bs;
+        for (int c = 0; c < bs; ++c) o[c] = (0.0 + alpha * x[c]) + beta * o[c];
+      } else {
+        for (int c = 0; c < bs; ++c) o[c] = 0.0 + beta * o[c];
+      }
+    }
+  }
+  return true;
+}
+
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry) {
   check_block_match(a, b, "multiply element-wise");

@@ -29,6 +29,10 @@ void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std:
 // With a registry the union is built once per pair of patterns.
 SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha = 1.0,
                  double beta = 1.0, PatternRegistry* registry = nullptr);
+// B = alpha A + beta B in B's own storage, with add()'s bits, when every block of A lies in
+// B's pattern (float matrices of one block shape, canonical patterns); returns false and
+// leaves B alone otherwise. The JIT computes `A = M - s * K` so in the matrix K's map made.
+bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta);
 // A .* B: component products over the union of the patterns.
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry = nullptr);

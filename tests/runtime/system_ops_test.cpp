@@ -133,6 +133,37 @@ TEST_F(TetMatrices, SumsOverTheUnionKeepTheBitsOfAddingIntoZeros) {
   EXPECT_GT(dk.cwiseAbs().maxCoeff(), 0.0);
 }
 
+// The sum in place (the JIT's `A = M - s * K` in K's storage) has add()'s bits, signed zeros
+// included, on a sub-pattern and on the same pattern; outside the pattern it declines.
+TEST_F(TetMatrices, SumIntoTheSecondOperandKeepsTheBitsOfTheSum) {
+  auto [k, dk] = tet_matrix(verts, verts, 3, 3, 41);
+  SystemMatrix mass(registry.assembled(verts, verts, verts), 3, 3);
+  assemble(mass, verts, random_locals(verts.size(), 3, 3, 42));
+  mass.block(0)[1] = -0.0;
+  k.block(k.pattern().find(0, 1))[2] = -0.0;
+  k.block(k.pattern().find(0, 0))[1] = 0.0;
+  const SystemMatrix want = add(mass, k, 1.0, -0.37, &registry);
+  SystemMatrix in_place = k;
+  ASSERT_TRUE(add_into(mass, 1.0, in_place, -0.37));
+  ASSERT_EQ(want.value_count(), in_place.value_count());
+  EXPECT_EQ(std::memcmp(want.values(), in_place.values(), want.value_count() * sizeof(double)), 0);
+  EXPECT_FALSE(std::signbit(in_place.block(in_place.pattern().find(0, 1))[2]));
+  EXPECT_GT(max_diff(to_dense(in_place), dk), 0.0);  // it did change
+  // The same pattern: add()'s element-wise combination, without the zero.
+  auto [b, db] = tet_matrix(verts, verts, 3, 3, 43);
+  b.block(2)[0] = -0.0;
+  k.block(2)[0] = -0.0;
+  const SystemMatrix same = add(b, k, 2.0, 0.5);
+  ASSERT_TRUE(add_into(b, 2.0, k, 0.5));
+  EXPECT_EQ(std::memcmp(same.values(), k.values(), same.value_count() * sizeof(double)), 0);
+  EXPECT_TRUE(std::signbit(k.block(2)[0]));  // -0 + -0, as add() gives on one pattern
+  // The tets' blocks do not lie in the diagonal: declined, the mass untouched.
+  const SystemMatrix before = mass;
+  EXPECT_FALSE(add_into(k, 1.0, mass, -1.0));
+  EXPECT_EQ(std::memcmp(before.values(), mass.values(), mass.value_count() * sizeof(double)), 0);
+  EXPECT_GT(db.cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST_F(TetMatrices, ScaleAndNegate) {
   auto [a, da] = tet_matrix(verts, verts, 3, 3, 15);
   EXPECT_LT(max_diff(to_dense(scaled(-2.5, a)), -2.5 * da), 1e-12);
