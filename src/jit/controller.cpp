@@ -1114,6 +1114,9 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
                            "): interpreted " + number(want->values()[c]) + ", compiled " +
                            number(k->values()[c]));
   }
+  // K is dead, but a debugger stopped later (Ctrl-C) could still print it: it has no value
+  // rather than the sum's.
+  in.variable(*sum.scaled) = Value();
   in.variable(*sum.target) = Value::of_matrix(k);
   return true;
 }
