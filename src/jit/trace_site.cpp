@@ -960,9 +960,10 @@ Tracer::ScratchView Tracer::in_scratch(const Sym& s, const SourceSpan& at) {
 }
 
 // An element-wise operation on a matrix of more than kTileAbove components whose operands lie
-// in scratch arrays in order (a tiled product's result, a scalar): one loop over the
-// components into a new scratch array, each the interpreter's one operation. False where
-// it does not apply (the operation is then unrolled).
+// in scratch arrays in order (a tiled product's result, a scalar; an unrolled operand beside
+// one in a scratch array is put into one): one loop over the components into a new scratch
+// array, each the interpreter's one operation. False where it does not apply (the operation
+// is then unrolled).
 bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at,
                                Sym& out) {
   const Sym& shape = l.scalar() ? r : l;
@@ -981,8 +982,16 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
         return -2;
     return -1;
   };
-  const int la = array_of(l), ra = array_of(r);
-  if (la == -2 || ra == -2 || (la == -1 && ra == -1)) return false;
+  int la = array_of(l), ra = array_of(r);
+  if ((la < 0 && ra < 0) || (la == -2 && ra == -2)) return false;
+  // One operand in a scratch array, the other unrolled: the other joins it there, so that a
+  // chain of operations on a tiled result stays one loop each.
+  auto join = [&](const Sym& s, int& a) {
+    if (a != -2 || s.scalar() || scratch_view(s).array >= 0) return a != -2;
+    a = in_scratch(s, at).array;
+    return true;
+  };
+  if (!join(l, la) || !join(r, ra)) return false;
   // A division by a loose zero depends on its sign (as unrolled, ZeroFold stops there).
   if (op == BinOp::Div && ra >= 0 && scratch_loose_[static_cast<size_t>(ra)])
     throw FoldConflict{"a division by a tiled tensor that may hold a folded zero"};

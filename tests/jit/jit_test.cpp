@@ -1041,7 +1041,8 @@ int line_of(const std::string& s, const std::string& what) {
 // product (tiles of 2 x 1: the largest extents up to 12 that divide 26 and 13), in one branch
 // of an if, or its transpose's transpose in the other (the same bits: each term is a
 // product of the same two factors), then P'P, 0.5 * Q + Q and zeros plus that as loops over
-// the arrays (169 components), and that matrix, and its transpose, times a vector. Each component
+// the arrays (169 components), minus an unrolled diagonal matrix (put into an array beside
+// them), and that matrix, and its transpose, times a vector. Each component
 // is summed from +0.0 in ascending k like the interpreter's, so the bits equal both the
 // interpreter's and a plain C++ loop's.
 TEST(Jit, ProductsTooLargeToUnrollRunTiledWithTheInterpretersBits) {
@@ -1075,8 +1076,12 @@ func tiles(p : Point) -> r : vector[points](vector[6](float))
   end
   Q = P' * P;
   S = 0.5 * Q + Q;
+  var D : matrix[13,13](float);
+  for i in 0:13
+    D(i, i) = p.a;
+  end
   var Z : matrix[13,13](float);
-  Z = Z + S;
+  Z = Z + (S - D);
   var x : vector[13](float);
   for k in 0:13
     x(k) = R(3, k) - p.a;
@@ -1124,12 +1129,13 @@ end
       << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
   // Four loops per product (tiles down, tiles across, a tile's rows, k), one per element-wise
-  // operation (Z + S too: Z's zeros are one value for every component) and one per
-  // matrix-vector product (Z * x, and Z' * x reading Z's array transposed).
+  // operation (S - D, D put into an array; Z + (S - D) too: Z's zeros are one value for every
+  // component) and one per matrix-vector product (Z * x, and Z' * x reading Z's array
+  // transposed).
   size_t loops = 0;
   for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
     ++loops;
-  EXPECT_EQ(loops, 4u * 3u + 3u + 2u) << dump;
+  EXPECT_EQ(loops, 4u * 3u + 4u + 2u) << dump;
   expect_same(results[0][0], results[1][0], "r");
   // The reference: the same sums in plain C++.
   for (int e = 0; e < 3; ++e) {
@@ -1150,7 +1156,8 @@ end
       }
     double Z[13][13], wv[13], y = 0.0, u = 0.0;
     for (int i = 0; i < 13; ++i)
-      for (int j = 0; j < 13; ++j) Z[i][j] = 0.0 + (0.5 * Q[i][j] + Q[i][j]);
+      for (int j = 0; j < 13; ++j)
+        Z[i][j] = 0.0 + ((0.5 * Q[i][j] + Q[i][j]) - (i == j ? as[e] : 0.0));
     for (int k = 0; k < 13; ++k) wv[k] = R[3][k] - as[e];
     for (int k = 0; k < 13; ++k) y = y + Z[11][k] * wv[k];
     for (int k = 0; k < 13; ++k) u = u + Z[k][4] * wv[k];
