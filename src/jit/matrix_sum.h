@@ -16,11 +16,11 @@
 namespace simit::jit {
 
 struct FusedSum {
-  const frontend::ast::Variable* target = nullptr;  // A
-  const frontend::ast::Variable* base = nullptr;    // M
-  const frontend::ast::Variable* scaled = nullptr;  // K, dead after the statement
-  const frontend::ast::Expr* factor = nullptr;      // s
-  bool subtract = false;                            // M - s * K (else M + s * K)
+  const frontend::ast::Variable* target = nullptr;    // A
+  const frontend::ast::Variable* base = nullptr;      // M
+  const frontend::ast::Variable* scaled = nullptr;    // K, dead after the statement
+  const frontend::ast::Expr* factor = nullptr;        // s
+  bool subtract = false;                              // M - s * K (else M + s * K)
   const frontend::ast::Assembly* producer = nullptr;  // the map K = map ... assembles
   int producer_line = 0;
 };
