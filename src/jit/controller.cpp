@@ -12,12 +12,12 @@
 #include "interp/interpreter.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
-#include "runtime/system_ops.h"
 #include "jit/decompose_call.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
+#include "runtime/system_ops.h"
 
 namespace simit::jit {
 
@@ -1091,8 +1091,8 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
   if (!runtime::add_into(*m, 1.0, *k, beta)) {
-    s.stats.status = "interpreted: " + sum.base->name + " has blocks outside the pattern of " +
-                     sum.scaled->name;
+    s.stats.status =
+        "interpreted: " + sum.base->name + " has blocks outside the pattern of " + sum.scaled->name;
     return false;
   }
   s.stats.cpu_ms += thread_cpu_ms() - cpu;
@@ -1103,8 +1103,10 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   if (want) {
     const runtime::MatrixPattern &pw = want->pattern(), &pk = k->pattern();
     if (pw.row_ptr() != pk.row_ptr() || pw.col_idx() != pk.col_idx())
-      throw interp::RuntimeError(stmt.span, "--check-jit: the fused sum's pattern differs from "
-                                            "the interpreter's for '" + sum.target->name + "'");
+      throw interp::RuntimeError(stmt.span,
+                                 "--check-jit: the fused sum's pattern differs from "
+                                 "the interpreter's for '" +
+                                     sum.target->name + "'");
     for (size_t c = 0; c < want->value_count(); ++c)
       if (!same_bits(want->values()[c], k->values()[c]))
         throw interp::RuntimeError(
