@@ -89,7 +89,15 @@ void print_expr(std::ostream& os, const Expr& e) {
     case ExprKind::Load:
       os << "a" << e.slot << "[";
       print_expr(os, *e.ops[0]);
-      os << "]." << e.comp;
+      os << "].";
+      if (e.ops.size() < 2) {
+        os << e.comp;
+        return;
+      }
+      os << "(";
+      if (e.comp) os << e.comp << " + ";
+      print_expr(os, *e.ops[1]);
+      os << ")";
       return;
     case ExprKind::Local: os << "%" << e.slot; return;
     case ExprKind::Unary:
@@ -298,6 +306,7 @@ class Verifier {
         if (error_.empty() && (e.comp < 0 || e.comp >= t_.arrays[e.slot].components))
           fail("load of component " + std::to_string(e.comp) + " out of range");
         need(e.ops.at(0), Ty::I32, "load index");
+        if (e.ops.size() > 1) need(e.ops[1], Ty::I32, "load component");
         return;
       case ExprKind::Local:
         if (e.slot < 0 || static_cast<size_t>(e.slot) >= t_.locals.size())

@@ -32,7 +32,7 @@ const char* ty_name(Ty t);
   X(Scalar)   /* the call's scalar argument `slot`                              */ \
   X(Element)  /* the index of the visited element                               */ \
   X(Endpoint) /* endpoint `slot` of the visited element                         */ \
-  X(Load)     /* component `comp` of array `slot` at element ops[0]            */  \
+  X(Load)     /* component `comp` (+ ops[1]) of array `slot` at ops[0]         */  \
   X(Local)    /* the value of local `slot`                                      */ \
   X(Unary)    /* op(ops[0])                                                     */ \
   X(Binary)   /* ops[0] op ops[1]                                               */ \

@@ -354,7 +354,7 @@ class Tracer {
     std::unordered_map<const ast::Variable*, std::vector<int>> merged;  // mutable locals
   };
   struct CachedLoad {
-    int local;
+    int local;  // the local loaded into; for a whole tiled tensor (comp -1), its scratch array
     int block;
   };
 
@@ -431,6 +431,7 @@ class Tracer {
 
   // Loads of fields, cached per block so that each component is read once.
   ExprRef load(int slot, int member, int comp, const SourceSpan& at);
+  Sym load_tensor(int slot, int member, std::vector<int> dims, const SourceSpan& at);
   void forget_loads(int slot) {
     for (auto it = loads_.begin(); it != loads_.end();)
       it = std::get<0>(it->first) == slot ? loads_.erase(it) : std::next(it);
@@ -492,7 +493,8 @@ class Tracer {
   ScratchView in_scratch(const Sym& s, const SourceSpan& at);
   Sym tiled_product(const Sym& l, const Sym& r, const SourceSpan& at);
   bool tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const SourceSpan& at, Sym& out);
-  bool tiled_matvec(const Sym& l, const Sym& r, const SourceSpan& at, Sym& out);
+  bool tiled_matvec(const Sym& a, const Sym& x, bool row_vector, const SourceSpan& at, Sym& out);
+  bool tiled_outer(const Sym& u, const Sym& v, const SourceSpan& at, Sym& out);
   // A For statement of `trips` iterations whose body `body(k)` emits, k its I32 local.
   template <class F>
   void for_loop(int trips, const SourceSpan& at, F body) {
@@ -717,11 +719,38 @@ Sym Tracer::eval_field(const ast::FieldRead& f) {
   Sym base = eval(*f.base);
   if (base.kind != Sym::Kind::Element) give_up(f.span, "a field of something other than a member");
   const int slot = field_array(base.member, f.field, f.span);
+  return load_tensor(slot, base.member, dims_of(*f.type, f.span), f.span);
+}
+
+// The components of array `slot` at a member as a tensor: each loaded once (cached per
+// block); a float tensor of more than kTileAbove components by one loop into a scratch array.
+Sym Tracer::load_tensor(int slot, int member, std::vector<int> dims, const SourceSpan& at) {
   const ArraySlot& a = trace_.arrays[slot];
-  std::vector<int> dims = dims_of(*f.type, f.span);
+  const size_t n = static_cast<size_t>(a.components);
   std::vector<ExprRef> c;
-  for (int k = 0; k < a.components; ++k) c.push_back(load(slot, base.member, k, f.span));
-  return tensor(a.ty, std::move(dims), std::move(c));
+  if (a.ty != Ty::F64 || n <= kTileAbove) {
+    for (int k = 0; k < a.components; ++k) c.push_back(load(slot, member, k, at));
+    return tensor(a.ty, std::move(dims), std::move(c));
+  }
+  const auto key = std::make_tuple(slot, member, -1);
+  auto it = loads_.find(key);
+  if (it == loads_.end() ||
+      std::find(blocks_.begin(), blocks_.end(), it->second.block) == blocks_.end()) {
+    const int array = new_scratch(n, false);
+    for_loop(a.components, at, [&](const ExprRef& k) {
+      Expr e;
+      e.kind = ExprKind::Load;
+      e.ty = Ty::F64;
+      e.slot = slot;
+      e.ops = {member_index(member), k};
+      e.span = at;
+      put(array, k, make(std::move(e)), at);
+    });
+    it = loads_.insert_or_assign(key, CachedLoad{array, blocks_.back()}).first;
+  }
+  for (size_t k = 0; k < n; ++k)
+    c.push_back(read_scratch(it->second.local, iconst(static_cast<int64_t>(k)), at));
+  return tensor(Ty::F64, std::move(dims), std::move(c));
 }
 
 Sym Tracer::eval_tuple(const ast::TupleRead& t) {
@@ -745,10 +774,7 @@ Sym Tracer::eval_read(const ast::TensorRead& r) {
     Sym at = eval(*r.indices[0]);
     if (at.kind != Sym::Kind::Element)
       give_up(r.span, "a global vector read that is not at a member");
-    const ArraySlot& a = trace_.arrays[base.slot];
-    std::vector<ExprRef> c;
-    for (int k = 0; k < a.components; ++k) c.push_back(load(base.slot, at.member, k, r.span));
-    return tensor(a.ty, dims_of(*r.type, r.span), std::move(c));
+    return load_tensor(base.slot, at.member, dims_of(*r.type, r.span), r.span);
   }
   if (base.kind == Sym::Kind::Matrix) return read_matrix_block(base, r);
   if (base.kind != Sym::Kind::Tensor) give_up(r.span, "reading from this value is not compiled");
@@ -868,6 +894,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
       return scalar(Ty::F64, sum(n, [&](int k) { return mul(l.c[k], r.c[k]); }));
     }
     if (lrow || !rrow) give_up(at, "product of two vectors of the same orientation");
+    if (Sym tiled; tiled_outer(l, r, at, tiled)) return tiled;
     check_components(static_cast<size_t>(n) * m, at);
     std::vector<ExprRef> c;
     for (int i = 0; i < n; ++i)
@@ -877,7 +904,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   if (lo == 2 && ro == 1) {
     const int m = l.dims[0], n = l.dims[1];
     if (r.dims[0] != n) give_up(at, "matrix-vector dimensions do not match");
-    if (Sym tiled; tiled_matvec(l, r, at, tiled)) return tiled;
+    if (Sym tiled; tiled_matvec(l, r, false, at, tiled)) return tiled;
     std::vector<ExprRef> c;
     for (int i = 0; i < m; ++i)
       c.push_back(sum(n, [&](int k) { return mul(l.c[i * n + k], r.c[k]); }));
@@ -886,6 +913,7 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   if (lo == 1 && ro == 2) {
     const int n = r.dims[0], m = r.dims[1];
     if (l.dims[0] != n) give_up(at, "vector-matrix dimensions do not match");
+    if (Sym tiled; tiled_matvec(r, l, true, at, tiled)) return tiled;
     std::vector<ExprRef> c;
     for (int j = 0; j < m; ++j)
       c.push_back(sum(n, [&](int k) { return mul(l.c[k], r.c[k * m + j]); }));
@@ -918,10 +946,10 @@ int tile_extent(int n) {
   return 1;
 }
 
-// Whether matrix s reads its components from one scratch array in order (or transposed),
-// component k at a constant position.
+// Whether tensor s reads its components from one scratch array in order (a matrix also
+// transposed), component k at a constant position.
 Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
-  if (s.kind != Sym::Kind::Tensor || s.blocked() || s.dims.size() != 2 || s.c.empty() ||
+  if (s.kind != Sym::Kind::Tensor || s.blocked() || s.dims.empty() || s.c.empty() ||
       s.c[0]->kind != ExprKind::Scratch)
     return {};
   const int array = s.c[0]->slot;
@@ -932,6 +960,11 @@ Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
            static_cast<size_t>(e.ops[0]->i) == want &&
            e.loose == scratch_loose_[static_cast<size_t>(array)];
   };
+  if (s.dims.size() != 2) {
+    for (size_t k = 0; k < s.size(); ++k)
+      if (!at(k, k)) return {};
+    return {array, false};
+  }
   const size_t rows = static_cast<size_t>(s.dims[0]), cols = static_cast<size_t>(s.dims[1]);
   bool straight = true, transposed = true;
   for (size_t i = 0; i < rows; ++i)
@@ -944,7 +977,7 @@ Tracer::ScratchView Tracer::scratch_view(const Sym& s) const {
   return {};
 }
 
-// Matrix s in a scratch array: where it already lies, or put there now.
+// Tensor s in a scratch array: where it already lies, or put there now.
 Tracer::ScratchView Tracer::in_scratch(const Sym& s, const SourceSpan& at) {
   if (ScratchView v = scratch_view(s); v.array >= 0) return v;
   // A zero folded into a component may have the other sign (jit/zero_fold.h): the array is
@@ -1011,34 +1044,69 @@ bool Tracer::tiled_elementwise(BinOp op, const Sym& l, const Sym& r, const Sourc
 }
 
 // A matrix of more than kTileAbove components that lies in a scratch array (in order or
-// transposed) times a vector: one loop over the rows, each row's sum from +0.0 over k
-// unrolled in it, as the unrolled product sums. False where it does not apply.
-bool Tracer::tiled_matvec(const Sym& l, const Sym& r, const SourceSpan& at, Sym& out) {
-  const int m = l.dims[0], n = l.dims[1];
-  if (l.size() <= kTileAbove || l.blocked() || r.blocked()) return false;
-  const ScratchView v = scratch_view(l);
+// transposed) times a vector, or a row vector times it: one loop over the result's
+// components, each one's sum from +0.0 over k unrolled in it, the factors in the order the
+// unrolled product multiplies them. False where it does not apply.
+bool Tracer::tiled_matvec(const Sym& a, const Sym& x, bool row_vector, const SourceSpan& at,
+                          Sym& out) {
+  if (a.size() <= kTileAbove || a.blocked() || x.blocked()) return false;
+  const ScratchView v = scratch_view(a);
   if (v.array < 0) return false;
-  for (const ExprRef& x : r.c)
-    if (x->loose) return false;  // a folded zero's product would fold inside the loop
-  const int li = v.transposed ? 1 : n, lk = v.transposed ? m : 1;
+  for (const ExprRef& e : x.c)
+    if (e->loose) return false;  // a folded zero's product would fold inside the loop
+  const int rows = a.dims[0], cols = a.dims[1];
+  // Component (i, k) of the matrix lies at i * ai + k * ak of its array.
+  const int ai = v.transposed ? 1 : cols, ak = v.transposed ? rows : 1;
+  // A * x: result i is the sum over k of a(i, k) x(k); x' * A: result j of x(k) a(k, j).
+  const int trips = row_vector ? cols : rows, n = row_vector ? rows : cols;
+  const int per_result = row_vector ? ak : ai, per_k = row_vector ? ai : ak;
   const int result =
-      new_scratch(static_cast<size_t>(m), scratch_loose_[static_cast<size_t>(v.array)]);
-  for_loop(m, at, [&](const ExprRef& i) {
-    const ExprRef row = local_i32(i32_mul(i, li, at), at);
+      new_scratch(static_cast<size_t>(trips), scratch_loose_[static_cast<size_t>(v.array)]);
+  auto mul = [&](ExprRef p, ExprRef q) {
+    if (row_vector) std::swap(p, q);
+    return node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {p, q}, at);
+  };
+  for_loop(trips, at, [&](const ExprRef& i) {
+    const ExprRef first = local_i32(i32_mul(i, per_result, at), at);
     ExprRef sum = fconst(0.0);
     for (int k = 0; k < n; ++k) {
       ExprRef term =
-          node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul),
-               {scratch_read(v.array, i32_add(row, static_cast<int64_t>(k) * lk, at), at),
-                r.c[static_cast<size_t>(k)]},
-               at);
+          mul(scratch_read(v.array, i32_add(first, static_cast<int64_t>(k) * per_k, at), at),
+              x.c[static_cast<size_t>(k)]);
       sum = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, term}, at);
     }
     put(result, i, sum, at);
   });
   std::vector<ExprRef> c;
-  for (int i = 0; i < m; ++i) c.push_back(read_scratch(result, iconst(i), at));
-  out = tensor(Ty::F64, {m}, std::move(c));
+  for (int i = 0; i < trips; ++i) c.push_back(read_scratch(result, iconst(i), at));
+  out = tensor(Ty::F64, {trips}, std::move(c));
+  return true;
+}
+
+// An outer product u v' of more than kTileAbove components: u in a scratch array, one loop
+// over its components, each a row of the result (one rounding per component, as unrolled).
+// False where it does not apply.
+bool Tracer::tiled_outer(const Sym& u, const Sym& v, const SourceSpan& at, Sym& out) {
+  const int n = u.dims[0], m = v.dims[0];
+  if (static_cast<size_t>(n) * m <= kTileAbove || u.blocked() || v.blocked()) return false;
+  for (const Sym* s : {&u, &v})
+    for (const ExprRef& e : s->c)
+      if (e->loose) return false;  // as in tiled_matvec
+  check_components(static_cast<size_t>(n) * m, at);
+  const int ua = in_scratch(u, at).array;
+  const int result = new_scratch(static_cast<size_t>(n) * m, false);
+  for_loop(n, at, [&](const ExprRef& i) {
+    const ExprRef row = local_i32(i32_mul(i, m, at), at);
+    const ExprRef ui = scratch_read(ua, i, at);
+    for (int j = 0; j < m; ++j)
+      put(result, i32_add(row, j, at),
+          node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul),
+               {ui, v.c[static_cast<size_t>(j)]}, at),
+          at);
+  });
+  std::vector<ExprRef> c;
+  for (int k = 0; k < n * m; ++k) c.push_back(read_scratch(result, iconst(k), at));
+  out = tensor(Ty::F64, {n, m}, std::move(c));
   return true;
 }
 

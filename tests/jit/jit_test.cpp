@@ -1167,6 +1167,134 @@ end
   }
 }
 
+// Tensors of more than 144 components that come from fields, outer products and element-wise
+// operations lie in scratch arrays and run as loops: a 13 x 13 field is loaded by one loop
+// (binary64 and binary32 storage; a second read of it reuses the array), the outer product
+// u w' is one loop over u, and the sums, differences, scaling and both kinds of
+// matrix-vector product (T u, w' T, A' w) one loop each. The bits equal the interpreter's
+// and a plain C++ loop's.
+TEST(Jit, LargeTensorsFromFieldsAndOuterProductsRunAsLoops) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const char* program = R"(
+element Point
+  A : matrix[13,13](float);
+  B : matrix[13,13](float);
+  u : vector[13](float);
+  w : vector[13](float);
+  a : float;
+end
+extern points : set{Point};
+func big(p : Point) -> r : vector[points](vector[7](float))
+  O = p.u * p.w';
+  S = p.A + O;
+  T = p.a * p.B - S;
+  y = T * p.u;
+  z = p.w' * T;
+  q = p.A' * p.w;
+  var v : vector[7](float);
+  v(0) = T(12, 3);
+  v(1) = y(7);
+  v(2) = z(11);
+  v(3) = q(5);
+  v(4) = O(4, 9);
+  v(5) = S(0, 12) + p.A(3, 3);
+  v(6) = p.B(2, 11);
+  r(p) = v;
+end
+export func step() -> r : vector[points](vector[7](float))
+  r = map big to points;
+end
+)";
+  constexpr int n = 13, count = 3;
+  // The fields' values: A, B (binary32), u, w, a per element.
+  auto value = [](int field, int e, int k) {
+    return std::sin(0.37 * (k + 1) + 1.3 * field + 0.71 * e) * (1.0 + field);
+  };
+  std::vector<Value> results[2];
+  std::string dump, stats;
+  double stored_b[count][n * n];
+  for (int run = 0; run < 2; ++run) {
+    auto compiled = CompiledProgram::from_source("big.sim", program);
+    ASSERT_TRUE(compiled->ok());
+    runtime::Set points("points");
+    points.add_many(count);
+    points.add_field("A", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, false});
+    points.add_field("B", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, true});
+    points.add_field("u", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
+    points.add_field("w", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
+    points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    auto field = [&](const char* name) -> runtime::Field& {
+      return points.field(points.field_index(name));
+    };
+    for (int e = 0; e < count; ++e) {
+      for (int k = 0; k < n * n; ++k) {
+        field("A").at<double>(e)[k] = value(0, e, k);
+        field("B").at<float>(e)[k] = static_cast<float>(value(1, e, k));
+      }
+      for (int k = 0; k < n; ++k) {
+        field("u").at<double>(e)[k] = value(2, e, k);
+        field("w").at<double>(e)[k] = value(3, e, k);
+      }
+      field("a").at<double>(e)[0] = value(4, e, 0);
+    }
+    // The reference reads the values back as stored (B's rounded to binary32).
+    for (int e = 0; e < count; ++e)
+      for (int k = 0; k < n * n; ++k) stored_b[e][k] = field("B").at<float>(e)[k];
+    std::ostringstream dumped;
+    EngineOptions o;
+    o.executor = run ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    o.jit.dump = &dumped;
+    o.jit.dump_loop_ir = true;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("points"), points);
+    results[run] = engine.call(*compiled->find_func("step"), {});
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (run) stats = os.str(), dump = dumped.str();
+  }
+  EXPECT_NE(stats.find("big (line " + std::to_string(line_of(program, "map big")) + ")"),
+            std::string::npos)
+      << stats;
+  EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
+  // Loads of A and B, the outer product, A + O, a * B, minus S, T u, w' T and A' w.
+  size_t loops = 0;
+  for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
+    ++loops;
+  EXPECT_EQ(loops, 9u) << dump;
+  // No component of the 13 x 13 fields is loaded one by one.
+  EXPECT_EQ(dump.find("].168"), std::string::npos) << dump;
+  expect_same(results[0][0], results[1][0], "r");
+  // The reference: the same operations in plain C++.
+  for (int e = 0; e < count; ++e) {
+    double A[n][n], B[n][n], u[n], w[n], O[n][n], S[n][n], T[n][n];
+    for (int i = 0; i < n; ++i) {
+      u[i] = value(2, e, i);
+      w[i] = value(3, e, i);
+      for (int j = 0; j < n; ++j) {
+        A[i][j] = value(0, e, i * n + j);
+        B[i][j] = stored_b[e][i * n + j];
+      }
+    }
+    const double a = value(4, e, 0);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        O[i][j] = u[i] * w[j];
+        S[i][j] = A[i][j] + O[i][j];
+        T[i][j] = a * B[i][j] - S[i][j];
+      }
+    double y = 0.0, z = 0.0, q = 0.0;
+    for (int k = 0; k < n; ++k) {
+      y = y + T[7][k] * u[k];
+      z = z + w[k] * T[k][11];
+      q = q + A[k][5] * w[k];
+    }
+    const double want[7] = {T[12][3], y, z, q, O[4][9], S[0][12] + A[3][3], B[2][11]};
+    expect_same_bits(results[1][0].tensor().floats() + 7 * e, want, 7,
+                     "element " + std::to_string(e));
+  }
+}
+
 // Every component of a dense local becomes a value of its own: a tensor of more than
 // kMaxDenseComponents stays interpreted, saying why, and computes what the interpreter does.
 // The mapped function's two writes to its result are no run of statements of their own.

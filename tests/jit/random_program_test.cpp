@@ -443,15 +443,18 @@ std::string ProgramGen::fscalar(Fn& f, int d) {
 }
 
 // A value of shape s through a product too large to unroll (the JIT tiles it): K x K outer
-// products multiplied, scaled and added element-wise (loops over their scratch arrays), then
-// brought to s through products with K-vectors.
+// products (loops) multiplied, scaled and added element-wise (loops over their scratch
+// arrays), then brought to s through products with K-vectors, on the right or the left.
 std::string ProgramGen::big_product(Fn& f, Shape s, int d) {
   const int k = pick(13, 24);
   auto kv = [&] { return literal({k, 0}); };
   auto big = [&] { return "((" + kv() + " * " + kv() + "') * (" + kv() + " * " + kv() + "'))"; };
   const std::string mixed = "(" + fexpr(f, {}, d) + " * " + big() + " + " + big() + ")";
   const std::string left = "(" + fexpr(f, {s.rows, 0}, d) + " * " + kv() + "')";
-  if (s.vector()) return "(" + left + " * (" + mixed + " * " + kv() + "))";
+  // The K-vector on either side of the matrix (a loop over rows or over columns).
+  const std::string reduced =
+      coin(0.5) ? "(" + mixed + " * " + kv() + ")" : "(" + kv() + "' * " + mixed + ")'";
+  if (s.vector()) return "(" + left + " * " + reduced + ")";
   return "(" + left + " * (" + mixed + " * (" + kv() + " * " + fexpr(f, {s.cols, 0}, d) + "')))";
 }
 

@@ -131,10 +131,13 @@ Value* Emitter::expr(const Expr& e) {
   }
 }
 
-// Component e.comp of array e.slot at the (scalar) element index.
+// Component e.comp (plus ops[1], a loop's counter, where given) of array e.slot at the
+// (scalar) element index.
 Value* Emitter::load(const Expr& e, Value* index) {
   const ArraySlot& a = slots_[e.slot];
-  llvm::LoadInst* v = b_.CreateLoad(storage(a), address(e.slot, index, e.comp));
+  Value* comp = b_.getInt64(e.comp);
+  if (e.ops.size() > 1) comp = b_.CreateAdd(comp, b_.CreateSExt(expr(*e.ops[1]), b_.getInt64Ty()));
+  llvm::LoadInst* v = b_.CreateLoad(storage(a), address(e.slot, index, comp));
   tag(v, e.slot);
   if (a.ty == Ty::F64 && a.single) return b_.CreateFPExt(v, b_.getDoubleTy());
   if (a.ty == Ty::Bool) return b_.CreateICmpNE(v, b_.getInt8(0));

@@ -58,12 +58,15 @@ class Emitter {
   }
   // Address of component `comp` of element `index` of array `slot`.
   Value* address(int slot, Value* index, int comp) {
+    return address(slot, index, b_.getInt64(comp));
+  }
+  Value* address(int slot, Value* index, Value* comp) {  // comp: an i64
     const ArraySlot& a = slots_[slot];
     // The visited element as the i64 it was computed from: LLVM then sees that a pass reads
     // the component a product has just stored (and keeps it in a register).
     Value* i =
         index == element_ && element_wide_ ? element_wide_ : b_.CreateSExt(index, b_.getInt64Ty());
-    Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), b_.getInt64(comp));
+    Value* at = b_.CreateAdd(b_.CreateMul(i, b_.getInt64(a.components)), comp);
     return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
   }
   Value* math(const Expr& e, const std::vector<Value*>& args);
