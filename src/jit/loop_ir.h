@@ -4,9 +4,10 @@
 // A trace is scalar code: the tracer (jit/trace_site.h) has already inlined the calls,
 // unrolled the loops over constant ranges and split every small dense tensor into its
 // components, so what is left is arithmetic, loads, guarded blocks and the assembly writes.
-// The exception is a matrix product too large to unroll, and element-wise operations and
-// matrix-vector products on its result (tiled dense tensors): their operands and results lie
-// in per-element scratch arrays, and they run as loops (a product over 12 x 12 tiles).
+// The exception is tensors of more than 144 components (a product too large to unroll, a
+// large field, an outer product, and element-wise operations and matrix-vector products on
+// them: tiled dense tensors): their operands and results lie in per-element scratch arrays,
+// and they run as loops (a product over 12 x 12 tiles).
 // Every node keeps the source span it came from, so a failing check names the `.sim` line.
 #pragma once
 

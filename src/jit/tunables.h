@@ -23,8 +23,9 @@ inline constexpr size_t kMaxDenseComponents = 1024;
 // runs as loops over kTile x kTile tiles of its result (loop_ir.h).
 inline constexpr size_t kMaxUnrolledProduct = 1728;
 inline constexpr int kTile = 12;
-// An element-wise operation on a matrix of more components than this, whose operands lie in
-// scratch arrays (a tiled product's result), runs as one loop over them rather than unrolled.
+// A float tensor of more components than this that a field holds, an outer product makes or
+// an element-wise operation or matrix-vector product computes from one in a scratch array (a
+// tiled product's result) lies in a scratch array and is computed by a loop, not unrolled.
 inline constexpr size_t kTileAbove = 144;
 // Calls inlined inside one another.
 inline constexpr int kMaxInlineDepth = 32;
