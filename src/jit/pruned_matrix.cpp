@@ -7,12 +7,14 @@ namespace simit::jit {
 
 namespace {
 
-// Whether every component is +0.0 or -0.0, without a branch per component.
+// Whether every component is +0.0 or -0.0: the bits but the sign, or-ed together, without a
+// branch or a chain of floating-point additions per component (a NaN or an infinity has bits
+// there, and the block is kept).
 template <int N>
 bool all_zero(const double* b) {
-  double m = 0.0;
-  for (int i = 0; i < N; ++i) m = m + (b[i] < 0.0 ? -b[i] : b[i]);
-  return m == 0.0;  // a NaN makes m NaN, and the block is kept
+  uint64_t m = 0;
+  for (int i = 0; i < N; ++i) m |= std::bit_cast<uint64_t>(b[i]);
+  return (m << 1) == 0;
 }
 
 // Rows with N x N blocks; n is the run-time size when N is 0. One pass: each block is

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 
 #include "api/engine.h"
@@ -315,8 +316,9 @@ TEST(LoopIr, APassMovesUpToTheLoopItCanJoin) {
 // ---------------------------------------------------------------------------
 // The compiled products' copy of a matrix
 
-// A solver loop's copy of a matrix drops its zero blocks, holds the others by columns, and is
-// padded so that a 3-component column loads as one 4-lane vector.
+// A solver loop's copy of a matrix drops its zero blocks (of either sign; a block with a
+// subnormal, a NaN or an infinity is kept), holds the others by columns, and is padded so that
+// a 3-component column loads as one 4-lane vector.
 TEST(PrunedMatrix, TheCopyDropsZeroBlocksHoldsColumnsAndIsPadded) {
   std::vector<int32_t> row_ptr{0}, cols;
   for (int r = 0; r < 5; ++r) {
@@ -327,11 +329,18 @@ TEST(PrunedMatrix, TheCopyDropsZeroBlocksHoldsColumnsAndIsPadded) {
   for (size_t i = 0; i < k.value_count(); ++i)
     k.values()[i] = 0.1 * static_cast<double>(i % 17) - 0.7;
   for (int i = 0; i < 9; ++i) k.block(1)[i] = i == 4 ? -0.0 : 0.0;  // block (0, 1): dropped
+  // Zeros but for one subnormal, one NaN, one -infinity: kept; all -0.0: dropped.
+  const double odd[3] = {std::numeric_limits<double>::denorm_min(),
+                         std::numeric_limits<double>::quiet_NaN(),
+                         -std::numeric_limits<double>::infinity()};
+  for (int b = 0; b < 3; ++b)
+    for (int i = 0; i < 9; ++i) k.block(3 + b)[i] = i == 8 - b ? odd[b] : -0.0;
+  for (int i = 0; i < 9; ++i) k.block(6)[i] = -0.0;  // block (2, 2): dropped
   PrunedMatrix p;
   p.assign(k);
   EXPECT_EQ(p.total, 13);
-  EXPECT_EQ(p.kept, 12);
-  EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 4, 7, 10, 12}));
+  EXPECT_EQ(p.kept, 11);
+  EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 4, 6, 9, 11}));
   EXPECT_EQ(p.cols[0], 0);
   EXPECT_EQ(p.cols[1], 0);  // row 1 starts with block (1, 0)
   ASSERT_EQ(p.values.size(), 13u * 9 + 1);
