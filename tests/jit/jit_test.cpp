@@ -1180,7 +1180,7 @@ end
 // operations lie in scratch arrays and run as loops: a 13 x 13 field is loaded by one loop
 // (binary64 and binary32 storage; a second read of it reuses the array), the outer product
 // u w' is one loop over u, and the sums, differences, scaling and both kinds of
-// matrix-vector product (T u, w' T, A' w) one loop each. The bits equal the interpreter's
+// matrix-vector product (T u, w' T, A' w, u' S') one loop each. The bits equal the interpreter's
 // and a plain C++ loop's.
 TEST(Jit, LargeTensorsFromFieldsAndOuterProductsRunAsLoops) {
   if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
@@ -1193,14 +1193,15 @@ element Point
   a : float;
 end
 extern points : set{Point};
-func big(p : Point) -> r : vector[points](vector[7](float))
+func big(p : Point) -> r : vector[points](vector[8](float))
   O = p.u * p.w';
   S = p.A + O;
   T = p.a * p.B - S;
   y = T * p.u;
   z = p.w' * T;
   q = p.A' * p.w;
-  var v : vector[7](float);
+  t = p.u' * S';
+  var v : vector[8](float);
   v(0) = T(12, 3);
   v(1) = y(7);
   v(2) = z(11);
@@ -1208,9 +1209,10 @@ func big(p : Point) -> r : vector[points](vector[7](float))
   v(4) = O(4, 9);
   v(5) = S(0, 12) + p.A(3, 3);
   v(6) = p.B(2, 11);
+  v(7) = t(4);
   r(p) = v;
 end
-export func step() -> r : vector[points](vector[7](float))
+export func step() -> r : vector[points](vector[8](float))
   r = map big to points;
 end
 )";
@@ -1266,11 +1268,11 @@ end
             std::string::npos)
       << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
-  // Loads of A and B, the outer product, A + O, a * B, minus S, T u, w' T and A' w.
+  // Loads of A and B, the outer product, A + O, a * B, minus S, T u, w' T, A' w and u' S'.
   size_t loops = 0;
   for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
     ++loops;
-  EXPECT_EQ(loops, 9u) << dump;
+  EXPECT_EQ(loops, 10u) << dump;
   // No component of the 13 x 13 fields is loaded one by one.
   EXPECT_EQ(dump.find("].168"), std::string::npos) << dump;
   expect_same(results[0][0], results[1][0], "r");
@@ -1292,14 +1294,15 @@ end
         S[i][j] = A[i][j] + O[i][j];
         T[i][j] = a * B[i][j] - S[i][j];
       }
-    double y = 0.0, z = 0.0, q = 0.0;
+    double y = 0.0, z = 0.0, q = 0.0, t = 0.0;
     for (int k = 0; k < n; ++k) {
       y = y + T[7][k] * u[k];
       z = z + w[k] * T[k][11];
       q = q + A[k][5] * w[k];
+      t = t + u[k] * S[4][k];
     }
-    const double want[7] = {T[12][3], y, z, q, O[4][9], S[0][12] + A[3][3], B[2][11]};
-    expect_same_bits(results[1][0].tensor().floats() + 7 * e, want, 7,
+    const double want[8] = {T[12][3], y, z, q, O[4][9], S[0][12] + A[3][3], B[2][11], t};
+    expect_same_bits(results[1][0].tensor().floats() + 8 * e, want, 8,
                      "element " + std::to_string(e));
   }
 }
