@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -1046,6 +1047,47 @@ int line_of(const std::string& s, const std::string& what) {
   return 1 + static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(at), '\n'));
 }
 
+// A program whose `step` maps over a set `points` of `count` elements, whose fields `fill`
+// adds, run interpreted and then by the JIT at threshold 0: both runs' results, the JIT's
+// loop-IR dump and its stats.
+struct PointsRuns {
+  std::vector<Value> results[2];
+  std::string dump, stats;
+};
+PointsRuns run_points_both_ways(const char* file, const char* program, int count,
+                                const std::function<void(runtime::Set&)>& fill) {
+  PointsRuns out;
+  for (int k = 0; k < 2; ++k) {
+    auto compiled = CompiledProgram::from_source(file, program);
+    EXPECT_TRUE(compiled->ok());
+    if (!compiled->ok()) return out;
+    runtime::Set points("points");
+    points.add_many(count);
+    fill(points);
+    std::ostringstream dumped;
+    EngineOptions o;
+    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.jit.threshold = 0;
+    o.jit.dump = &dumped;
+    o.jit.dump_loop_ir = true;
+    Engine engine(compiled, o);
+    engine.bind_set(*compiled->find_extern("points"), points);
+    out.results[k] = engine.call(*compiled->find_func("step"), {});
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    if (k) out.stats = os.str(), out.dump = dumped.str();
+  }
+  return out;
+}
+
+// The loops (For statements) of a loop-IR dump.
+size_t count_loops(const std::string& dump) {
+  size_t loops = 0;
+  for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
+    ++loops;
+  return loops;
+}
+
 // Products too large to unroll run as loops over tiles of scratch arrays: a 26 x 7 by 7 x 13
 // product (tiles of 2 x 1: the largest extents up to 12 that divide 26 and 13), in one branch
 // of an if, or its transpose's transpose in the other (the same bits: each term is a
@@ -1111,28 +1153,11 @@ export func step() -> r : vector[points](vector[6](float))
 end
 )";
   const double as[] = {0.5, -1.25, 3.0};
-  std::vector<Value> results[2];
-  std::string dump, stats;
-  for (int k = 0; k < 2; ++k) {
-    auto compiled = CompiledProgram::from_source("tiles.sim", program);
-    ASSERT_TRUE(compiled->ok());
-    runtime::Set points("points");
-    points.add_many(3);
-    points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
-    for (int i = 0; i < 3; ++i) points.field(0).at<double>(i)[0] = as[i];
-    std::ostringstream dumped;
-    EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
-    o.jit.dump = &dumped;
-    o.jit.dump_loop_ir = true;
-    Engine engine(compiled, o);
-    engine.bind_set(*compiled->find_extern("points"), points);
-    results[k] = engine.call(*compiled->find_func("step"), {});
-    std::ostringstream os;
-    engine.print_jit_stats(os);
-    if (k) stats = os.str(), dump = dumped.str();
-  }
+  const auto [results, dump, stats] =
+      run_points_both_ways("tiles.sim", program, 3, [&](runtime::Set& points) {
+        points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+        for (int i = 0; i < 3; ++i) points.field(0).at<double>(i)[0] = as[i];
+      });
   EXPECT_NE(stats.find("tiles (line " + std::to_string(line_of(program, "map tiles")) + ")"),
             std::string::npos)
       << stats;
@@ -1141,10 +1166,7 @@ end
   // operation (S - D, D put into an array; Z + (S - D) too: Z's zeros are one value for every
   // component) and one per matrix-vector product (Z * x, and Z' * x reading Z's array
   // transposed).
-  size_t loops = 0;
-  for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
-    ++loops;
-  EXPECT_EQ(loops, 4u * 3u + 4u + 2u) << dump;
+  EXPECT_EQ(count_loops(dump), 4u * 3u + 4u + 2u) << dump;
   expect_same(results[0][0], results[1][0], "r");
   // The reference: the same sums in plain C++.
   for (int e = 0; e < 3; ++e) {
@@ -1221,58 +1243,37 @@ end
   auto value = [](int field, int e, int k) {
     return std::sin(0.37 * (k + 1) + 1.3 * field + 0.71 * e) * (1.0 + field);
   };
-  std::vector<Value> results[2];
-  std::string dump, stats;
   double stored_b[count][n * n];
-  for (int run = 0; run < 2; ++run) {
-    auto compiled = CompiledProgram::from_source("big.sim", program);
-    ASSERT_TRUE(compiled->ok());
-    runtime::Set points("points");
-    points.add_many(count);
-    points.add_field("A", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, false});
-    points.add_field("B", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, true});
-    points.add_field("u", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
-    points.add_field("w", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
-    points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
-    auto field = [&](const char* name) -> runtime::Field& {
-      return points.field(points.field_index(name));
-    };
-    for (int e = 0; e < count; ++e) {
-      for (int k = 0; k < n * n; ++k) {
-        field("A").at<double>(e)[k] = value(0, e, k);
-        field("B").at<float>(e)[k] = static_cast<float>(value(1, e, k));
-      }
-      for (int k = 0; k < n; ++k) {
-        field("u").at<double>(e)[k] = value(2, e, k);
-        field("w").at<double>(e)[k] = value(3, e, k);
-      }
-      field("a").at<double>(e)[0] = value(4, e, 0);
-    }
-    // The reference reads the values back as stored (B's rounded to binary32).
-    for (int e = 0; e < count; ++e)
-      for (int k = 0; k < n * n; ++k) stored_b[e][k] = field("B").at<float>(e)[k];
-    std::ostringstream dumped;
-    EngineOptions o;
-    o.executor = run ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
-    o.jit.dump = &dumped;
-    o.jit.dump_loop_ir = true;
-    Engine engine(compiled, o);
-    engine.bind_set(*compiled->find_extern("points"), points);
-    results[run] = engine.call(*compiled->find_func("step"), {});
-    std::ostringstream os;
-    engine.print_jit_stats(os);
-    if (run) stats = os.str(), dump = dumped.str();
-  }
+  const auto [results, dump, stats] =
+      run_points_both_ways("big.sim", program, count, [&](runtime::Set& points) {
+        points.add_field("A", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, false});
+        points.add_field("B", runtime::FieldType{runtime::ComponentKind::Float, {n, n}, true});
+        points.add_field("u", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
+        points.add_field("w", runtime::FieldType{runtime::ComponentKind::Float, {n}, false});
+        points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+        auto field = [&](const char* name) -> runtime::Field& {
+          return points.field(points.field_index(name));
+        };
+        for (int e = 0; e < count; ++e) {
+          for (int k = 0; k < n * n; ++k) {
+            field("A").at<double>(e)[k] = value(0, e, k);
+            field("B").at<float>(e)[k] = static_cast<float>(value(1, e, k));
+            // The reference reads B back as stored (rounded to binary32).
+            stored_b[e][k] = field("B").at<float>(e)[k];
+          }
+          for (int k = 0; k < n; ++k) {
+            field("u").at<double>(e)[k] = value(2, e, k);
+            field("w").at<double>(e)[k] = value(3, e, k);
+          }
+          field("a").at<double>(e)[0] = value(4, e, 0);
+        }
+      });
   EXPECT_NE(stats.find("big (line " + std::to_string(line_of(program, "map big")) + ")"),
             std::string::npos)
       << stats;
   EXPECT_EQ(stats.find("interpreted"), std::string::npos) << stats;
   // Loads of A and B, the outer product, A + O, a * B, minus S, T u, w' T, A' w and u' S'.
-  size_t loops = 0;
-  for (size_t at = dump.find("for %"); at != std::string::npos; at = dump.find("for %", at + 1))
-    ++loops;
-  EXPECT_EQ(loops, 10u) << dump;
+  EXPECT_EQ(count_loops(dump), 10u) << dump;
   // No component of the 13 x 13 fields is loaded one by one.
   EXPECT_EQ(dump.find("].168"), std::string::npos) << dump;
   expect_same(results[0][0], results[1][0], "r");
@@ -2001,8 +2002,6 @@ std::string loop_stats(const std::string& stats, int line) {
   }
   return "";
 }
-
-
 
 void expect_same_pcg_results(const std::vector<Value>& a, const std::vector<Value>& b) {
   ASSERT_EQ(a.size(), 5u);
