@@ -28,6 +28,14 @@ namespace {
 
 constexpr int kUsageError = 2;
 
+// Where the executor options of `simit run` and `simit test` land.
+struct JitTargets {
+  std::string& backend;
+  long& threshold;
+  bool& stats;
+  bool& check;
+};
+
 struct Commands {
   CLI::App* check = nullptr;
   CLI::App* test = nullptr;
@@ -43,6 +51,48 @@ struct Commands {
   SceneOptions scene_options;
   bool no_finite_check = false;  // simit run --no-finite-check (scenes)
 };
+
+JitTargets run_jit_targets(Commands& c) {
+  RunOptions& o = c.run_options;
+  return {o.backend, o.jit_threshold, o.jit_stats, o.check_jit};
+}
+
+JitTargets test_jit_targets(Commands& c) {
+  TestCommandOptions& o = c.test_options;
+  return {o.backend, o.jit_threshold, o.jit_stats, o.check_jit};
+}
+
+// The executor options, defined once for both commands: the same names, checks and words.
+// `runs` says what the backend runs; `stats_when` when --jit-stats prints.
+void add_jit_options(CLI::App& sub, const JitTargets& t, const std::string& runs,
+                     const std::string& stats_when) {
+  sub.add_option("--backend", t.backend,
+                 "What runs " + runs +
+                     ": interpreter (default) or jit (hot map and apply sites, solver loops and "
+                     "other system statements compiled to native code with LLVM; the rest "
+                     "interpreted)")
+      ->check(CLI::IsMember({"interpreter", "jit"}));
+  sub.add_option("--jit-threshold", t.threshold,
+                 "jit: executions of a site before it is compiled (0: at once; default 2)")
+      ->check(CLI::NonNegativeNumber);
+  sub.add_flag("--jit-stats", t.stats,
+               "jit: print each trace (site, key, compile ms, calls, ms spent, or why it ran "
+               "interpreted) " +
+                   stats_when + "; needs --backend jit");
+  sub.add_flag("--check-jit", t.check,
+               "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
+               "the first result, field or variable that differs (bit for bit), naming it; needs "
+               "--backend jit");
+}
+
+// --jit-stats and --check-jit say something about the JIT only: without it they would do
+// nothing, silently. "" or the usage error.
+std::string jit_options_misused(const JitTargets& t) {
+  if (t.backend == "jit") return "";
+  if (t.check) return "--check-jit needs --backend jit";
+  if (t.stats) return "--jit-stats needs --backend jit";
+  return "";
+}
 
 void add_check(CLI::App& app, Commands& c) {
   c.check = app.add_subcommand("check", "Parse and type-check Simit programs");
@@ -73,20 +123,17 @@ void add_test(CLI::App& app, Commands& c) {
   c.test->add_flag("--float32", c.test_options.float32, "Run programs with 32-bit floats");
   c.test->add_flag("--check-finite", c.test_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
-  c.test
-      ->add_option("--backend", c.test_options.backend,
-                   "What runs the sections: interpreter (default) or jit (hot maps and system "
-                   "statements compiled)")
-      ->check(CLI::IsMember({"interpreter", "jit"}));
-  c.test
-      ->add_option("--jit-threshold", c.test_options.jit_threshold,
-                   "jit: executions of a map before it is compiled (0: at once; default 2)")
-      ->check(CLI::NonNegativeNumber);
+  add_jit_options(*c.test, test_jit_targets(c), "the sections",
+                  "under each section listed (failures; every section with -v) that made one, "
+                  "and before the last line how many traces all sections made, compiled and "
+                  "interpreted, with the reasons counted");
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
       "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...); "
       "with --backend jit, hot maps and runs of system statements (solver loops) run compiled.\n"
+      "With --check-jit a section whose compiled code differs from the interpreter fails with "
+      "the '--check-jit: ...' message naming the difference.\n"
       "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
       "otherwise, 2 on a usage error.\n");
 }
@@ -122,23 +169,10 @@ void add_run(CLI::App& app, Commands& c) {
                   "Scenes: let NaN and infinity through (by default the run stops at the first "
                   "one in the sets' float fields or step's results, checked after init and after "
                   "every frame; the frames before it stay written)");
-  c.run
-      ->add_option("--backend", o.backend,
-                   "What runs the program: interpreter (default) or jit (hot map and apply sites, "
-                   "solver loops and other system statements compiled to native code with LLVM; "
-                   "the rest interpreted)")
-      ->check(CLI::IsMember({"interpreter", "jit"}));
-  c.run
-      ->add_option("--jit-threshold", o.jit_threshold,
-                   "jit: executions of a site before it is compiled (0: at once; default 2)")
-      ->check(CLI::NonNegativeNumber);
-  c.run->add_flag("--jit-stats", o.jit_stats,
-                  "jit: after the run, print each trace: site, key, compile ms, calls, ms spent, "
-                  "or why it ran interpreted");
-  c.run->add_flag(
-      "--check-jit", o.check_jit,
-      "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
-      "the first result, field or variable that differs (bit for bit), naming it");
+  add_jit_options(*c.run, run_jit_targets(c), "the program",
+                  "after the run, also after the error message when it stops on a run-time "
+                  "error, a NaN or infinity, or Ctrl-C (which then stops the run at its next "
+                  "statement; a second Ctrl-C ends it at once)");
   c.run->add_option("--dump", o.dump, "jit: print each compiled trace: loop-ir, llvm (or both)")
       ->type_name("KIND")
       ->delimiter(',')
@@ -247,6 +281,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   if (app.get_subcommands().empty()) return repl::run_repl("");
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
+  for (const auto& [sub, targets] :
+       {std::pair{c.run, run_jit_targets(c)}, std::pair{c.test, test_jit_targets(c)}})
+    if (sub->parsed())
+      if (std::string bad = jit_options_misused(targets); !bad.empty())
+        return usage_error(app, sub->get_name() + ": " + bad, err);
   if (c.run->parsed()) {
     if (ends_with(c.run_options.file, ".toml")) {
       if (!c.run_options.func.empty() || !c.run->remaining().empty())

@@ -107,6 +107,15 @@ void Engine::print_jit_stats(std::ostream& os) const {
 #endif
 }
 
+std::vector<std::string> Engine::jit_trace_statuses() const {
+  std::vector<std::string> out;
+#ifdef SIMIT_HAS_JIT
+  if (auto* c = dynamic_cast<const jit::TraceController*>(jit_.get()))
+    for (const jit::TraceStats& s : c->stats()) out.push_back(s.status);
+#endif
+  return out;
+}
+
 void Engine::bind_set(const ast::Variable& var, runtime::Set& set) { executor_->bind_set(var, set); }
 
 void Engine::set_global(const ast::Variable& var, interp::Value value) {

@@ -111,6 +111,9 @@ class Engine {
   // `--jit-stats`: each trace's site, key, compile time, calls and time spent (nothing
   // under the interpreter).
   void print_jit_stats(std::ostream& os) const;
+  // The status of each trace print_jit_stats lists ("compiled", "fused", or "interpreted: "
+  // and why), for front ends that add them up over many engines (`simit test --jit-stats`).
+  std::vector<std::string> jit_trace_statuses() const;
 
  private:
   std::unique_ptr<interp::Interpreter> make_executor() const;

@@ -1,9 +1,12 @@
 // `simit run`: one exported function, arguments from the command line.
 #include "commands/run_command.h"
 
+#include <memory>
 #include <new>
+#include <optional>
 
 #include "api/engine.h"
+#include "api/stop_on_sigint.h"
 #include "interp/operators.h"
 #include "interp/printing.h"
 #include "testing/literal.h"
@@ -84,20 +87,36 @@ int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream&
       !bad.empty())
     return usage(err, bad);
   run_options.jit.check = options.check_jit;
+  // --jit-stats: Ctrl-C stops the run with an error instead of ending the process, so that
+  // the stats still print (a debugger's trap already stops it its own way).
+  interp::Trap own_trap;
+  std::optional<api::StopOnSigint> stop_on_sigint;
+  if (options.jit_stats && !hooks.trap) {
+    run_options.trap = &own_trap;
+    stop_on_sigint.emplace(own_trap);
+  }
+  std::unique_ptr<api::Engine> engine;
+  // Also after a run-time error, a NaN stop or an interrupt, when they are needed most: what
+  // the JIT compiled up to there, after the error message.
+  auto print_jit_stats = [&] {
+    if (options.jit_stats && engine) engine->print_jit_stats(out);
+  };
   try {
-    api::Engine engine(c, run_options);
-    std::vector<interp::Value> results = engine.call(*f, std::move(args));
+    engine = std::make_unique<api::Engine>(c, run_options);
+    std::vector<interp::Value> results = engine->call(*f, std::move(args));
     for (size_t i = 0; i < results.size(); ++i)
       out << f->results[i].name << " = "
           << interp::literal_text(results[i], is_column(*f->results[i].var->type)) << "\n";
-    if (options.jit_stats) engine.print_jit_stats(out);
+    print_jit_stats();
   } catch (const interp::RuntimeError& e) {
     out.flush();
     err << e.render();
+    print_jit_stats();
     return 1;
   } catch (const std::bad_alloc&) {
     out.flush();
     err << "simit run: out of memory while running '" << f->name << "'\n";
+    print_jit_stats();
     return 1;
   } catch (const std::exception& e) {  // never a user mistake: say so plainly
     err << "simit run: internal error: " << e.what() << "\n";

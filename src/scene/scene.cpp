@@ -2,6 +2,7 @@
 // reported the way `simit run` prints them.
 #include "simit/scene.h"
 
+#include <memory>
 #include <new>
 
 #include "runtime/mesh/atomic_file.h"
@@ -58,25 +59,29 @@ const frontend::ast::Program& SceneAccess::program(const Scene& scene) {
 int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const SceneOptions& o = impl_->options;
   const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
+  std::unique_ptr<SceneRun> run;  // outlives the try: --jit-stats prints after the error
   try {
-    SceneRun run(*impl_->file, o, impl_->meshes, impl_->trap);
-    run.build();
-    run.run(count, out);
+    run = std::make_unique<SceneRun>(*impl_->file, o, impl_->meshes, impl_->trap);
+    run->build();
+    run->run(count, out);
   } catch (const SceneError& e) {
     out.flush();
     err << e.what() << "\n";
     return 1;
-  } catch (const RunFailure& e) {
+  } catch (const RunFailure& e) {  // a run-time error, a NaN stop, an interrupt
     out.flush();
     err << e.what() << "\n";
+    if (run) run->print_jit_stats(out);
     return 1;
   } catch (const runtime::MeshError& e) {
     out.flush();
     err << o.file << ": error: writing output: " << e.what() << "\n";
+    if (run) run->print_jit_stats(out);
     return 1;
   } catch (const std::bad_alloc&) {  // what was being allocated is not known here
     out.flush();
     err << o.file << ": error: out of memory while building or running the scene\n";
+    if (run) run->print_jit_stats(out);
     return 1;
   } catch (const std::exception& e) {
     out.flush();

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
+#include "api/stop_on_sigint.h"
 #include "runtime/fault.h"
 #include "scene/progress.h"
 
@@ -153,7 +155,16 @@ void SceneRun::run(int frames, std::ostream& out) {
   if (!options_.quiet) output_.configure(sets_);
   if (!file_.init_name.empty()) check_needs("init", file_.init_name);
   check_needs("step", file_.step_name);
-  api::Engine engine(file_.program, engine_options(out));
+  api::EngineOptions eo = engine_options(out);
+  // --jit-stats: Ctrl-C stops the run with an error instead of ending the process, so that
+  // the stats still print (the debugger's trap stops it its own way).
+  std::optional<api::StopOnSigint> stop_on_sigint;
+  if (options_.jit_stats && !trap_) {
+    eo.trap = &own_trap_;
+    stop_on_sigint.emplace(own_trap_);
+  }
+  engine_ = std::make_unique<api::Engine>(file_.program, eo);
+  api::Engine& engine = *engine_;
   bind(engine);
   output_.open(file_.stat_names);
   print_sizes(out, frames);
@@ -164,8 +175,14 @@ void SceneRun::run(int frames, std::ostream& out) {
   const double total_ms = run_frames(engine, frames, out);
   if (options_.progress_line && frames > 0) out << '\n';
   print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
-  if (options_.jit_stats) engine.print_jit_stats(out);
+  print_jit_stats(out);
   output_.write_final_csv();
+}
+
+void SceneRun::print_jit_stats(std::ostream& out) {
+  if (!options_.jit_stats || !engine_ || jit_stats_printed_) return;
+  jit_stats_printed_ = true;
+  engine_->print_jit_stats(out);
 }
 
 // Frames 1 .. frames: step, the output, the progress. Returns the frames' total ms.

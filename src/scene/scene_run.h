@@ -38,6 +38,10 @@ class SceneRun {
   // Checks the output and what init and step need, opens the output, runs `frames` frames
   // and prints the progress to `out`. Throws SceneError, RunFailure, runtime::MeshError.
   void run(int frames, std::ostream& out);
+  // --jit-stats: what the JIT made of the run, once; also after run() threw (a run-time
+  // error, a NaN stop, Ctrl-C), when it is needed most. Nothing without the option or before
+  // the engine exists.
+  void print_jit_stats(std::ostream& out);
 
   const BoundSets& sets() const { return sets_; }
   const std::map<std::string, SceneTensor>& tensors() const { return tensors_; }
@@ -59,6 +63,11 @@ class SceneRun {
   BoundSets sets_;
   std::map<std::string, SceneTensor> tensors_;
   OutputSeries output_;
+  // --jit-stats without a debugger's trap: Ctrl-C stops the run through this one.
+  interp::Trap own_trap_;
+  // Declared after the sets and tensors it is bound to: destroyed before them.
+  std::unique_ptr<api::Engine> engine_;
+  bool jit_stats_printed_ = false;
 };
 
 }  // namespace simit::scene

@@ -24,6 +24,12 @@ struct RunResult {
   bool passed() const { return status == Status::Passed; }
 };
 
+// What the JIT made of an executor's runs (`simit test --jit-stats`).
+struct JitRecord {
+  std::string tables;                 // Engine::print_jit_stats of each run that made a trace
+  std::vector<std::string> statuses;  // each trace's: "compiled", "fused", "interpreted: ..."
+};
+
 // Runs checked programs. The runner holds at most one; without one, sections that have
 // something to run are reported as skipped.
 class Executor {
@@ -38,6 +44,9 @@ class Executor {
   // order (TESTFORMAT.md §7.3).
   virtual RunResult run_graph(const frontend::ast::Program& program,
                               const std::vector<GraphStep>& steps) = 0;
+  // What the JIT made of the runs since the last call, if the executor records it; forgotten
+  // here, so that each section reports its own.
+  virtual JitRecord take_jit_record() { return {}; }
 };
 
 }  // namespace simit::tools

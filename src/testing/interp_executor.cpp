@@ -3,11 +3,12 @@
 
 #include <map>
 #include <memory>
-#include <sstream>
 #include <span>
+#include <sstream>
+#include <utility>
 
-#include "frontend/diagnostics.h"
 #include "api/engine.h"
+#include "frontend/diagnostics.h"
 #include "interp/printing.h"
 #include "interp/set_binding.h"
 #include "runtime/set.h"
@@ -29,6 +30,9 @@ RunResult runtime_error_result(const interp::RuntimeError& e) {
   if (!text.empty() && text.back() == '\n') text.pop_back();
   RunResult r{RunResult::Status::RuntimeError, text};
   r.line = e.line();
+  // A difference `--check-jit` found is the JIT's failure, never the run-time error a
+  // section may expect (the JIT reports it as a run-time error that starts so).
+  if (e.message().starts_with("--check-jit:")) r.status = RunResult::Status::Failed;
   return r;
 }
 
@@ -73,21 +77,37 @@ RunResult InterpExecutor::run_test(const ast::Program& program, const ast::TestD
   std::ostringstream discarded;
   api::EngineOptions options = options_;
   if (!options.out) options.out = &discarded;
+  std::unique_ptr<api::Engine> engine;  // outlives the try: recorded after an error too
+  RunResult result;
   try {
-    api::Engine engine(program, options);
+    engine = std::make_unique<api::Engine>(program, options);
     std::vector<interp::Value> args;
-    for (const auto& a : test.args) args.push_back(engine.evaluate_constant(*a));
-    interp::Value expected = engine.evaluate_constant(*test.expected);
-    interp::Value actual = engine.call(*f, std::move(args)).at(0);
-    if (values_match(actual, expected)) return {};
+    for (const auto& a : test.args) args.push_back(engine->evaluate_constant(*a));
+    interp::Value expected = engine->evaluate_constant(*test.expected);
+    interp::Value actual = engine->call(*f, std::move(args)).at(0);
     bool column = is_column(*f->results[0].var->type);
-    return failed(interp::literal_text(actual, column) +
-                  " != " + interp::literal_text(expected, column));
+    if (!values_match(actual, expected))
+      result = failed(interp::literal_text(actual, column) +
+                      " != " + interp::literal_text(expected, column));
   } catch (const interp::RuntimeError& e) {
-    return runtime_error_result(e);
+    result = runtime_error_result(e);
   } catch (const std::exception& e) {
-    return failed(std::string("the interpreter failed: ") + e.what());
+    result = failed(std::string("the interpreter failed: ") + e.what());
   }
+  record(engine.get());
+  return result;
+}
+
+JitRecord InterpExecutor::take_jit_record() { return std::exchange(jit_, JitRecord{}); }
+
+void InterpExecutor::record(const api::Engine* engine) {
+  if (!record_jit_ || !engine) return;
+  std::vector<std::string> statuses = engine->jit_trace_statuses();
+  if (statuses.empty()) return;  // a table without a trace says nothing
+  std::ostringstream table;
+  engine->print_jit_stats(table);
+  jit_.tables += table.str();
+  jit_.statuses.insert(jit_.statuses.end(), statuses.begin(), statuses.end());
 }
 
 namespace {
@@ -144,7 +164,8 @@ class GraphRun {
     const ast::Variable* v = global(d.name);
     runtime::Set* points = set(d.point_set);
     if (!v || v->type->kind != Type::Kind::Set) return "no extern grid '" + d.name + "'";
-    if (!points) return "grid '" + d.name + "' names point set '" + d.point_set + "' before it exists";
+    if (!points)
+      return "grid '" + d.name + "' names point set '" + d.point_set + "' before it exists";
     auto g = std::make_unique<runtime::Set>(d.name, *points, d.extents);
     add_fields(*g, *v->type);
     in_.bind_set(*v, *g);
@@ -187,7 +208,8 @@ class GraphRun {
       std::vector<interp::Value> args;
       for (const ast::Param& p : f->params) {
         auto it = args_.find(p.name);
-        if (it == args_.end()) return "no %@ arg for parameter '" + p.name + "' of '" + f->name + "'";
+        if (it == args_.end())
+          return "no %@ arg for parameter '" + p.name + "' of '" + f->name + "'";
         interp::Value v = it->second;
         args.push_back(std::move(v));
       }
@@ -201,15 +223,20 @@ class GraphRun {
   std::string apply(const ExpectDirective& d) {
     if (!d.is_field()) {
       interp::Value actual;
-      if (auto it = results_.find(d.name); it != results_.end()) actual = it->second;
-      else if (const ast::Variable* v = global(d.name)) actual = in_.global(*v);
-      else return "nothing named '" + d.name + "' to check";
+      if (auto it = results_.find(d.name); it != results_.end())
+        actual = it->second;
+      else if (const ast::Variable* v = global(d.name))
+        actual = in_.global(*v);
+      else
+        return "nothing named '" + d.name + "' to check";
       if (d.values.size() != 1) return "expect " + d.name + " needs one value";
       interp::Value expected = literal_value(d.values[0]);
-      if (actual.is_tensor() && expected.is_tensor() && actual.tensor().size() == expected.tensor().size())
+      if (actual.is_tensor() && expected.is_tensor() &&
+          actual.tensor().size() == expected.tensor().size())
         expected.tensor().reshape(actual.tensor().shape());
       if (values_match(actual, expected, d.tolerance)) return "";
-      return d.name + " is " + interp::literal_text(actual, false) + ", expected " + d.values[0].text;
+      return d.name + " is " + interp::literal_text(actual, false) + ", expected " +
+             d.values[0].text;
     }
     runtime::Set* s = set(d.set);
     if (!s) return "expectation on unknown set '" + d.set + "'";
@@ -224,7 +251,8 @@ class GraphRun {
     for (size_t i = 0; i < d.values.size(); ++i) {
       const int k = first + static_cast<int>(i);
       Tensor t = s->get(f, k);
-      interp::Value actual = t.shape().is_scalar() ? interp::Value::component(t, 0) : interp::Value::of_tensor(t);
+      interp::Value actual =
+          t.shape().is_scalar() ? interp::Value::component(t, 0) : interp::Value::of_tensor(t);
       interp::Value expected = literal_value(d.values[i]);
       if (expected.is_tensor() && actual.is_tensor() && expected.tensor().size() == t.size())
         expected.tensor().reshape(t.shape());
@@ -248,27 +276,31 @@ class GraphRun {
 
 }  // namespace
 
-RunResult InterpExecutor::run_graph(const ast::Program& program, const std::vector<GraphStep>& steps) {
+RunResult InterpExecutor::run_graph(const ast::Program& program,
+                                    const std::vector<GraphStep>& steps) {
   std::ostringstream output;
   api::EngineOptions options = options_;
   options.out = &output;
+  std::unique_ptr<api::Engine> engine;  // outlives the try: recorded after an error too
+  RunResult result;
   try {
-    api::Engine engine(program, options);
-    GraphRun run(program, engine, output);
+    engine = std::make_unique<api::Engine>(program, options);
+    GraphRun run(program, *engine, output);
     for (const GraphStep& s : steps) {
       std::string problem = run.step(s);
       if (!problem.empty()) {
-        RunResult r = failed(problem);
-        return r;
+        result = failed(problem);
+        break;
       }
     }
-    if (options_.out) *options_.out << output.str();
-    return {};
+    if (result.passed() && options_.out) *options_.out << output.str();
   } catch (const interp::RuntimeError& e) {
-    return runtime_error_result(e);
+    result = runtime_error_result(e);
   } catch (const std::exception& e) {
-    return failed(std::string("the interpreter failed: ") + e.what());
+    result = failed(std::string("the interpreter failed: ") + e.what());
   }
+  record(engine.get());
+  return result;
 }
 
 }  // namespace simit::tools

@@ -1,4 +1,4 @@
-// `simit test` as the command line runs it: the test runner with the interpreter as executor.
+// `simit test` as the command line runs it: the test runner with the engine as executor.
 #include "interp_executor.h"
 #include "simit/testing.h"
 #include "test_runner.h"
@@ -10,15 +10,19 @@ int run_test_command(const std::vector<std::string>& paths, const TestCommandOpt
   api::EngineOptions engine;
   engine.float32 = options.float32;
   engine.check_finite = options.check_finite;
-  if (std::string bad = api::configure_backend(engine, options.backend, options.jit_threshold, {}, nullptr);
+  if (std::string bad =
+          api::configure_backend(engine, options.backend, options.jit_threshold, {}, nullptr);
       !bad.empty()) {
     err << "simit test: " << bad << "\n";
     return 2;
   }
-  InterpExecutor executor(engine);
+  // Every section's runs checked against the interpreter: a difference fails the section.
+  engine.jit.check = options.check_jit;
+  InterpExecutor executor(engine, options.jit_stats);
   TestOptions run;
   run.verbose = options.verbose;
   run.executor = &executor;
+  run.jit_stats = options.jit_stats;
   return run_tests(paths, run, out, err);
 }
 

@@ -1,6 +1,7 @@
 // `simit test`: runs the sections of test files (TESTFORMAT.md §1-7) and reports them.
 #include "test_runner.h"
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <map>
@@ -155,8 +156,7 @@ RunResult run_all(Executor& executor, const Compilation& c, const SectionDirecti
 
 // A section expected to compile and then stop with a run-time error.
 void judge_runtime_error(const Compilation& c, const SectionDirectives& d,
-                         const SectionContext& context, const Section& section,
-                         SectionReport& r) {
+                         const SectionContext& context, const Section& section, SectionReport& r) {
   if (inline_tests(*c.program).empty() && !d.has_graph())
     return fail(r, "expects a run-time error, but has nothing to run");
   if (!context.executor) return skip(r, kSkipRuntime);
@@ -196,21 +196,12 @@ std::unique_ptr<Compilation> compile_section(const Section& section, const Secti
   }
 }
 
-}  // namespace
-
-SectionReport run_section(const Section& section, const SectionContext& context) {
-  SectionReport r;
-  r.label = label_of(context.file, section);
-  r.file = context.file;
-  r.line = section.line;
-  if (section.disabled) {
-    skip(r, kSkipDisabled);
-    return r;
-  }
+void judge_section(const Section& section, const SectionContext& context, SectionReport& r) {
+  if (section.disabled) return skip(r, kSkipDisabled);
   SectionDirectives d = parse_directives(section.source);
-  if (report_directive_errors(d, context, section, r)) return r;
+  if (report_directive_errors(d, context, section, r)) return;
   std::unique_ptr<Compilation> c = compile_section(section, context, r);
-  if (!c) return r;
+  if (!c) return;
   bool runtime_error = d.error && d.error->runtime();
   if (context.illegal_folder || (d.error && !runtime_error)) {
     judge_rejection(*c, d.error.value_or(ErrorExpectation{}), section, r);
@@ -223,6 +214,18 @@ SectionReport run_section(const Section& section, const SectionContext& context)
   } else {
     judge_run(*c, d, context, r);
   }
+}
+
+}  // namespace
+
+SectionReport run_section(const Section& section, const SectionContext& context) {
+  SectionReport r;
+  r.label = label_of(context.file, section);
+  r.file = context.file;
+  r.line = section.line;
+  if (context.executor) context.executor->take_jit_record();  // not an earlier caller's
+  judge_section(section, context, r);
+  if (context.executor) r.jit = context.executor->take_jit_record();
   return r;
 }
 
@@ -246,22 +249,68 @@ const char* outcome_word(Outcome o) {
   return "?";
 }
 
-void print_report(const SectionReport& r, std::ostream& out) {
-  out << outcome_word(r.outcome) << " " << r.label << " (" << r.file << ":" << r.line << ")";
-  if (!r.reason.empty()) out << ": " << r.reason;
-  out << "\n";
+void print_indented(const std::string& text, std::ostream& out) {
   size_t begin = 0;
-  while (begin < r.detail.size()) {
-    size_t end = r.detail.find('\n', begin);
-    if (end == std::string::npos) end = r.detail.size();
-    out << "    " << r.detail.substr(begin, end - begin) << "\n";
+  while (begin < text.size()) {
+    size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    out << "    " << text.substr(begin, end - begin) << "\n";
     begin = end + 1;
   }
 }
 
+void print_report(const SectionReport& r, bool jit_stats, std::ostream& out) {
+  out << outcome_word(r.outcome) << " " << r.label << " (" << r.file << ":" << r.line << ")";
+  if (!r.reason.empty()) out << ": " << r.reason;
+  out << "\n";
+  print_indented(r.detail, out);
+  if (jit_stats) print_indented(r.jit.tables, out);
+}
+
+// A trace's status without the line it ends with ("... (line 12)"), so that the same reason
+// in many sections counts as one.
+std::string without_line(const std::string& status) {
+  const size_t open = status.rfind(" (line ");
+  if (open == std::string::npos || !status.ends_with(")")) return status;
+  const std::string digits = status.substr(open + 7, status.size() - open - 8);
+  if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) return status;
+  return status.substr(0, open);
+}
+
+// What the JIT made of every section: traces compiled (or fused) and run interpreted, with
+// the reasons counted, so that a corpus run shows what its sections did not compile.
+struct JitTally {
+  int sections = 0, traces = 0, compiled = 0;
+  std::map<std::string, int> interpreted;  // the status ("interpreted: why") and its count
+
+  void add(const JitRecord& j) {
+    if (j.statuses.empty()) return;
+    ++sections;
+    for (const std::string& s : j.statuses) {
+      ++traces;
+      if (s.starts_with("interpreted"))
+        ++interpreted[without_line(s)];
+      else
+        ++compiled;
+    }
+  }
+
+  // The most frequent reasons first.
+  void print(std::ostream& out) const {
+    out << "jit: " << traces << (traces == 1 ? " trace" : " traces") << " in " << sections
+        << (sections == 1 ? " section" : " sections") << ", " << compiled << " compiled, "
+        << traces - compiled << " interpreted\n";
+    std::vector<std::pair<int, std::string>> reasons;
+    for (const auto& [status, count] : interpreted) reasons.emplace_back(-count, status);
+    std::sort(reasons.begin(), reasons.end());
+    for (const auto& [count, status] : reasons) out << "jit: " << -count << " " << status << "\n";
+  }
+};
+
 struct Tally {
   int passed = 0, failed = 0, skipped = 0;
   std::map<std::string, int> skip_reasons;
+  JitTally jit;
 
   void add(const SectionReport& r) {
     if (r.outcome == Outcome::Pass) ++passed;
@@ -270,13 +319,15 @@ struct Tally {
       ++skipped;
       ++skip_reasons[r.reason];
     }
+    jit.add(r.jit);
   }
 };
 
-void print_summary(const Tally& t, bool verbose, std::ostream& out) {
-  if (!verbose)
+void print_summary(const Tally& t, const TestOptions& options, std::ostream& out) {
+  if (!options.verbose)
     for (const auto& [reason, count] : t.skip_reasons)
       out << "skipped " << count << ": " << reason << "\n";
+  if (options.jit_stats) t.jit.print(out);
   out << t.passed << " passed, " << t.failed << " failed";
   if (t.skipped > 0) out << ", " << t.skipped << " skipped";
   out << "\n";
@@ -303,11 +354,11 @@ int run_tests(const std::vector<std::string>& paths, const TestOptions& options,
     }
     for (const SectionReport& r : run_file(file, *text, options.executor)) {
       tally.add(r);
-      if (options.verbose || r.outcome == Outcome::Fail) print_report(r, out);
+      if (options.verbose || r.outcome == Outcome::Fail) print_report(r, options.jit_stats, out);
     }
   }
   tally.failed += static_cast<int>(found.errors.size());
-  print_summary(tally, options.verbose, out);
+  print_summary(tally, options, out);
   return tally.failed > 0 ? 1 : 0;
 }
 

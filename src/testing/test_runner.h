@@ -20,6 +20,7 @@ struct SectionReport {
   Outcome outcome = Outcome::Pass;
   std::string reason;  // one line; empty for a pass
   std::string detail;  // further lines (rendered diagnostics), may be empty
+  JitRecord jit;       // what the JIT made of the section's runs, when the executor records it
 };
 
 // How a section is to be judged, from where its file lives.
@@ -39,6 +40,9 @@ std::vector<SectionReport> run_file(const std::string& file, const std::string& 
 struct TestOptions {
   bool verbose = false;  // list every section, not only failures
   Executor* executor = nullptr;
+  // Print the JIT's tables under each section listed and a summary of all traces before
+  // the last line (the executor records them).
+  bool jit_stats = false;
 };
 
 // Runs every test file under `paths`, prints reports and the summary line

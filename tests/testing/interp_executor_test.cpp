@@ -71,12 +71,74 @@ TEST(InterpExecutor, GraphSectionsRunAndCheckFields) {
       "func twice(inout n : N)\n  n.x = 2.0 * n.x;\nend\n"
       "export func main()\n  apply twice to nodes;\nend\n";
   EXPECT_EQ(judge("%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n"
-                  "%@ expect nodes.x = 2.0, 6.0\n" + program).outcome,
+                  "%@ expect nodes.x = 2.0, 6.0\n" +
+                  program)
+                .outcome,
             Outcome::Pass);
-  SectionReport r = judge("%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n"
-                          "%@ expect nodes.x = 2.0, 7.0\n" + program);
+  SectionReport r = judge(
+      "%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n"
+      "%@ expect nodes.x = 2.0, 7.0\n" +
+      program);
   EXPECT_EQ(r.outcome, Outcome::Fail);
   EXPECT_NE(r.reason.find("nodes.x[1]"), std::string::npos) << r.reason;
+}
+
+// A graph section whose map the JIT compiles at threshold 0.
+const char* kMapSection =
+    "element N\n  x : float;\n  y : float;\nend\nextern nodes : set{N};\n"
+    "func twice(n : N) -> r : vector[nodes](float)\n  r(n) = 2.0 * n.x;\nend\n"
+    "export func main()\n  nodes.y = map twice to nodes reduce +;\nend\n";
+
+api::EngineOptions checked_jit(bool corrupt) {
+  api::EngineOptions o;
+  o.executor = api::ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  o.jit.check = true;
+  o.jit.corrupt_for_test = corrupt;  // flips the last bit of the compiled map's result
+  return o;
+}
+
+// `simit test --check-jit`: a compiled map that differs from the interpreter fails its section
+// with the check's message, also a section that expects a run-time error (the difference is
+// the JIT's failure, never the program's error).
+TEST(InterpExecutor, CheckJitDifferencesFailTheirSections) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const std::string graph = "%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n";
+  const std::string expect = "%@ expect nodes.y = 2.0, 6.0\n";
+  for (bool corrupt : {false, true}) {
+    InterpExecutor executor(checked_jit(corrupt));
+    std::vector<SectionReport> r = run_file("cases.sim", graph + expect + kMapSection, &executor);
+    ASSERT_EQ(r.size(), 1u);
+    EXPECT_EQ(r[0].outcome, corrupt ? Outcome::Fail : Outcome::Pass) << r[0].reason;
+    if (corrupt) {
+      EXPECT_NE(r[0].reason.find("--check-jit: the compiled twice (line "), std::string::npos)
+          << r[0].reason;
+    }
+    r = run_file("cases.sim", "%@ error runtime\n" + graph + kMapSection, &executor);
+    ASSERT_EQ(r.size(), 1u);
+    EXPECT_EQ(r[0].outcome, Outcome::Fail);
+    const std::string want = corrupt ? "expected a run-time error, got: cases.sim:"
+                                     : "expected a run-time error, but the runs succeeded";
+    EXPECT_EQ(r[0].reason.rfind(want, 0), 0u) << r[0].reason;
+    if (corrupt) {
+      EXPECT_NE(r[0].reason.find("--check-jit: "), std::string::npos) << r[0].reason;
+    }
+  }
+}
+
+// `simit test --jit-stats`: the executor keeps each section's traces until asked, once.
+TEST(InterpExecutor, RecordsWhatTheJitMadeWhenAsked) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const std::string section =
+      "%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n" + std::string(kMapSection);
+  for (bool record : {false, true}) {
+    InterpExecutor executor(checked_jit(false), record);
+    std::vector<SectionReport> r = run_file("cases.sim", section, &executor);
+    ASSERT_EQ(r.size(), 1u);
+    EXPECT_EQ(r[0].jit.statuses.empty(), !record);
+    EXPECT_EQ(r[0].jit.tables.find("jit traces:") != std::string::npos, record) << r[0].jit.tables;
+    EXPECT_TRUE(executor.take_jit_record().statuses.empty());  // the section took them
+  }
 }
 
 interp::Value value(const std::string& text) {

@@ -10,6 +10,8 @@
 
 #include <unistd.h>
 
+#include "api/engine.h"
+
 namespace simit::tools {
 namespace {
 
@@ -112,6 +114,73 @@ TEST(Cli, CheckDumps) {
   EXPECT_EQ(both.status, 0);
   EXPECT_NE(both.out.find("# ast of"), std::string::npos);
   EXPECT_NE(both.out.find("# typed of"), std::string::npos);
+}
+
+// A graph section whose map the JIT compiles at threshold 0.
+const char* kMapTest =
+    "%@ set nodes = 2\n%@ field nodes.x = 1.0, 3.0\n%@ run main\n%@ expect nodes.y = 2.0, 6.0\n"
+    "element N\n  x : float;\n  y : float;\nend\nextern nodes : set{N};\n"
+    "func twice(n : N) -> r : vector[nodes](float)\n  r(n) = 2.0 * n.x;\nend\n"
+    "export func main()\n  nodes.y = map twice to nodes reduce +;\nend\n";
+
+// `simit test` takes the JIT options of `simit run`, under the same names and words.
+TEST(Cli, TestAndRunShareTheJitOptions) {
+  for (const char* command : {"test", "run"}) {
+    Result r = cli({command, "--help"});
+    EXPECT_EQ(r.status, 0);
+    for (const char* option : {"--backend", "--jit-threshold", "--jit-stats", "--check-jit"})
+      EXPECT_NE(r.out.find(option), std::string::npos) << command << " " << option;
+    EXPECT_NE(r.out.find("that differs (bit for bit), naming it; needs --backend jit"),
+              std::string::npos)
+        << r.out;
+  }
+}
+
+// Without the JIT they would do nothing, silently: a usage error in both commands.
+TEST(Cli, JitOptionsNeedTheJitBackend) {
+  TempFile file("needs_jit.sim", kMapTest);
+  for (const char* command : {"test", "run"})
+    for (const char* option : {"--check-jit", "--jit-stats"}) {
+      std::vector<std::string> args = {command, file.path, option};
+      if (std::string(command) == "run") args.insert(args.end(), {"--call", "main"});
+      Result r = cli(args);
+      EXPECT_EQ(r.status, 2) << command << " " << option;
+      EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+                std::string("simit: error: ") + command + ": " + option + " needs --backend jit");
+      r = cli({command, file.path, option, "--backend", "interpreter"});
+      EXPECT_EQ(r.status, 2) << command << " " << option;
+    }
+}
+
+// `simit test --backend jit --check-jit` runs each section checked against the interpreter.
+TEST(Cli, TestRunsSectionsUnderCheckJit) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  TempFile file("check_jit.sim", kMapTest);
+  Result r = cli({"test", "--backend", "jit", "--jit-threshold", "0", "--check-jit", file.path});
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(r.out, "1 passed, 0 failed\n");
+}
+
+// `simit test --jit-stats`: the traces under each section listed, and a summary of them all
+// before the last line.
+TEST(Cli, TestPrintsJitStats) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  TempFile file("jit_stats.sim", kMapTest);
+  Result r =
+      cli({"test", "-v", "--backend", "jit", "--jit-threshold", "0", "--jit-stats", file.path});
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  const std::string pass = "PASS " + std::filesystem::path(file.path).stem().string() + " (" +
+                           file.path + ":1)\n    jit traces:\n";
+  EXPECT_EQ(r.out.rfind(pass, 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("\n      twice (line "), std::string::npos) << r.out;
+  const size_t summary = r.out.find("\njit: ");
+  ASSERT_NE(summary, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" in 1 section, ", summary), std::string::npos) << r.out;
+  EXPECT_TRUE(r.out.ends_with(" interpreted\n1 passed, 0 failed\n")) << r.out;
+  // Without -v a passing section is not listed: the summary alone.
+  r = cli({"test", "--backend", "jit", "--jit-threshold", "0", "--jit-stats", file.path});
+  EXPECT_EQ(r.out.rfind("jit: ", 0), 0u) << r.out;
+  EXPECT_EQ(r.out.find("jit traces:"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -51,19 +51,22 @@ void expect_only(const std::string& folder, const std::set<std::string>& allowed
       folder.starts_with("src/") ? fs::path(folder).filename().string() + "/" : std::string();
   for (const fs::path& p : sources(folder))
     for (const std::string& h : private_includes(p))
-      EXPECT_TRUE(allowed.count(h) || (!own.empty() && h.starts_with(own))) << fs::relative(p, kRoot).string() << " includes \"" << h
-                                    << "\", which " << folder << "/ may not use";
+      EXPECT_TRUE(allowed.count(h) || (!own.empty() && h.starts_with(own)))
+          << fs::relative(p, kRoot).string() << " includes \"" << h << "\", which " << folder
+          << "/ may not use";
 }
 
 TEST(Layers, OnlyTheEngineConstructsAnInterpreter) {
   static const std::regex construction(
       R"((make_unique|make_shared)\s*<\s*(simit::)?interp::Interpreter\s*>|(simit::)?interp::Interpreter\s+\w+\s*[({])");
-  for (const char* folder : {"tools", "repl", "bench", "src/scene", "src/api", "src/repl", "src/testing", "src/commands"})
+  for (const char* folder : {"tools", "repl", "bench", "src/scene", "src/api", "src/repl",
+                             "src/testing", "src/commands"})
     for (const fs::path& p : sources(folder)) {
       if (p.filename() == "engine.cpp") continue;  // Engine::make_executor, the one place
       EXPECT_FALSE(std::regex_search(text_of(p), construction))
-          << fs::relative(p, kRoot).string() << " constructs an interp::Interpreter; run through "
-                                                "api::Engine instead";
+          << fs::relative(p, kRoot).string()
+          << " constructs an interp::Interpreter; run through "
+             "api::Engine instead";
     }
 }
 
@@ -87,12 +90,12 @@ TEST(Layers, PublicHeadersIncludeOnlyPublicHeaders) {
 
 // Scenes: the engine and its bindings, the runtime's sets and mesh readers and writers.
 TEST(Layers, ScenesUseTheEngineAndTheMeshReadersOnly) {
-  expect_only("src/scene", {"api/binding_check.h", "api/compiled_program.h", "api/engine.h",
-                            "api/set_access.h", "api/tensor_values.h", "interp/value.h", "runtime/fault.h",
-                            "runtime/mesh/atomic_file.h", "runtime/mesh/mesh.h",
-                            "runtime/mesh/mesh_reader.h", "runtime/mesh/pvd_writer.h",
-                            "runtime/mesh/quicklook.h", "runtime/mesh/topology.h",
-                            "runtime/set.h", "runtime/tensor.h"});
+  expect_only("src/scene",
+              {"api/binding_check.h", "api/compiled_program.h", "api/engine.h", "api/set_access.h",
+               "api/stop_on_sigint.h", "api/tensor_values.h", "interp/value.h", "runtime/fault.h",
+               "runtime/mesh/atomic_file.h", "runtime/mesh/mesh.h", "runtime/mesh/mesh_reader.h",
+               "runtime/mesh/pvd_writer.h", "runtime/mesh/quicklook.h", "runtime/mesh/topology.h",
+               "runtime/set.h", "runtime/tensor.h"});
 }
 
 }  // namespace
