@@ -64,6 +64,10 @@ class Trap {
     armed_.store(true, std::memory_order_relaxed);
   }
   bool interrupt_pending() const { return interrupt_.load(std::memory_order_relaxed); }
+  // The flag request_interrupt() sets, for compiled code that cannot call back: a byte,
+  // nonzero while an interrupt is pending (a compiled while loop reads it once per
+  // iteration; jit/backend.h).
+  const std::atomic<bool>* interrupt_flag() const { return &interrupt_; }
   // Clears a pending interrupt; true when there was one.
   bool take_interrupt() {
     if (!interrupt_.exchange(false, std::memory_order_relaxed)) return false;
@@ -73,6 +77,7 @@ class Trap {
 
  private:
   static_assert(std::atomic<bool>::is_always_lock_free, "signal handlers need lock-free flags");
+  static_assert(sizeof(std::atomic<bool>) == 1, "compiled code reads the flag as a byte");
   void rearm() {
     armed_.store(hook() != nullptr || interrupt_pending(), std::memory_order_relaxed);
     // A signal handled between the test and the store above set armed_ first; keep its request.

@@ -18,9 +18,15 @@ using KernelFn = int32_t (*)(void* const* arrays, const double* scalars, const i
                              int32_t begin, int32_t end, int32_t* failed_element);
 
 // A compiled system trace: `scalars` holds the program's scalars (in, then out), `sizes` the
-// lengths the trace names. Returns 0, or 1 + the index in SystemTrace::errors of the error
-// statement it reached (the scalars and vectors are then partly updated).
-using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes);
+// lengths the trace names, `interrupt` the host's interrupt flag (a byte, nonzero while an
+// interrupt is pending: interp::Trap::interrupt_flag), which its while loop reads at the top
+// of every iteration. Returns 0; kSystemInterrupted when the loop stopped there for the flag
+// (the scalars written back: everything as a whole number of iterations leaves it, the ops
+// after the loop not run); or 1 + the index in SystemTrace::errors of the error statement it
+// reached (the scalars and vectors are then partly updated).
+using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes,
+                             const void* interrupt);
+inline constexpr int32_t kSystemInterrupted = -1;
 
 class Kernel {
  public:

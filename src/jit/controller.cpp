@@ -737,11 +737,30 @@ Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
   return out;
 }
 
+// The scalars a kernel stopped by an interrupt hands back: those the ops before the loop and
+// its iterations write (the ops after it did not run; a scalar only they write keeps its value).
+std::vector<bool> scalars_written_up_to_loop(const SystemTrace& t) {
+  std::vector<bool> out(static_cast<size_t>(t.scalars), false);
+  for (const auto* ops : {&t.before, &t.body})
+    for (const VectorOp& op : *ops) note_scalar_writes(op.body, t.scalars, out);
+  return out;
+}
+
+// Where the interpreter takes an interrupt that arrives between two iterations: before the
+// first statement of the next one (the loop itself when its body is empty).
+const ast::Stmt& interrupted_at(const std::vector<const ast::Stmt*>& run) {
+  for (const ast::Stmt* s : run)
+    if (const auto* loop = s->as<ast::While>())
+      return loop->body.empty() ? *s : *loop->body.front();
+  return *run.front();
+}
+
 }  // namespace
 
 // Runs the loop's kernel on the interpreter's variables. A loop that reaches an error
 // statement is put back as it was and left to the interpreter (false), which runs it from
-// the start and stops with the error in its own words, at its line.
+// the start and stops with the error in its own words, at its line. A loop that an interrupt
+// (Ctrl-C) stops between two iterations keeps what they wrote and throws interp::Interrupted.
 bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in) {
   LoopEntry* e = &entry;
   const auto start = std::chrono::steady_clock::now();
@@ -815,13 +834,21 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
     const Value& v = in.variable(*b.scalars[i]);
     if (!v.empty()) scalars[i] = component(v, 0);
   }
-  const int32_t rc = e->kernel->system(arrays.data(), scalars.data(), e->sizes.data());
-  if (rc != 0) {
+  interp::Trap& trap = in.trap();
+  const int32_t rc =
+      e->kernel->system(arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag());
+  // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
+  // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
+  // the scalars go back to their variables, and the interrupt is raised below.
+  const bool interrupted = rc == kSystemInterrupted;
+  if (rc != 0 && !interrupted) {
     for (auto& [var, value] : saved) in.variable(*var) = std::move(value);
     ++e->handed_back;
   }
-  for (size_t i = 0; i < b.scalars.size() && rc == 0; ++i) {
-    if (!e->writes_scalar[i]) continue;
+  const std::vector<bool> written =
+      interrupted ? scalars_written_up_to_loop(t) : std::vector<bool>();
+  for (size_t i = 0; i < b.scalars.size() && (rc == 0 || interrupted); ++i) {
+    if (!(interrupted ? written[i] : e->writes_scalar[i])) continue;
     switch (b.scalar_types[i]) {
       case Ty::F64: in.variable(*b.scalars[i]) = Value::of_float(scalars[i]); break;
       case Ty::I32:
@@ -847,6 +874,12 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
     e->stats.note += "; " + std::to_string(e->handed_back) + " call" +
                      (e->handed_back > 1 ? "s" : "") +
                      " reached an error statement and ran again interpreted";
+  if (interrupted) {
+    // Taken and raised as the interpreter's trap point does (exec_trapped), at the statement
+    // it would have stopped before: the REPL reports it and returns to its prompt.
+    trap.take_interrupt();
+    throw interp::Interrupted(interrupted_at(e->run).span, "interrupted");
+  }
   return rc == 0;
 }
 

@@ -4,11 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 #include "api/engine.h"
 #include "jit/loop_ir.h"
@@ -2435,6 +2440,121 @@ TEST(Jit, ARunWhoseLoopReachesAnErrorStatementIsInterpretedOnce) {
   EXPECT_EQ(stats.find("statements (lines " + std::to_string(line_of(kRunError, "var y"))),
             std::string::npos)
       << stats;
+}
+
+// Ctrl-C in a compiled loop that never ends (a solver that does not converge): the kernel
+// reads the interrupt flag once per iteration and stops at an iteration boundary; the call
+// ends with the interpreter's Interrupted error, the fields and the global scalar the loop
+// writes hold the values of one whole number of iterations, and the engine runs the next call
+// (the interrupt was taken).
+const char* const kSpin = R"(element P
+  b : float;
+  c : float;
+  d : float;
+end
+extern ps : set{P};
+extern count : float;
+
+export func spin(limit : float)
+  var x = 0.0 * ps.b;
+  var n = 0.0;
+  while n < limit
+    x = x + ps.b;
+    ps.c = x;
+    n = n + 1.0;
+    ps.d = n * ps.b;
+    count = count + 1.0;
+  end
+end
+)";
+
+// The calls of the trace that holds line `line` (a loop alone or a run; 0 when absent).
+long trace_calls(const std::string& stats, int line) {
+  const std::string l = loop_stats(stats, line);
+  if (l.empty()) return 0;
+  std::istringstream fields(l.substr(l.find(')') + 1));
+  double compile_ms = 0;
+  long calls = 0;
+  fields >> compile_ms >> calls;
+  return calls;
+}
+
+TEST(Jit, AnInterruptStopsACompiledLoopAtAnIterationBoundary) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  auto compiled = CompiledProgram::from_source("spin.sim", kSpin);
+  ASSERT_TRUE(compiled->ok());
+  runtime::Set ps("ps");
+  const int n = 1000;
+  ps.add_many(n);
+  for (const char* f : {"b", "c", "d"})
+    ps.add_field(f, runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < n; ++i) ps.field(0).at<double>(i)[0] = 1.0 + i % 7;  // small integers
+  interp::Trap trap;  // what the REPL's SIGINT handler asks to interrupt
+  EngineOptions o;
+  o.executor = ExecutorKind::Jit;
+  o.jit.threshold = 0;
+  o.trap = &trap;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("ps"), ps);
+  const ast::Variable& count = *compiled->find_extern("count");
+  engine.set_global(count, Value::of_float(0.0));
+  const ast::FuncDecl& spin = *compiled->find_func("spin");
+  const int loop_line = line_of(kSpin, "while n");
+  auto stats = [&] {
+    std::ostringstream os;
+    engine.print_jit_stats(os);
+    return os.str();
+  };
+  // c and d after `iterations` whole iterations, in exact (small integer) arithmetic.
+  auto expect_boundary = [&](double iterations) {
+    for (int i = 0; i < n; ++i) {
+      const double b = ps.field(0).at<double>(i)[0];
+      ASSERT_EQ(ps.field(1).at<double>(i)[0], iterations * b) << "c at element " << i;
+      ASSERT_EQ(ps.field(2).at<double>(i)[0], iterations * b) << "d at element " << i;
+    }
+  };
+  // The first call compiles the loop (a bounded one): 3 iterations.
+  engine.call(spin, {Value::of_float(3.0)});
+  expect_boundary(3.0);
+  ASSERT_EQ(engine.global(count).as_float(), 3.0);
+  ASSERT_EQ(trace_calls(stats(), loop_line), 1) << stats();
+  // The second never ends: its kernel runs until the flag is set, as SIGINT sets it.
+  auto run = std::async(std::launch::async, [&]() -> std::string {
+    try {
+      engine.call(spin, {Value::of_float(1e300)});
+    } catch (const interp::Interrupted& e) {
+      return "interrupted: " + e.render();
+    } catch (const interp::RuntimeError& e) {
+      return "error: " + e.render();
+    }
+    return "returned";
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  trap.request_interrupt();
+  if (run.wait_for(std::chrono::seconds(30)) != std::future_status::ready) {
+    // The kernel never looked at the flag: end the test process rather than hang.
+    std::fprintf(stderr, "FAIL: the compiled loop did not stop within 30 s of the interrupt\n");
+    std::fflush(stderr);
+    std::_Exit(1);
+  }
+  const std::string outcome = run.get();
+  EXPECT_EQ(outcome.rfind("interrupted: ", 0), 0u) << outcome;
+  EXPECT_NE(outcome.find("spin.sim:"), std::string::npos) << outcome;
+  EXPECT_FALSE(trap.interrupt_pending());  // taken, as the interpreter takes it
+  // The kernel ran and stopped itself (the interpreter did not catch the interrupt before
+  // it), after a whole number of iterations (at least one: 300 ms).
+  EXPECT_EQ(trace_calls(stats(), loop_line), 2) << stats();
+  const double iterations = ps.field(1).at<double>(0)[0] / ps.field(0).at<double>(0)[0];
+  EXPECT_GE(iterations, 1.0);
+  EXPECT_EQ(iterations, std::floor(iterations));
+  expect_boundary(iterations);
+  EXPECT_EQ(engine.global(count).as_float(), 3.0 + iterations);  // a scalar handed back
+  // The engine goes on: the next call runs compiled, to its end.
+  engine.call(spin, {Value::of_float(5.0)});
+  expect_boundary(5.0);
+  EXPECT_EQ(engine.global(count).as_float(), 8.0 + iterations);
+  EXPECT_EQ(trace_calls(stats(), loop_line), 3) << stats();
+  EXPECT_NE(loop_stats(stats(), loop_line).find(" compiled"), std::string::npos) << stats();
 }
 
 }  // namespace

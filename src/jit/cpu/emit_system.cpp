@@ -255,15 +255,15 @@ void Emitter::run_of(const VectorOp& op, Value* first, int group) {
   }
 }
 
-// int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes): the program's
-// scalars in and out through `scalars`, the ops before the loop, the while loop and the ops
-// after it in between.
+// int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes, const void* interrupt)
+// (SystemFn): the program's scalars in and out through `scalars`, the ops before the loop, the
+// while loop and the ops after it in between.
 llvm::Function* Emitter::run_system(const std::string& name) {
   llvm::Type* ptr = b_.getPtrTy();
-  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr}, false);
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
   fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
   auto arg = fn_->arg_begin();
-  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg;
+  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg++, *interrupt = &*arg;
   auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
   b_.SetInsertPoint(entry);
   load_arrays(arrays);
@@ -281,13 +281,39 @@ llvm::Function* Emitter::run_system(const std::string& name) {
   for (size_t i = 0; i < st_->sizes.size(); ++i)
     sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
                                   b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
+  auto write_scalars = [&] {
+    for (int i = 0; i < st_->scalars; ++i) {
+      const Ty t = local_types_[i];
+      Value* v = b_.CreateLoad(type(t), locals_[i]);
+      Value* d = t == Ty::F64   ? v
+                 : t == Ty::I32 ? b_.CreateSIToFP(v, f64)
+                                : b_.CreateUIToFP(v, f64);
+      b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+    }
+  };
   for (const VectorOp& op : st_->before) guarded_op(op, sizes);
   if (st_->condition) {
     auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
+    auto* test = llvm::BasicBlock::Create(ctx_, "while.test", fn_);
     auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
+    auto* stop = llvm::BasicBlock::Create(ctx_, "while.interrupted", fn_);
     auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
     b_.CreateBr(head);
     b_.SetInsertPoint(head);
+    // Ctrl-C: a loop whose only exit is its condition (a solver that does not converge) must
+    // stop when asked. The flag is read at the top of every iteration, where the vectors and
+    // scalars are what a whole number of iterations leaves; the kernel hands them back there.
+    // A relaxed atomic load: the handler (or another thread) sets it while the loop runs, and
+    // it must be read again on each iteration, not hoisted out of the loop.
+    llvm::LoadInst* flag = b_.CreateLoad(b_.getInt8Ty(), interrupt, "interrupt");
+    flag->setAtomic(llvm::AtomicOrdering::Monotonic);
+    flag->setAlignment(llvm::Align(1));
+    b_.CreateCondBr(b_.CreateICmpEQ(flag, b_.getInt8(0)), test, stop,
+                    llvm::MDBuilder(ctx_).createLikelyBranchWeights());
+    b_.SetInsertPoint(stop);
+    write_scalars();
+    b_.CreateRet(b_.getInt32(kSystemInterrupted));
+    b_.SetInsertPoint(test);
     b_.CreateCondBr(expr(*st_->condition), body, done);
     b_.SetInsertPoint(body);
     for (const VectorOp& op : st_->body) guarded_op(op, sizes);
@@ -295,12 +321,7 @@ llvm::Function* Emitter::run_system(const std::string& name) {
     b_.SetInsertPoint(done);
   }
   for (const VectorOp& op : st_->after) guarded_op(op, sizes);
-  for (int i = 0; i < st_->scalars; ++i) {
-    const Ty t = local_types_[i];
-    Value* v = b_.CreateLoad(type(t), locals_[i]);
-    Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
-    b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
-  }
+  write_scalars();
   b_.CreateRet(b_.getInt32(0));
   return fn_;
 }
