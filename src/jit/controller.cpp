@@ -85,6 +85,10 @@ struct TraceController::Pending {
   std::string name;          // the trace's site
   // Site: per result its values, per written field (array slot) its bytes, as compiled.
   std::vector<std::vector<double>> results;
+  // Per result: a matrix the kernel assembled on its specialised pattern (else empty), which
+  // replaces the interpreter's once they agree, so that what follows runs on what a
+  // compiled run would give it (a direct solve reads the pattern).
+  std::vector<Value> specialised;
   std::vector<std::pair<int, std::vector<std::byte>>> fields;
   const Trace* trace = nullptr;
   // Loop: per written variable its value as compiled; per written field ("S.f") its values.
@@ -350,7 +354,7 @@ std::vector<const int32_t*> TraceController::prepare_results(Entry& e, interp::S
 void TraceController::guard_results(Entry& e, interp::SiteCall& call,
                                     const std::vector<double>& scalars) {
   const Trace& t = *e.traced.trace;
-  if (options_.check || t.writes_fields || options_.float32) return;
+  if (t.writes_fields || options_.float32) return;
   if (!e.deciders) {
     e.deciders = write_deciders(t);
     if (!e.deciders->unguardable.empty()) e.full_why = e.deciders->unguardable;
@@ -937,10 +941,17 @@ bool TraceController::check_site(Entry& e, interp::SiteCall& call) {
       std::memcpy(v, &bits, sizeof bits);
     }
   }
-  for (const Value& r : call.results) {
+  p->specialised.resize(call.results.size());
+  for (size_t i = 0; i < call.results.size(); ++i) {
+    Value& r = call.results[i];
     if (r.kind() == Value::Kind::Matrix) {
       const double* v = r.matrix()->values();
       p->results.emplace_back(v, v + r.matrix()->value_count());
+      // The interpreter assembles on the full pattern: it makes that matrix itself.
+      if (r.matrix()->shared_pattern() != call.plan.results[i].pattern) {
+        p->specialised[i] = std::move(r);
+        r = Value::of_matrix(nullptr);
+      }
     } else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float) {
       p->results.emplace_back(r.tensor().floats(), r.tensor().floats() + r.tensor().size());
     } else {
@@ -979,6 +990,30 @@ void TraceController::site_done(interp::SiteCall& call) {
                        : v.is_tensor()                 ? v.tensor().floats()
                                                        : nullptr;
     if (!in) continue;
+    if (r < p->specialised.size() && !p->specialised[r].empty()) {
+      // The compiled matrix holds the blocks written; every other block of the interpreter's
+      // must be zero.
+      const runtime::SystemMatrix& full = *v.matrix();
+      const runtime::MatrixPattern& fp = full.pattern();
+      const runtime::MatrixPattern& sp = p->specialised[r].matrix()->pattern();
+      const size_t bs = static_cast<size_t>(full.block_size());
+      for (int row = 0; row < fp.rows(); ++row)
+        for (int32_t k = fp.row_ptr()[row]; k < fp.row_ptr()[row + 1]; ++k) {
+          const int32_t at = sp.find(row, fp.col_idx()[k]);
+          for (size_t c = 0; c < bs; ++c) {
+            const double iv = in[static_cast<size_t>(k) * bs + c];
+            const double jv = at < 0 ? 0.0 : jit[static_cast<size_t>(at) * bs + c];
+            if (same_bits(iv, jv)) continue;
+            differ("result '" + f.results[r].name + "' component " +
+                       std::to_string(static_cast<size_t>(k) * bs + c) + " (block " +
+                       std::to_string(k) + (at < 0 ? ", left out of the specialised pattern" : "") +
+                       ")",
+                   element_of_block(fp, k), call.target, iv, jv);
+          }
+        }
+      call.results[r] = std::move(p->specialised[r]);
+      continue;
+    }
     for (size_t c = 0; c < jit.size(); ++c) {
       if (same_bits(in[c], jit[c])) continue;
       const std::string what = "result '" + f.results[r].name + "' component " + std::to_string(c);

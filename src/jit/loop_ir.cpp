@@ -61,7 +61,7 @@ const char* un_name(uint8_t op) {
   return names[op];
 }
 const char* bin_name(uint8_t op) {
-  static const char* const names[] = {"+", "-", "*", "/", "and", "or", "xor"};
+  static const char* const names[] = {"+", "-", "*", "/", "and", "or", "xor", "mod"};
   return names[op];
 }
 const char* cmp_name(uint8_t op) {

@@ -61,7 +61,10 @@ const char* expr_kind_name(ExprKind k);
 const char* stmt_kind_name(StmtKind k);
 
 enum class UnOp : uint8_t { Neg, Not, Round32, ToF64 };
-enum class BinOp : uint8_t { Add, Sub, Mul, Div, And, Or, Xor };
+// Div on I32 truncates, Mod is the remainder of that division (the sign of the dividend); a
+// target computes both without trapping (a zero divisor's check fails before its value is
+// used, and `x / -1` wraps as the interpreter's does).
+enum class BinOp : uint8_t { Add, Sub, Mul, Div, And, Or, Xor, Mod };
 enum class CmpOp : uint8_t { Eq, Ne, Lt, Gt, Le, Ge };
 enum class MathFn : uint8_t {
   Sin,
@@ -106,9 +109,9 @@ struct Stmt {
   StmtKind kind = StmtKind::SetLocal;
   // SetLocal, For: local; Store: array; Assemble: result array; Put: scratch array
   int slot = 0;
-  int comp = 0;                    // Store / Assemble: component within the element's block
-  int pair = -1;                   // Assemble into a matrix: the (row member, column member) pair
-  int error = -1;                  // Check: index into Trace::errors
+  int comp = 0;    // Store / Assemble: component within the element's block
+  int pair = -1;   // Assemble into a matrix: the (row member, column member) pair
+  int error = -1;  // Check: index into Trace::errors
   // Store / Assemble into a vector: the element written; Put: the component written.
   ExprRef index;
   // SetLocal, Store, Assemble, Put: the value; If, Check: the condition.

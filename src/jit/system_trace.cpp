@@ -578,10 +578,13 @@ class SystemTracer {
     if (guard_ >= 0 && !assigned_.count(&target))
       for (const SystemBinding::Created& c : b_.created)
         if (c.var == &target) give_up(at, "a vector first assigned inside an if");
-    if (is_product(value))
-      if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::VarRef>(); x && x->var == &target)
-        give_up(at, "a product written into its own operand");
-    store_vector(vt->second, size_of_.at(&target), value, at);
+    // `x = K * x`: the product goes to a scratch vector first, then into x, since its rows
+    // read every component of x.
+    const auto* x = is_product(value) ? value.as<ast::Binary>()->rhs->as<ast::VarRef>() : nullptr;
+    if (x && x->var == &target)
+      store_own_product(vt->second, size_of_.at(&target), value, at);
+    else
+      store_vector(vt->second, size_of_.at(&target), value, at);
     if (guard_ < 0) assigned_.insert(&target);
   }
 
@@ -597,12 +600,19 @@ class SystemTracer {
   // `S.f = v`: the field's array, written in place.
   void assign_field(const ast::FieldRead& target, const ast::Expr& value, const SourceSpan& at) {
     const auto key = field_key(target);
+    first_field_write_ = std::min(first_field_write_, at_);
     if (is_product(value))
       if (const auto* x = value.as<ast::Binary>()->rhs->as<ast::FieldRead>();
           x && x->of_set && field_key(*x) == key)
-        give_up(at, "a product written into its own operand");
-    first_field_write_ = std::min(first_field_write_, at_);
+        return store_own_product(field_slot_.at(key), field_size_.at(key), value, at);
     store_vector(field_slot_.at(key), field_size_.at(key), value, at);
+  }
+
+  // A product written into its own operand (`x = K * x`, `S.f = K * S.f`): computed into a
+  // scratch vector, which a pass then copies into the target.
+  void store_own_product(int slot, int n, const ast::Expr& value, const SourceSpan& at) {
+    t_.arrays[slot].written = true;
+    store_pass(slot, n, product(*value.as<ast::Binary>(), at), at);
   }
 
   // `A * x` with A a matrix variable of the run.

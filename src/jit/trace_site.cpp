@@ -86,6 +86,15 @@ ExprRef binary(BinOp op, Ty ty, ExprRef a, ExprRef b, SourceSpan at = {}) {
         case BinOp::Add: return iconst(static_cast<int32_t>(x + y));
         case BinOp::Sub: return iconst(static_cast<int32_t>(x - y));
         case BinOp::Mul: return iconst(static_cast<int32_t>(x * y));
+        // A zero divisor is not folded: its check fails when the code runs.
+        case BinOp::Div:
+          if (b->i == -1) return iconst(static_cast<int32_t>(0u - x));
+          if (b->i != 0) return iconst(a->i / b->i);
+          break;
+        case BinOp::Mod:
+          if (b->i == -1) return iconst(0);
+          if (b->i != 0) return iconst(a->i % b->i);
+          break;
         default: break;
       }
     } else {
@@ -97,7 +106,6 @@ ExprRef binary(BinOp op, Ty ty, ExprRef a, ExprRef b, SourceSpan at = {}) {
       }
     }
   }
-  if (ty == Ty::I32 && op == BinOp::Div) give_up(at, "integer division is not compiled");
   if (zero_fold && ty == Ty::F64 && !(is_const(a) && is_const(b)))
     if (ExprRef f = zero_fold->binary(op, a, b)) return f;
   Expr e;
@@ -244,6 +252,34 @@ Sym zero_of(const Type& t, const SourceSpan& at) {
   check_components(n, at);
   return tensor(ty, std::move(d),
                 std::vector<ExprRef>(n, ty == Ty::F64 ? fconst(0.0) : iconst(0, ty)), std::move(b));
+}
+
+// A value bound to a variable of declared type `t` takes the variable's shape, as the
+// interpreter stores it: a scalar fills every component of a tensor (`var E :
+// matrix[3,3](float) = 0.0;`, `w = 0.0;`, `var w : vector[1](float) = 2.0`). With `reshape`
+// (a declaration's initialiser, which the interpreter reshapes) a tensor of as many
+// components keeps its components in order under the declared dimensions (`const m :
+// tensor[1,3](float) = [1.0, 2.0, 3.0]`). Values of other kinds (elements, sets, system
+// tensors) and tensors over sets are left as they are.
+Sym as_declared(Sym value, const Type& t, const SourceSpan& at, bool reshape = false) {
+  if (value.kind != Sym::Kind::Tensor || t.kind != Type::Kind::Tensor) return value;
+  for (const IndexSet& i : t.dims)
+    if (i.kind != IndexSet::Kind::Fixed) return value;
+  if (is_blocked(t) && is_blocked(*t.block)) return value;  // the tracer gives up on it later
+  Sym shape = zero_of(t, at);
+  if (value.same_shape(shape)) return value;
+  if (value.scalar()) {
+    for (ExprRef& c : shape.c) c = value.c[0];
+    shape.ty = value.ty;
+    return shape;
+  }
+  if (!reshape) return value;
+  if (value.size() != shape.size())
+    give_up(at, "a value of " + std::to_string(value.size()) +
+                    " components bound to a variable of " + std::to_string(shape.size()));
+  value.dims = std::move(shape.dims);
+  value.block = std::move(shape.block);
+  return value;
 }
 
 // For each component of a blocked matrix or vector in its logical (unblocked) row-major
@@ -475,6 +511,25 @@ class Tracer {
     check.span = at;
     emit(std::move(check));
     return s;
+  }
+  // An integer division's or mod's divisors: a check that each is not zero (the interpreter's
+  // error, which the controller has it report by running the site again), but for constants
+  // known not to be.
+  void check_divisors(const Sym& divisor, const char* message, const SourceSpan& at) {
+    ExprRef ok;
+    for (const ExprRef& d : divisor.c) {
+      if (is_const(d) && d->i != 0) continue;
+      ExprRef one = compare(CmpOp::Ne, d, iconst(0), at);
+      ok = ok ? binary(BinOp::And, Ty::Bool, ok, one, at) : one;
+    }
+    if (!ok) return;
+    trace_.errors.push_back({at, message});
+    Stmt check;
+    check.kind = StmtKind::Check;
+    check.value = ok;
+    check.error = static_cast<int>(trace_.errors.size() - 1);
+    check.span = at;
+    emit(std::move(check));
   }
   Sym read_block(const Sym& base, const ast::TensorRead& r);
   Sym read_matrix_block(const Sym& matrix, const ast::TensorRead& r);
@@ -1229,7 +1284,10 @@ Sym Tracer::eval_binary(const ast::Binary& b) {
     case Op::ElemMul: v = elementwise(BinOp::Mul, l, r, b.span); break;
     case Op::ElemDiv:
     case Op::Div:
-      if (l.ty != Ty::F64) give_up(b.span, "integer division is not compiled");
+      if (l.ty == Ty::I32)
+        check_divisors(r, "integer division by zero", b.span);
+      else if (l.ty != Ty::F64)
+        give_up(b.span, "division of non-numbers");
       v = elementwise(BinOp::Div, l, r, b.span);
       break;
     case Op::Mul:
@@ -1335,6 +1393,12 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
   };
   Sym v;
   switch (c.intrinsic) {
+    case Intrinsic::Mod:
+      if (!a[0].scalar() || !a[1].scalar() || a[0].ty != Ty::I32 || a[1].ty != Ty::I32)
+        give_up(c.span, "mod of non-integers");
+      check_divisors(a[1], "mod by zero", c.span);
+      v = scalar(Ty::I32, binary(BinOp::Mod, Ty::I32, a[0].c[0], a[1].c[0], c.span));
+      break;
     case Intrinsic::Sin: v = f1(MathFn::Sin); break;
     case Intrinsic::Cos: v = f1(MathFn::Cos); break;
     case Intrinsic::Tan: v = f1(MathFn::Tan); break;
@@ -1482,7 +1546,7 @@ std::vector<Sym> Tracer::call_user(const ast::Call& c) {
     const ast::Param& p = f.params[i];
     if (p.inout && args[i].kind == Sym::Kind::Tensor)
       give_up(c.span, "inout tensor arguments are not compiled");
-    callee.vars[p.var] = args[i];
+    callee.vars[p.var] = p.var->type ? as_declared(args[i], *p.var->type, c.span) : args[i];
     callee.bound_at[p.var] = static_cast<int>(blocks_.size());
   }
   for (const ast::Param& r : f.results) {
@@ -1511,7 +1575,8 @@ void Tracer::exec(const ast::Stmt& s) {
   switch (s.kind) {
     case ast::NodeKind::VarDecl: {
       const auto& d = static_cast<const ast::VarDecl&>(s);
-      Sym v = d.init ? eval(*d.init) : zero_of(*d.var->type, d.span);
+      Sym v = d.init ? as_declared(eval(*d.init), *d.var->type, d.span, true)
+                     : zero_of(*d.var->type, d.span);
       return bind(*d.var, std::move(v), d.span);
     }
     case ast::NodeKind::Assign: {
@@ -1710,14 +1775,8 @@ void Tracer::assign(const ast::Expr& target, Sym value, const SourceSpan& at) {
     auto it = frame().vars.find(v->var);
     if (it != frame().vars.end() && it->second.kind == Sym::Kind::Result)
       give_up(at, "assigning a whole result of the mapped function");
-    if (value.kind == Sym::Kind::Tensor && it != frame().vars.end() &&
-        it->second.kind == Sym::Kind::Tensor && it->second.size() != value.size() &&
-        value.scalar()) {
-      // `v = 0.0` on a tensor broadcasts.
-      Sym b = it->second;
-      for (ExprRef& c : b.c) c = value.c[0];
-      return bind(*v->var, std::move(b), at);
-    }
+    // `v = 0.0` on a tensor broadcasts; a variable keeps its declared shape.
+    if (v->var->type) value = as_declared(std::move(value), *v->var->type, at);
     return bind(*v->var, std::move(value), at);
   }
   if (const auto* f = target.as<ast::FieldRead>())

@@ -27,8 +27,10 @@ inline constexpr int kTile = 12;
 // an element-wise operation or matrix-vector product computes from one in a scratch array (a
 // tiled product's result) lies in a scratch array and is computed by a loop, not unrolled.
 inline constexpr size_t kTileAbove = 144;
-// Calls inlined inside one another.
-inline constexpr int kMaxInlineDepth = 32;
+// Calls inlined inside one another. Simit has no recursion, so a program's call chains are
+// as deep as its functions are many; the limit only keeps the tracer, which recurses a few
+// frames per level, well inside a thread's stack (a few kB a level).
+inline constexpr int kMaxInlineDepth = 256;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
 // LLVM's optimisation level for kernels (2 or 3), and for traces of more loop-IR nodes than

@@ -55,7 +55,13 @@ class Shape {
     return n;
   }
   size_t outer_count() const;  // number of blocks (components when unblocked)
-  size_t block_size() const { return size() / outer_count(); }
+  // Components of one block: the product of the inner levels' dimensions (not size() /
+  // outer_count(), which divides by zero for a tensor over an empty set).
+  size_t block_size() const {
+    size_t n = 1;
+    for (int i = levels_ ? level_order_[0] : 0; i < rank_; ++i) n *= static_cast<size_t>(dims_[i]);
+    return n;
+  }
 
   bool operator==(const Shape& o) const;
   bool operator!=(const Shape& o) const { return !(*this == o); }

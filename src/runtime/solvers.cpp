@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "runtime/sparse_convert.h"
 
@@ -36,6 +37,34 @@ std::string row_str(int64_t i, int block_rows) {
   return "row " + std::to_string(i) + " (element " + std::to_string(i / block_rows) +
          ", component " + std::to_string(i % block_rows) + ")";
 }
+
+// The matrix a factorisation reads: the logical matrix without its zero entries. A block
+// pattern's explicit zeros (blocks no element writes, zero components of written blocks) would
+// change the fill-reducing ordering, and with it the factor's rounding: without them the
+// factor, and every solve's bits, are the same for a matrix on any pattern that holds its
+// nonzeros (the JIT assembles a map's matrix on the blocks it writes, docs/jit.md).
+EigenSparse solver_form(const SystemMatrix& a) {
+  EigenSparse m = to_eigen(a);
+  m.prune([](auto, auto, double v) { return v != 0.0; });  // a NaN is kept
+  m.makeCompressed();
+  return m;
+}
+
+// The structure of the matrix a symbolic analysis was made for: one whose values put their
+// zeros elsewhere is analysed again.
+struct Structure {
+  std::vector<int> outer, inner;
+  bool same(const EigenSparse& m) const {
+    return std::equal(outer.begin(), outer.end(), m.outerIndexPtr(),
+                      m.outerIndexPtr() + m.outerSize() + 1) &&
+           std::equal(inner.begin(), inner.end(), m.innerIndexPtr(),
+                      m.innerIndexPtr() + m.nonZeros());
+  }
+  void take(const EigenSparse& m) {
+    outer.assign(m.outerIndexPtr(), m.outerIndexPtr() + m.outerSize() + 1);
+    inner.assign(m.innerIndexPtr(), m.innerIndexPtr() + m.nonZeros());
+  }
+};
 
 using VectorSolve = std::function<void(std::span<const double>, std::span<double>)>;
 
@@ -80,6 +109,7 @@ struct CholeskyFactor::Impl {
   cholmod_common common;
   cholmod_factor* factor = nullptr;
   PatternPtr analysed;  // the pattern the symbolic analysis belongs to
+  Structure structure;  // its nonzeros' structure
   int block_rows = 0, block_cols = 0;
   int64_t n = 0;  // CHOLMOD rejects empty matrices, so those never reach it
   // Solve workspace, reused between solves.
@@ -118,7 +148,7 @@ void CholeskyFactor::Impl::factorize(const SystemMatrix& a) {
     analysed = a.shared_pattern();
     return;
   }
-  EigenSparse m = to_eigen(a);  // the one conversion; CHOLMOD reads its arrays in place
+  EigenSparse m = solver_form(a);  // the one conversion; CHOLMOD reads its arrays in place
   cholmod_sparse s{};
   s.nrow = s.ncol = static_cast<size_t>(m.rows());
   s.nzmax = static_cast<size_t>(m.nonZeros());
@@ -132,12 +162,13 @@ void CholeskyFactor::Impl::factorize(const SystemMatrix& a) {
   s.sorted = 1;
   s.packed = 1;
   const bool same = factor && analysed == a.shared_pattern() && block_rows == a.block_rows() &&
-                    block_cols == a.block_cols();
+                    block_cols == a.block_cols() && structure.same(m);
   if (!same) {
     cholmod_free_factor(&factor, &common);
     factor = cholmod_analyze(&s, &common);
     check_status("the analysis");
     analysed = a.shared_pattern();
+    structure.take(m);
     block_rows = a.block_rows();
     block_cols = a.block_cols();
   }
@@ -198,6 +229,7 @@ SystemMatrix CholeskyFactor::solve(const SystemMatrix& b) const {
 struct LuFactor::Impl {
   Eigen::SparseLU<EigenSparse, Eigen::COLAMDOrdering<int>> lu;
   PatternPtr analysed;
+  Structure structure;
   int block_rows = 0, block_cols = 0;
   int64_t n = 0;
 
@@ -208,11 +240,12 @@ struct LuFactor::Impl {
       analysed = a.shared_pattern();
       return;
     }
-    EigenSparse m = to_eigen(a);
+    EigenSparse m = solver_form(a);
     if (!(analysed == a.shared_pattern() && block_rows == a.block_rows() &&
-          block_cols == a.block_cols())) {
+          block_cols == a.block_cols() && structure.same(m))) {
       lu.analyzePattern(m);
       analysed = a.shared_pattern();
+      structure.take(m);
       block_rows = a.block_rows();
       block_cols = a.block_cols();
     }

@@ -54,6 +54,20 @@ llvm::Type* Emitter::like(llvm::Type* scalar, Value* like) {
   return scalar;
 }
 
+// x / y or mod(x, y) on int32 (scalars or lanes) without a trap: a divisor of 0 or -1 is
+// replaced by 1 (the kernel's check fails first on 0, so that value is never used); by -1 the
+// quotient is the wrapping negation and the remainder 0, as the interpreter computes them.
+Value* Emitter::int_divide(Value* x, Value* y, bool remainder) {
+  llvm::Type* t = y->getType();
+  Value* minus_one = b_.CreateICmpEQ(y, llvm::ConstantInt::getSigned(t, -1));
+  Value* bad = b_.CreateOr(b_.CreateICmpEQ(y, llvm::ConstantInt::get(t, 0)), minus_one);
+  Value* safe = b_.CreateSelect(bad, llvm::ConstantInt::get(t, 1), y);
+  if (remainder)
+    return b_.CreateSelect(minus_one, llvm::ConstantInt::get(t, 0), b_.CreateSRem(x, safe));
+  return b_.CreateSelect(minus_one, b_.CreateSub(llvm::ConstantInt::get(t, 0), x),
+                         b_.CreateSDiv(x, safe));
+}
+
 // The operators on evaluated operands: scalars, or vectors of one element per lane.
 Value* Emitter::combine(const Expr& e, const std::vector<Value*>& args) {
   switch (e.kind) {
@@ -78,7 +92,8 @@ Value* Emitter::combine(const Expr& e, const std::vector<Value*>& args) {
         case BinOp::Add: return f ? b_.CreateFAdd(x, y) : b_.CreateAdd(x, y);
         case BinOp::Sub: return f ? b_.CreateFSub(x, y) : b_.CreateSub(x, y);
         case BinOp::Mul: return f ? b_.CreateFMul(x, y) : b_.CreateMul(x, y);
-        case BinOp::Div: return b_.CreateFDiv(x, y);
+        case BinOp::Div: return f ? b_.CreateFDiv(x, y) : int_divide(x, y, false);
+        case BinOp::Mod: return int_divide(x, y, true);
         case BinOp::And: return b_.CreateAnd(x, y);
         case BinOp::Or: return b_.CreateOr(x, y);
         case BinOp::Xor: return b_.CreateXor(x, y);

@@ -71,6 +71,7 @@ class Emitter {
   }
   Value* math(const Expr& e, const std::vector<Value*>& args);
   llvm::Type* like(llvm::Type* scalar, Value* like);
+  Value* int_divide(Value* x, Value* y, bool remainder);
   Value* combine(const Expr& e, const std::vector<Value*>& args);
   Value* expr(const Expr& e);
   Value* load(const Expr& e, Value* index);
