@@ -807,6 +807,10 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
                                           : const_cast<double*>(v.tensor().floats());
           break;
         case Part::RowPtr: {
+          if (t.matrices_in_place) {
+            arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data());
+            break;
+          }
           // The matrix is constant while the loop runs: its zero blocks are dropped once.
           const double before = thread_cpu_ms();
           PrunedMatrix& p = e->pruned[b.arrays[i].var];
@@ -817,8 +821,15 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
           arrays[i] = p.row_ptr.data();
           break;
         }
-        case Part::Cols: arrays[i] = e->pruned[b.arrays[i].var].cols.data(); break;
-        case Part::Values: arrays[i] = e->pruned[b.arrays[i].var].values.data(); break;
+        case Part::Cols:
+          arrays[i] = t.matrices_in_place
+                          ? const_cast<int32_t*>(v.matrix()->pattern().col_idx().data())
+                          : e->pruned[b.arrays[i].var].cols.data();
+          break;
+        case Part::Values:
+          arrays[i] = t.matrices_in_place ? const_cast<double*>(std::as_const(*v.matrix()).values())
+                                          : e->pruned[b.arrays[i].var].values.data();
+          break;
         case Part::Field: {
           runtime::Field& f = bound_field(b.arrays[i], in);
           // A write counts in the field's write version (and unshares its array).

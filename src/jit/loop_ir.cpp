@@ -475,7 +475,8 @@ void print(std::ostream& os, const Trace& t) {
 }
 
 void print(std::ostream& os, const SystemTrace& t) {
-  os << "system trace " << t.name << "\n";
+  os << "system trace " << t.name << (t.matrices_in_place ? " (matrices read in place)" : "")
+     << "\n";
   for (size_t i = 0; i < t.arrays.size(); ++i)
     os << "  a" << i << ": " << t.arrays[i].name << " "
        << (t.arrays[i].single ? "f32" : ty_name(t.arrays[i].ty))

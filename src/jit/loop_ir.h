@@ -220,6 +220,10 @@ struct SystemTrace {
   // The loop's error statements (Check statements in its scalar ops): a kernel that reaches
   // one returns 1 + its index, and the controller hands the loop back to the interpreter.
   std::vector<ErrorSite> errors;
+  // A run without a loop multiplies once by each matrix: its products read the matrices' own
+  // arrays (blocks row-major, zero blocks included, as the interpreter's product reads them)
+  // rather than a copy without zero blocks, whose blocks are column-major (PrunedMatrix).
+  bool matrices_in_place = false;
 };
 
 // Prints the trace as text (`--dump=loop-ir`).

@@ -63,12 +63,10 @@ class SystemTracer {
         }
       }
       end_section();
-      // Each call copies the matrices it multiplies by (PrunedMatrix): worth it for the
-      // iterations of a loop, not for one product, which the interpreter computes in place.
-      if (!loop && first_product_ < run_.size()) {
-        at_ = first_product_;
-        give_up(run_[at_]->span, "a product outside a loop (the matrix would be copied for it)");
-      }
+      // A loop's products read a copy of each matrix without its zero blocks (PrunedMatrix),
+      // made once per call for all iterations; a run without a loop multiplies once and reads
+      // the matrix where it is, as the interpreter does.
+      t_.matrices_in_place = !loop;
       // A kernel that reaches an error statement puts the variables back for the interpreter
       // to run the statements again; it could not put a field back.
       if (!t_.errors.empty() && first_field_write_ < run_.size()) {
@@ -684,7 +682,6 @@ class SystemTracer {
       op.body.push_back(std::move(s));
     }
     push_op(std::move(op), at);
-    first_product_ = std::min(first_product_, at_);
   }
 
   // A product inside a vector expression (`b - A * x`): into a scratch vector, read back
@@ -864,7 +861,6 @@ class SystemTracer {
   interp::Interpreter& in_;
   bool float32_ = false;
   size_t at_ = 0;                        // the statement of the run being collected or traced
-  size_t first_product_ = SIZE_MAX;      // the first statement with a sparse product
   size_t first_field_write_ = SIZE_MAX;  // the first statement that writes a field
   using FieldKey = std::pair<const ast::Variable*, int>;  // a set and its field's index
   std::map<FieldKey, int> field_slot_, field_size_, field_block_;

@@ -400,6 +400,49 @@ TEST(JitIdioms, AProductWrittenIntoItsOwnOperandCompiles) {
   EXPECT_EQ(not_compiled(jit.stats), "") << jit.stats;
 }
 
+const char* kLoneProduct = R"(
+element V
+  x : vector[3](float);
+  y : vector[3](float);
+  k : int;
+  m : vector[3](int);
+end
+element E
+end
+extern verts : set{V};
+extern edges : set{E}(verts, verts);
+
+func stiffness(e : E, p : (V * 2)) -> A : matrix[verts,verts](matrix[3,3](float))
+  var K : matrix[3,3](float) = 0.0;
+  K(0, 0) = norm(p(0).x - p(1).x);
+  K(1, 2) = 0.5;
+  A(p(0), p(0)) = K;
+  A(p(0), p(1)) = -K;
+end
+
+export func step() -> r : float
+  A = map stiffness to edges reduce +;
+  verts.y = 0.5 * verts.y + A * verts.x;
+  r = norm(A * verts.y - verts.x) / norm(verts.x);
+end
+)";
+
+// Products outside a loop read the matrix in place (no copy), with the interpreter's bits.
+TEST(JitIdioms, ProductsOutsideALoopCompileAndReadTheMatrixInPlace) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  for (bool check : {false, true}) {
+    const IdiomRun in = run(kLoneProduct, ExecutorKind::Interpreter, 4, kEdges, 3);
+    const IdiomRun jit = run(kLoneProduct, ExecutorKind::Jit, 4, kEdges, 3, check);
+    ASSERT_EQ(jit.error, "");
+    expect_same_bits(in.y, jit.y);
+    expect_same_bits(floats(in.results[0]), floats(jit.results[0]));
+    EXPECT_NE(jit.stats.find("statements (lines 23-24)"), std::string::npos) << jit.stats;
+    EXPECT_EQ(not_compiled(jit.stats), "") << jit.stats;
+    EXPECT_EQ(jit.stats.find("products stream"), std::string::npos) << jit.stats;  // no copy
+    EXPECT_GT(in.results[0].as_float(), 0.0);
+  }
+}
+
 // f0 calls f1 ... calls f39: 40 levels, past the old limit of 32.
 std::string deep_chain_program() {
   std::string s = R"(

@@ -90,10 +90,25 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
           Value* xc = b_.CreateMul(col, b_.getInt64(bs));
           Value* part = nullptr;
           for (int j = 0; j < bs; ++j) {
-            llvm::LoadInst* a =
-                b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                        b_.CreateAdd(blk, b_.getInt64(j * bs))));
-            a->setAlignment(llvm::Align(8));
+            Value* a;
+            if (st_->matrices_in_place) {
+              // The matrix's own blocks are row-major: column j is every bs-th value, and the
+              // lanes past bs stay zero (their sums are never read).
+              a = llvm::ConstantFP::get(vec, 0.0);
+              for (int i = 0; i < bs; ++i)
+                a = b_.CreateInsertElement(
+                    a,
+                    b_.CreateLoad(f64,
+                                  b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                       b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
+                    static_cast<uint64_t>(i));
+            } else {
+              llvm::LoadInst* column =
+                  b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                          b_.CreateAdd(blk, b_.getInt64(j * bs))));
+              column->setAlignment(llvm::Align(8));
+              a = column;
+            }
             Value* x = b_.CreateLoad(
                 f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
             Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
