@@ -198,9 +198,11 @@ void Checker::declare_params(std::vector<ast::Param>& params, Variable::Kind kin
 void Checker::check_func(ast::FuncDecl& f) {
   bool fresh = funcs_.find(f.name) == funcs_.end();
   if (find_intrinsic(f.name)) {
+    // Still registered (the first one): later calls and maps of the name are checked
+    // against the function as written, where checking them against the intrinsic would
+    // add a knock-on error to this one.
     error(SemanticKind::Redefinition, f.name_span,
           "redefinition of intrinsic function '" + f.name + "'");
-    fresh = false;
   } else if (!fresh) {
     error(SemanticKind::Redefinition, f.name_span,
           "redefinition of function or procedure '" + f.name + "'");

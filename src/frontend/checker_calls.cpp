@@ -8,8 +8,11 @@ namespace simit::frontend::checker_detail {
 using ast::Variable;
 
 TypeRef Checker::check_call(ast::Call& c) {
-  if (auto id = find_intrinsic(c.callee)) return check_intrinsic_call(c, *id);
   auto it = funcs_.find(c.callee);
+  // A function named like an intrinsic (an error check_func reports) takes the name's calls
+  // after it: checked against the intrinsic, they would add knock-on errors.
+  auto id = find_intrinsic(c.callee);
+  if (id && it == funcs_.end()) return check_intrinsic_call(c, *id);
   if (it == funcs_.end()) {
     undeclared("undeclared function", c.callee, c.callee_span.valid() ? c.callee_span : c.span);
     return nullptr;

@@ -171,6 +171,7 @@ class Checker {
   void check_assign(ast::Assign& a);
   void assign_target(ast::Assign& a, size_t i, const TypeRef& value);
   void declare_implicit(ast::Assign& a, size_t i, const TypeRef& value);
+  void not_writable(const ast::Expr& target);
   bool check_assignable(SourceSpan at, const Type& target, const Type& value);
   void check_condition(ast::Expr& e);
   void check_for_range(ast::ForRange& f);

@@ -46,7 +46,7 @@ void Checker::check_index_assign(ast::Assign& a) {
     if (target && !target->is_tensor()) {
       error(SemanticKind::Type, t.span, "cannot assign to a target of type " + quoted(*target));
     } else if (target && !t.writable) {
-      error(SemanticKind::NotWritable, t.span, "assignment target is not writable");
+      not_writable(t);
     } else if (target) {
       check_assignable(a.value->span, *target, *value);
     }

@@ -71,6 +71,25 @@ static bool const_lenient(const Type& declared, const Type& value) {
   return strip(declared.dims) == strip(value.dims);
 }
 
+// Vector types that differ only in orientation print alike but for one `'`; the messages
+// name the orientations instead and suggest the transpose.
+static bool differ_in_orientation(const Type& a, const Type& b) {
+  if (a.kind != Type::Kind::Tensor || b.kind != Type::Kind::Tensor || a.order() != 1 ||
+      a.row == b.row)
+    return false;
+  Type flipped = b;
+  flipped.row = a.row;
+  return same_type(a, flipped);
+}
+
+// "row vector (vector[3](float)')", or with `what` "column vector target (vector[3](float))".
+static std::string oriented(const Type& t, const std::string& what = "") {
+  return std::string(t.row ? "row" : "column") + " vector " + (what.empty() ? "" : what + " ") +
+         "(" + type_name(t) + ")";
+}
+
+static const char* const kTransposeHint = ": transpose it with the ' operator";
+
 bool Checker::check_initializer(SourceSpan at, const Type& declared, const Type& value,
                                 bool is_const, bool global) {
   if (!value.is_tensor()) {
@@ -88,6 +107,12 @@ bool Checker::check_initializer(SourceSpan at, const Type& declared, const Type&
     if (value.scalar == declared.component()) return true;
   }
   if (is_const && const_lenient(declared, value)) return true;
+  if (differ_in_orientation(declared, value)) {
+    error(SemanticKind::Type, at,
+          "cannot initialize a " + oriented(declared, "variable") + " with a " + oriented(value) +
+              kTransposeHint);
+    return false;
+  }
   error(SemanticKind::Type, at,
         "cannot initialize a variable of type " + quoted(declared) + " with a value of type " +
             quoted(value));
@@ -179,7 +204,7 @@ void Checker::assign_target(ast::Assign& a, size_t i, const TypeRef& value) {
     return;
   }
   if (!t.writable) {
-    error(SemanticKind::NotWritable, t.span, "assignment target is not writable");
+    not_writable(t);
     return;
   }
   if (!is_tensor_or_opaque(*value)) {
@@ -194,6 +219,41 @@ void Checker::assign_target(ast::Assign& a, size_t i, const TypeRef& value) {
     info_->misuse_span = t.span;
     info_->misused_result = ref->name;
   }
+}
+
+// The variable a target names, read whole or through element reads (`v`, `v(i)`, `A(i,j)`),
+// or null for anything else: a slice, a field, a literal or a call.
+static const Variable* named_target(const ast::Expr& t) {
+  const ast::Expr* e = &t;
+  while (const auto* r = e->as<ast::TensorRead>()) {
+    for (const auto& index : r->indices)
+      if (!index) return nullptr;
+    if (!r->base) return nullptr;
+    e = r->base.get();
+  }
+  const auto* ref = e->as<ast::VarRef>();
+  return ref ? ref->var : nullptr;
+}
+
+// Programs ported from the original Simit bind a name more than once; where declaring the
+// name with `var` would make the assignment legal, the message says so.
+void Checker::not_writable(const ast::Expr& t) {
+  std::string message = "assignment target is not writable";
+  const Variable* v = named_target(t);
+  if (v && !v->writable && v->type && v->type->is_tensor()) {
+    const std::string& n = v->name;
+    if (v->kind == Variable::Kind::Implicit)
+      message += ": '" + n +
+                 "' was declared by its first assignment, which makes it read-only; declare it "
+                 "with 'var' to assign it again";
+    else if (v->kind == Variable::Kind::Local)
+      message += ": '" + n + "' is a local 'const'; declare it with 'var' to assign it again";
+    else if (v->kind == Variable::Kind::Param)
+      message += ": parameter '" + n +
+                 "' is read-only; to change a copy, declare one with 'var' ('var " + n + " = " + n +
+                 ";')";
+  }
+  error(SemanticKind::NotWritable, t.span, std::move(message));
 }
 
 void Checker::declare_implicit(ast::Assign& a, size_t i, const TypeRef& value) {
@@ -215,6 +275,12 @@ bool Checker::check_assignable(SourceSpan at, const Type& target, const Type& va
   if (same_type(target, value)) return true;
   if (value.is_scalar() && target.kind == Type::Kind::Tensor && value.scalar == target.component())
     return true;
+  if (differ_in_orientation(target, value)) {
+    error(SemanticKind::Type, at,
+          "cannot assign a " + oriented(value) + " to a " + oriented(target, "target") +
+              kTransposeHint);
+    return false;
+  }
   error(
       SemanticKind::Type, at,
       "cannot assign a value of type " + quoted(value) + " to a target of type " + quoted(target));

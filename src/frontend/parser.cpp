@@ -259,8 +259,22 @@ DeclPtr Parser::parse_program_element() {
     case TokenKind::KwFunc:
     case TokenKind::KwExport: return parse_func();
     case TokenKind::Test: return parse_test();
-    default: fail_expected("a program element (element, extern, const, func, export or a test)");
+    default:
+      if (at(TokenKind::Ident) && peek().text == "proc") fail_proc();
+      fail_expected("a program element (element, extern, const, func, export or a test)");
   }
+}
+
+// The original Simit wrote an exported procedure `proc NAME ... end`; programs ported from
+// it meet this first. The procedure is then skipped to its `end`, so that its body (which
+// may declare `const`s) gives no further errors.
+void Parser::fail_proc() {
+  std::string name = peek(1).kind == TokenKind::Ident ? std::string(peek(1).text) : "NAME";
+  report(peek(), "'proc' is not a keyword here: an exported procedure is written 'export func " +
+                     name + "()'");
+  advance();
+  open_block(TokenKind::KwFunc);
+  throw SyntaxAbort{};
 }
 
 // element_decl = "element" IDENT { field_decl } "end" ;

@@ -72,6 +72,7 @@ class Parser {
 
   // --- program elements (parser.cpp)
   ast::DeclPtr parse_program_element();
+  [[noreturn]] void fail_proc();
   ast::DeclPtr parse_element();
   void parse_field(ast::ElementDecl& element);
   ast::DeclPtr parse_extern();
