@@ -677,9 +677,18 @@ size_t TraceController::run_statements(const ast::Block& block, size_t first, si
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
   if (!backend_ || options_.check_finite) return 0;
+  // A matrix statement (a sum of matrices, a direct solve) is the interpreter's: the run ends
+  // before it, and one that starts with it is not offered (the interpreter runs it and offers
+  // the statements after it).
+  if (matrix_statement(*block[first])) return 0;
   auto& state = runs_[block[first].get()];
   if (!state) {
     state = std::make_unique<LoopState>();
+    for (size_t i = first + 1; i < first + count; ++i)
+      if (matrix_statement(*block[i])) {
+        count = i - first;
+        break;
+      }
     state->length = count;
     for (size_t i = first; i < first + count; ++i)
       if (const auto* loop = block[i]->as<ast::While>()) note_loop(*loop);

@@ -881,6 +881,28 @@ class SystemTracer {
 
 }  // namespace
 
+bool matrix_statement(const ast::Stmt& s) {
+  bool found = false;
+  std::function<void(const ast::Expr&)> scan = [&](const ast::Expr& e) {
+    if (const auto* b = e.as<ast::Binary>(); b && b->op == ast::Binary::Op::LeftDiv) found = true;
+    if (const auto* c = e.as<ast::Call>()) {
+      if (c->type && is_matrix(*c->type)) found = true;
+      for (const auto& a : c->args)
+        if (a->type && is_matrix(*a->type)) found = true;
+    }
+    if (!found) ast::for_each_child(e, scan);
+  };
+  if (const auto* d = s.as<ast::VarDecl>()) {
+    if (d->var && d->var->type && is_matrix(*d->var->type)) return true;
+    if (d->init) scan(*d->init);
+  } else if (const auto* a = s.as<ast::Assign>()) {
+    for (const auto& t : a->targets)
+      if (t->type && is_matrix(*t->type)) return true;
+    scan(*a->value);
+  }
+  return found;
+}
+
 std::string run_lines(const std::vector<const ast::Stmt*>& run) {
   const SourceSpan &a = run.front()->span, &b = run.back()->span;
   if (!a.valid() || !b.valid()) return "?";

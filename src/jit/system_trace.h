@@ -52,6 +52,11 @@ struct TracedSystem {
   SystemBinding binding;
 };
 
+// A statement the system tracer never compiles and the interpreter runs as it is: one that
+// makes a system matrix (a sum or product of matrices) or solves directly (`A \ b`, the
+// factorisation intrinsics). Runs of statements are offered without them.
+bool matrix_statement(const frontend::ast::Stmt& s);
+
 // "FIRST-LAST": the lines a run of statements covers.
 std::string run_lines(const std::vector<const frontend::ast::Stmt*>& run);
 

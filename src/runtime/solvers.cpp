@@ -50,6 +50,18 @@ EigenSparse solver_form(const SystemMatrix& a) {
   return m;
 }
 
+constexpr const char* kSingularLu =
+    "LU factorisation failed: the matrix is singular (elimination found no nonzero pivot for one "
+    "of its columns)";
+
+// The first column of m without an entry, or -1: the matrix is singular (SparseLU would not
+// return on such a matrix, and CHOLMOD would find its pivot zero).
+int64_t empty_column(const EigenSparse& m) {
+  for (Eigen::Index c = 0; c < m.outerSize(); ++c)
+    if (m.outerIndexPtr()[c] == m.outerIndexPtr()[c + 1]) return c;
+  return -1;
+}
+
 // The structure of the matrix a symbolic analysis was made for: one whose values put their
 // zeros elsewhere is analysed again.
 struct Structure {
@@ -149,6 +161,11 @@ void CholeskyFactor::Impl::factorize(const SystemMatrix& a) {
     return;
   }
   EigenSparse m = solver_form(a);  // the one conversion; CHOLMOD reads its arrays in place
+  if (const int64_t c = empty_column(m); c >= 0) {
+    analysed.reset();
+    throw Fault("Cholesky factorisation failed: the matrix is not positive definite (the " +
+                row_str(c, a.block_rows()) + " pivot is not positive)");
+  }
   cholmod_sparse s{};
   s.nrow = s.ncol = static_cast<size_t>(m.rows());
   s.nzmax = static_cast<size_t>(m.nonZeros());
@@ -241,6 +258,10 @@ struct LuFactor::Impl {
       return;
     }
     EigenSparse m = solver_form(a);
+    if (empty_column(m) >= 0) {
+      analysed.reset();
+      throw Fault(kSingularLu);
+    }
     if (!(analysed == a.shared_pattern() && block_rows == a.block_rows() &&
           block_cols == a.block_cols() && structure.same(m))) {
       lu.analyzePattern(m);
@@ -255,9 +276,7 @@ struct LuFactor::Impl {
       // Eigen says "STRUCTURALLY SINGULAR ... ZERO COLUMN AT k" for numerically singular
       // matrices too, k counting columns in its own ordering: no use to the user.
       if (lu.lastErrorMessage().starts_with("THE MATRIX IS STRUCTURALLY SINGULAR"))
-        throw Fault(
-            "LU factorisation failed: the matrix is singular (elimination found no nonzero "
-            "pivot for one of its columns)");
+        throw Fault(kSingularLu);
       throw Fault("LU factorisation failed: out of memory while factorising a " +
                   std::to_string(n) + "x" + std::to_string(n) + " matrix");
     }
