@@ -519,6 +519,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
       }
       // Located as the interpreter locates it: the mapped function's frame names the element.
       interp::RuntimeError error(err.span, err.message);
+      for (const auto& [callee, at] : err.frames) error.add_frame(callee, at);
       error.add_frame(call.plan.func->name, call.at);
       error.note_element(call.plan.func->name, element_note(call, failed));
       throw error;

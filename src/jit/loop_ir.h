@@ -155,6 +155,9 @@ struct ArraySlot {
 struct ErrorSite {
   frontend::SourceSpan span;
   std::string message;
+  // The inlined calls it lies in, innermost first: each callee and the span of its call, for
+  // the call stack the interpreter would report.
+  std::vector<std::pair<std::string, frontend::SourceSpan>> frames = {};
 };
 
 // One compiled unit: the per-element body of a map or apply site.

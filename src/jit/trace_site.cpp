@@ -1555,7 +1555,11 @@ std::vector<Sym> Tracer::call_user(const ast::Call& c) {
   }
   // Loads cached by the caller stay valid: the callee reads the same arrays.
   frames_.push_back(std::move(callee));
+  const size_t errors_before = trace_.errors.size();
   exec_block(f.body);
+  // A check failing in the callee reports the call stack the interpreter would.
+  for (size_t i = errors_before; i < trace_.errors.size(); ++i)
+    trace_.errors[i].frames.emplace_back(f.name, c.span);
   std::vector<Sym> out;
   for (const ast::Param& r : f.results) out.push_back(frame().vars[r.var]);
   frames_.pop_back();
