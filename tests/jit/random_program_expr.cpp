@@ -473,18 +473,41 @@ void ProgramGen::decl_stmt(Fn& f) {
 }
 
 // A tensor declared from a scalar, which every component takes (`var E : matrix[3,3](float) =
-// 1.0;`, `const c : vector[3](float) = g_s;`), now and then a vector of one component; a write
-// of one component may follow.
+// 1.0;`, `const c : vector[3](float) = g_s;`), now and then a vector of one component. A write
+// of one component may follow, or a use of the whole tensor (a product, a norm, an element-wise
+// operation): a tracer that kept the scalar computes with it silently only where nothing
+// indexes the tensor.
 void ProgramGen::broadcast_decl(Fn& f, Var v) {
   if (coin(0.1)) v.shape = {1, 0};
   const std::string e = coin(0.4) ? number() : fexpr(f, {}, 2);
   v.writable = coin(0.7);
   line(f, (v.writable ? "var " : "const ") + v.name + " : " + v.shape.type() + " = " + e + ";");
   declare(f, v);
-  if (!v.writable || !coin(0.4)) return;
-  std::string at = index_below(f, v.shape.rows);
-  if (v.shape.matrix()) at += ", " + index_below(f, v.shape.cols);
-  line(f, v.name + "(" + at + ") = " + fexpr(f, {}, 2) + ";");
+  const int k = pick(0, 9);
+  if (v.writable && k < 3) {
+    std::string at = index_below(f, v.shape.rows);
+    if (v.shape.matrix()) at += ", " + index_below(f, v.shape.cols);
+    return line(f, v.name + "(" + at + ") = " + fexpr(f, {}, 2) + ";");
+  }
+  if (k >= 8) return;
+  Var u;
+  u.name = fresh("t");
+  const Shape s = v.shape;
+  std::string use;
+  if (s.matrix() && coin(0.5)) {
+    u.shape = {s.rows, 0};
+    use = v.name + " * " + fexpr(f, {s.cols, 0}, 2);
+  } else if (s.matrix()) {
+    u.shape = {s.cols, 0};
+    use = "(" + v.name + "' * " + fexpr(f, {s.rows, 0}, 2) + ")";
+  } else if (s.rows == 1 || coin(0.4)) {
+    use = (coin(0.5) ? "norm(" + v.name + ")" : v.name + "' * " + v.name) + " * " + fexpr(f, {}, 2);
+  } else {
+    u.shape = s;
+    use = v.name + (coin(0.5) ? " .* " : " - ") + fexpr(f, s, 2);
+  }
+  line(f, u.name + " = " + use + ";");
+  declare(f, u);
 }
 
 // The int v divided by a leaf that may be zero, under a condition that it is not: a kernel that

@@ -289,6 +289,18 @@ void ProgramGen::system_stage(Step& st) {
     const std::string b = one_of(same).first;
     const std::string c = scalar_arg(st);
     const std::string name = fresh("y");
+    // Now and then a product into its own operand (`y = A * y`), which the JIT must not
+    // compute in place.
+    std::vector<std::string> operands;
+    for (const auto& p : st.pool)
+      if (ga.square() && p.second == ga.cols()) operands.push_back(p.first);
+    if (!operands.empty() && coin(0.12)) {
+      st.s << "  var " << name << " = " << one_of(operands) << ";\n  " << name << " = " << a
+           << " * " << name << ";\n";
+      st.pool.push_back({name, ga.cols()});
+      st.made.push_back({name, ga.cols()});
+      continue;
+    }
     Global out = ga;
     std::string e;
     if (!products.empty() && coin(0.6)) {
@@ -362,8 +374,11 @@ std::string ProgramGen::cg_text(const Cg& c) {
     << (coin(0.5) ? "dot(" + c.p + ", " + c.Ap + ")" : "(" + c.p + "' * " + c.Ap + ")") << ";\n";
   s << i2 << c.x << " = " << c.x << " + " << c.alpha << " * " << c.p << ";\n";
   s << i2 << c.r << " = " << c.r << " - " << c.alpha << " * " << c.Ap << ";\n";
-  if (c.extra_vector)
+  // The extra vector: a step along another vector, or a product into its own operand.
+  if (c.extra_vector && coin(0.7))
     s << i2 << c.q << " = 0.5 * " << c.q << " - " << c.alpha << " * " << c.other << ";\n";
+  else if (c.extra_vector)
+    s << i2 << c.q << " = " << c.A << " * " << c.q << ";\n";
   switch (pick(0, 2)) {
     case 0: s << i2 << c.rn << " = " << c.r << "' * " << c.r << ";\n"; break;
     case 1: s << i2 << c.rn << " = dot(" << c.r << ", " << c.r << ");\n"; break;
@@ -516,6 +531,15 @@ void ProgramGen::field_updates(Step& st) {
         if (g.of == of && g.block == fd.shape.rows) c.push_back(v);
       if (c.empty()) continue;
       const std::string f = (edge ? "edges." : "verts.") + fd.name;
+      // A vertex field multiplied in place by a square matrix of its blocks (`verts.f = M *
+      // verts.f`), or a step along a vector.
+      std::vector<std::string> ms;
+      for (const auto& [m, g] : st.pool)
+        if (!edge && g.square() && g.block == fd.shape.rows) ms.push_back(m);
+      if (!ms.empty() && coin(0.15)) {
+        st.s << "  " << f << " = " << one_of(ms) << " * " << f << ";\n";
+        continue;
+      }
       st.s << "  " << f << " = " << f << " + 0.0625 * " << one_of(c) << ";\n";
     }
 }
