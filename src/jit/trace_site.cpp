@@ -502,15 +502,18 @@ class Tracer {
       ExprRef one = compare(CmpOp::Lt, math(MathFn::Abs, {e}, at), fconst(HUGE_VAL), at);
       ok = ok ? binary(BinOp::And, Ty::Bool, ok, one, at) : one;
     }
-    if (!ok) return s;
-    trace_.errors.push_back({at, "the operation produced a NaN or an infinity"});
+    if (ok) emit_check(ok, "the operation produced a NaN or an infinity", at);
+    return s;
+  }
+  // A check that `ok` holds: a kernel where it does not stops with error `message`.
+  void emit_check(ExprRef ok, std::string message, const SourceSpan& at) {
+    trace_.errors.push_back({at, std::move(message)});
     Stmt check;
     check.kind = StmtKind::Check;
-    check.value = ok;
+    check.value = std::move(ok);
     check.error = static_cast<int>(trace_.errors.size() - 1);
     check.span = at;
     emit(std::move(check));
-    return s;
   }
   // An integer division's or mod's divisors: a check that each is not zero (the interpreter's
   // error, which the controller has it report by running the site again), but for constants
@@ -522,14 +525,7 @@ class Tracer {
       ExprRef one = compare(CmpOp::Ne, d, iconst(0), at);
       ok = ok ? binary(BinOp::And, Ty::Bool, ok, one, at) : one;
     }
-    if (!ok) return;
-    trace_.errors.push_back({at, message});
-    Stmt check;
-    check.kind = StmtKind::Check;
-    check.value = ok;
-    check.error = static_cast<int>(trace_.errors.size() - 1);
-    check.span = at;
-    emit(std::move(check));
+    if (ok) emit_check(ok, message, at);
   }
   Sym read_block(const Sym& base, const ast::TensorRead& r);
   Sym read_matrix_block(const Sym& matrix, const ast::TensorRead& r);
@@ -1444,13 +1440,8 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
       for (int i = 0; i < n; ++i) all[i] = i;
       const ExprRef d = settle(det(a[0].c, n, all, all), c.span);
       // The interpreter's singular-matrix error: the controller re-runs the site to report it.
-      trace_.errors.push_back({c.span, "inverse of a singular matrix (determinant is 0)"});
-      Stmt check;
-      check.kind = StmtKind::Check;
-      check.value = compare(CmpOp::Ne, d, fconst(0.0), c.span);
-      check.error = static_cast<int>(trace_.errors.size() - 1);
-      check.span = c.span;
-      emit(std::move(check));
+      emit_check(compare(CmpOp::Ne, d, fconst(0.0), c.span),
+                 "inverse of a singular matrix (determinant is 0)", c.span);
       std::vector<ExprRef> out(static_cast<size_t>(n) * n);
       for (int i = 0; i < n; ++i)
         for (int j = 0; j < n; ++j) {
@@ -1618,13 +1609,7 @@ void Tracer::exec(const ast::Stmt& s) {
 // are not traced, since compiled code never shows them.
 void Tracer::exec_error(const SourceSpan& at) {
   if (!error_at_.valid()) error_at_ = at;
-  trace_.errors.push_back({at, "an error statement (reported by the interpreter)"});
-  Stmt check;
-  check.kind = StmtKind::Check;
-  check.value = iconst(0, Ty::Bool);
-  check.error = static_cast<int>(trace_.errors.size() - 1);
-  check.span = at;
-  emit(std::move(check));
+  emit_check(iconst(0, Ty::Bool), "an error statement (reported by the interpreter)", at);
 }
 
 void Tracer::exec_for(const ast::ForRange& s) {

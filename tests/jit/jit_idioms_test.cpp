@@ -94,7 +94,8 @@ std::string not_compiled(const std::string& stats) {
 
 const std::vector<int32_t> kEdges = {0, 1, 1, 2, 2, 3, 3, 0};
 
-const char* kBroadcast = R"(
+// The sets every program here runs on (the fields run() makes).
+const std::string kPrelude = R"(
 element V
   x : vector[3](float);
   y : vector[3](float);
@@ -105,7 +106,9 @@ element E
 end
 extern verts : set{V};
 extern edges : set{E}(verts, verts);
+)";
 
+const std::string kBroadcast = kPrelude + R"(
 func ones_times(x : vector[3](float)) -> r : vector[3](float)
   const c : vector[3](float) = 0.5;
   var E : matrix[3,3](float) = 1.0;
@@ -154,18 +157,7 @@ TEST(JitIdioms, ScalarBroadcastDeclarationsFillEveryComponent) {
   EXPECT_NEAR(jit.results[0].as_float(), nw, 1e-15);
 }
 
-const char* kEmpty = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kEmpty = kPrelude + R"(
 func spring(e : E, p : (V * 2)) -> (A : matrix[verts,verts](matrix[3,3](float)),
                                     F : vector[verts](vector[3](float)))
   var K : matrix[3,3](float) = 1.0;
@@ -211,18 +203,7 @@ TEST(JitIdioms, SetsOfNoElementsRun) {
   EXPECT_EQ(none.results[1].as_int(), 0);  // an empty sum is 0: the loop does not run
 }
 
-const char* kModDiv = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kModDiv = kPrelude + R"(
 func f(e : E, p : (V * 2)) -> F : vector[verts](vector[3](float))
   for k in 0:3
     F(p(0))(k) = p(1).x(mod(k + 1, 3)) - p(0).x(mod(k + 2, 3));
@@ -265,18 +246,7 @@ TEST(JitIdioms, ModAndIntegerDivisionCompileWithTheInterpretersValues) {
   EXPECT_EQ(-7 % 3, -1);  // the sign follows the dividend, as LANGUAGE.md says
 }
 
-const char* kDivZero = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kDivZero = kPrelude + R"(
 func f(e : E, p : (V * 2)) -> F : vector[verts](vector[3](float))
   if p(0).k / (p(1).k - 3) > 0
     F(p(0)) = p(1).x;
@@ -302,18 +272,7 @@ TEST(JitIdioms, ADivisionByZeroIsReportedAsTheInterpreterReportsIt) {
   EXPECT_EQ(jit.error, in.error);
 }
 
-const char* kSolve = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kSolve = kPrelude + R"(
 func stiffness(e : E, p : (V * 2)) -> A : matrix[verts,verts](matrix[3,3](float))
   var K : matrix[3,3](float) = 0.0;
   const s = 1.0 + 0.1 * norm(p(0).x - p(1).x);
@@ -356,18 +315,7 @@ TEST(JitIdioms, ADirectSolveOfASpecialisedMatrixGivesTheInterpretersBits) {
   }
 }
 
-const char* kOwnOperand = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kOwnOperand = kPrelude + R"(
 func stiffness(e : E, p : (V * 2)) -> A : matrix[verts,verts](matrix[3,3](float))
   var K : matrix[3,3](float) = 0.25;
   A(p(0), p(0)) = K;
@@ -400,18 +348,7 @@ TEST(JitIdioms, AProductWrittenIntoItsOwnOperandCompiles) {
   EXPECT_EQ(not_compiled(jit.stats), "") << jit.stats;
 }
 
-const char* kLoneProduct = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+const std::string kLoneProduct = kPrelude + R"(
 func stiffness(e : E, p : (V * 2)) -> A : matrix[verts,verts](matrix[3,3](float))
   var K : matrix[3,3](float) = 0.0;
   K(0, 0) = norm(p(0).x - p(1).x);
@@ -445,18 +382,7 @@ TEST(JitIdioms, ProductsOutsideALoopCompileAndReadTheMatrixInPlace) {
 
 // f0 calls f1 ... calls f39: 40 levels, past the old limit of 32.
 std::string deep_chain_program() {
-  std::string s = R"(
-element V
-  x : vector[3](float);
-  y : vector[3](float);
-  k : int;
-  m : vector[3](int);
-end
-element E
-end
-extern verts : set{V};
-extern edges : set{E}(verts, verts);
-
+  std::string s = kPrelude + R"(
 func f40(x : float) -> r : float
   r = x;
 end
