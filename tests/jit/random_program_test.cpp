@@ -267,9 +267,23 @@ std::string differ(const runtime::Set& a, const runtime::Set& b, int* nans) {
   return "";
 }
 
+// Whether a float field of the set holds an infinity or a NaN.
+bool non_finite(const runtime::Set& s) {
+  for (int f = 0; f < s.field_count(); ++f) {
+    const runtime::Field& x = s.field(f);
+    if (x.type().kind != runtime::ComponentKind::Float) continue;
+    const size_t n = static_cast<size_t>(s.size()) * x.components();
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(x.type().single ? x.data<float>()[i] : x.data<double>()[i])) return true;
+  }
+  return false;
+}
+
 // What the JIT did with a program's sites and loops, from print_jit_stats.
 struct Tally {
   int programs = 0, runtime_errors = 0, nans = 0;
+  // Programs whose fields held an infinity or a NaN before a call: compared no further.
+  int non_finite_inputs = 0;
   // Programs on an empty vertex or edge set, with a chain of helpers past the inline depth.
   int empty_sets = 0, deep_chains = 0;
   int sites_compiled = 0, sites_interpreted = 0, loops_compiled = 0, loops_interpreted = 0;
@@ -328,6 +342,14 @@ std::string check_program(uint64_t seed, Tally& tally) {
   tally.deep_chains += g.chain_depth > kMaxInlineDepth;
   std::string diff;
   for (int call = 0; call < 3 && diff.empty(); ++call) {
+    // A product by a vector that holds an infinity or a NaN may give a number in the JIT
+    // where the interpreter's zero block gives NaN (a compiled loop's copy of a matrix drops
+    // its zero blocks, a specialised pattern leaves them out: docs/jit.md), and a loop's
+    // condition may then differ: such inputs end the comparison.
+    if (call > 0 && (non_finite(in.world.verts) || non_finite(*in.world.edges))) {
+      ++tally.non_finite_inputs;
+      break;
+    }
     std::string in_error, jit_error;
     host_changes(in.world, g, call);
     host_changes(jit.world, g, call);
@@ -376,8 +398,10 @@ TEST(RandomPrograms, TheJitComputesTheInterpretersBits) {
   std::printf("%d programs from seed %llu in %.1f s: %d runtime errors (alike), %d NaNs alike\n",
               tally.programs, static_cast<unsigned long long>(first), seconds, tally.runtime_errors,
               tally.nans);
-  std::printf("programs on an empty set: %d; with a call chain past the inline depth: %d\n",
-              tally.empty_sets, tally.deep_chains);
+  std::printf(
+      "programs on an empty set: %d; with a call chain past the inline depth: %d; "
+      "compared no further after a call left an infinity or a NaN in a field: %d\n",
+      tally.empty_sets, tally.deep_chains, tally.non_finite_inputs);
   std::printf(
       "map/apply sites: %d compiled, %d interpreted; while loops alone: %d compiled, %d "
       "interpreted; runs of statements: %d compiled, %d interpreted; statements alone: %d "
