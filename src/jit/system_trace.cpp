@@ -442,7 +442,10 @@ class SystemTracer {
           case Op::ElemMul: op = BinOp::Mul; break;
           case Op::Div:
           case Op::ElemDiv:
-            if (ty != Ty::F64) give_up(e.span, "integer division in a compiled loop");
+            if (ty == Ty::I32)
+              check_divisor(r, "integer division by zero", e.span);
+            else if (ty != Ty::F64)
+              give_up(e.span, "this division in a compiled loop");
             op = BinOp::Div;
             break;
           case Op::And: op = BinOp::And; break;
@@ -479,6 +482,12 @@ class SystemTracer {
           return rounded(
               node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sqrt), {d}, e.span),
               e.span);
+        }
+        if (c.intrinsic == Intrinsic::Mod) {
+          ExprRef x = scalar(*c.args[0]), y = scalar(*c.args[1]);
+          if (x->ty != Ty::I32 || y->ty != Ty::I32) give_up(e.span, "mod of non-integers");
+          check_divisor(y, "mod by zero", e.span);
+          return node(ExprKind::Binary, Ty::I32, static_cast<uint8_t>(BinOp::Mod), {x, y}, e.span);
         }
         MathFn f;
         switch (c.intrinsic) {
@@ -843,6 +852,20 @@ class SystemTracer {
     guard_ = rest->slot;
     for (const auto& b : i.else_branch) stmt(*b);
     guard_ = outer;
+  }
+
+  // An integer division's or mod's divisor: a check that it is not zero, which hands the loop
+  // back to the interpreter (as an error statement does) to report the error in its words.
+  void check_divisor(const ExprRef& d, const char* message, const SourceSpan& at) {
+    if (d->kind == ExprKind::Const && d->i != 0) return;
+    Stmt s;
+    s.kind = StmtKind::Check;
+    s.value = node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Ne),
+                   {d, iconst(0, Ty::I32)}, at);
+    s.error = static_cast<int>(t_.errors.size());
+    s.span = at;
+    t_.errors.push_back({at, message});
+    scalar_stmt(std::move(s));
   }
 
   // An error statement: a check that always fails. Only the interpreter formats the message,

@@ -380,6 +380,46 @@ TEST(JitIdioms, ProductsOutsideALoopCompileAndReadTheMatrixInPlace) {
   }
 }
 
+// `mod` and integer division among a solver loop's scalars; with zero = 1 the divisor
+// reaches 0 on the fourth iteration.
+std::string loop_division_program(int zero) {
+  return kPrelude + R"(
+export func step() -> (k : int, q : int)
+  var x = verts.x;
+  k = 0;
+  q = 0;
+  while k < 6
+    x = 0.5 * x + verts.x;
+    q = q + mod(k * 7 - 11, 4) + (k - 9) / (4 - )" +
+         std::to_string(zero) + R"( * k);
+    k = k + 1;
+  end
+  verts.y = x;
+end
+)";
+}
+
+TEST(JitIdioms, ModAndIntegerDivisionInASolverLoopCompile) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const std::string source = loop_division_program(0);
+  const IdiomRun in = run(source, ExecutorKind::Interpreter, 4, kEdges, 2);
+  const IdiomRun jit = run(source, ExecutorKind::Jit, 4, kEdges, 2);
+  ASSERT_EQ(jit.error, "");
+  expect_same_bits(in.y, jit.y);
+  EXPECT_EQ(not_compiled(jit.stats), "") << jit.stats;
+  EXPECT_NE(jit.stats.find("statements (lines"), std::string::npos) << jit.stats;
+  int q = 0;
+  for (int k = 0; k < 6; ++k) q += (k * 7 - 11) % 4 + (k - 9) / 4;
+  EXPECT_EQ(jit.results[1].as_int(), q);
+  EXPECT_EQ(in.results[1].as_int(), q);
+  // A zero divisor hands the loop back: the interpreter reports it.
+  const std::string zero = loop_division_program(1);
+  const IdiomRun in0 = run(zero, ExecutorKind::Interpreter, 4, kEdges, 1);
+  const IdiomRun jit0 = run(zero, ExecutorKind::Jit, 4, kEdges, 1);
+  EXPECT_NE(in0.error.find("integer division by zero"), std::string::npos) << in0.error;
+  EXPECT_EQ(jit0.error, in0.error);
+}
+
 // f0 calls f1 ... calls f39: 40 levels, past the old limit of 32.
 std::string deep_chain_program() {
   std::string s = kPrelude + R"(
