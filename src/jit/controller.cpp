@@ -678,14 +678,13 @@ size_t TraceController::run_statements(const ast::Block& block, size_t first, si
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
   if (!backend_ || options_.check_finite) return 0;
-  // A matrix statement (a sum of matrices, a direct solve) is the interpreter's: the run ends
-  // before it, and one that starts with it is not offered (the interpreter runs it and offers
-  // the statements after it).
-  if (matrix_statement(*block[first])) return 0;
   auto& state = runs_[block[first].get()];
   if (!state) {
     state = std::make_unique<LoopState>();
-    for (size_t i = first + 1; i < first + count; ++i)
+    // A matrix statement (a sum of matrices, a direct solve) is the interpreter's: the run
+    // ends before it, and one that starts with it (length 0) is not offered (the interpreter
+    // runs it and offers the statements after it).
+    for (size_t i = first; i < first + count; ++i)
       if (matrix_statement(*block[i])) {
         count = i - first;
         break;
@@ -694,7 +693,7 @@ size_t TraceController::run_statements(const ast::Block& block, size_t first, si
     for (size_t i = first; i < first + count; ++i)
       if (const auto* loop = block[i]->as<ast::While>()) note_loop(*loop);
   }
-  if (checking_run_ || in_loop_to_compile(block)) return 0;
+  if (state->length == 0 || checking_run_ || in_loop_to_compile(block)) return 0;
   if (++state->runs <= options_.threshold) return 0;
   std::vector<const ast::Stmt*> run;
   for (size_t i = first; i < first + std::min(count, state->length); ++i)
@@ -966,13 +965,16 @@ bool TraceController::check_site(Entry& e, interp::SiteCall& call) {
   for (size_t i = 0; i < call.results.size(); ++i) {
     Value& r = call.results[i];
     if (r.kind() == Value::Kind::Matrix) {
-      const double* v = r.matrix()->values();
-      p->results.emplace_back(v, v + r.matrix()->value_count());
-      // The interpreter assembles on the full pattern: it makes that matrix itself.
       if (r.matrix()->shared_pattern() != call.plan.results[i].pattern) {
+        // The interpreter assembles on the full pattern: it makes that matrix itself, and
+        // the compiled one is kept whole.
+        p->results.emplace_back();
         p->specialised[i] = std::move(r);
         r = Value::of_matrix(nullptr);
+        continue;
       }
+      const double* v = r.matrix()->values();
+      p->results.emplace_back(v, v + r.matrix()->value_count());
     } else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float) {
       p->results.emplace_back(r.tensor().floats(), r.tensor().floats() + r.tensor().size());
     } else {
@@ -1017,13 +1019,14 @@ void TraceController::site_done(interp::SiteCall& call) {
       const runtime::SystemMatrix& full = *v.matrix();
       const runtime::MatrixPattern& fp = full.pattern();
       const runtime::MatrixPattern& sp = p->specialised[r].matrix()->pattern();
+      const double* compiled = std::as_const(*p->specialised[r].matrix()).values();
       const size_t bs = static_cast<size_t>(full.block_size());
       for (int row = 0; row < fp.rows(); ++row)
         for (int32_t k = fp.row_ptr()[row]; k < fp.row_ptr()[row + 1]; ++k) {
           const int32_t at = sp.find(row, fp.col_idx()[k]);
           for (size_t c = 0; c < bs; ++c) {
             const double iv = in[static_cast<size_t>(k) * bs + c];
-            const double jv = at < 0 ? 0.0 : jit[static_cast<size_t>(at) * bs + c];
+            const double jv = at < 0 ? 0.0 : compiled[static_cast<size_t>(at) * bs + c];
             if (same_bits(iv, jv)) continue;
             differ("result '" + f.results[r].name + "' component " +
                        std::to_string(static_cast<size_t>(k) * bs + c) + " (block " +

@@ -858,25 +858,23 @@ class SystemTracer {
   // back to the interpreter (as an error statement does) to report the error in its words.
   void check_divisor(const ExprRef& d, const char* message, const SourceSpan& at) {
     if (d->kind == ExprKind::Const && d->i != 0) return;
-    Stmt s;
-    s.kind = StmtKind::Check;
-    s.value = node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Ne),
-                   {d, iconst(0, Ty::I32)}, at);
-    s.error = static_cast<int>(t_.errors.size());
-    s.span = at;
-    t_.errors.push_back({at, message});
-    scalar_stmt(std::move(s));
+    check(node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Ne),
+               {d, iconst(0, Ty::I32)}, at),
+          message, at);
   }
 
   // An error statement: a check that always fails. Only the interpreter formats the message,
   // so a kernel that reaches it hands the whole loop back (TraceController::run_loop_kernel).
-  void error_stmt(const SourceSpan& at) {
+  void error_stmt(const SourceSpan& at) { check(iconst(0, Ty::Bool), "error statement", at); }
+
+  // A check that `ok` holds; a kernel where it does not hands the loop back.
+  void check(ExprRef ok, const char* message, const SourceSpan& at) {
     Stmt s;
     s.kind = StmtKind::Check;
-    s.value = iconst(0, Ty::Bool);
+    s.value = std::move(ok);
     s.error = static_cast<int>(t_.errors.size());
     s.span = at;
-    t_.errors.push_back({at, "error statement"});
+    t_.errors.push_back({at, message});
     scalar_stmt(std::move(s));
   }
 
