@@ -13,12 +13,24 @@ namespace simit::baseline {
 
 namespace {
 
-[[noreturn]] void usage(const std::string& name, bool has_sim_form) {
-  std::fprintf(stderr,
-               "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock]%s [INPUT] "
-               "[FRAMES]\n",
-               name.c_str(), has_sim_form ? " [--sim-form]" : "");
-  std::exit(2);
+// Prints the usage to stdout and exits 0 for --help, to stderr and exits 2 for bad arguments.
+[[noreturn]] void usage(const std::string& name, bool has_sim_form, bool asked = false) {
+  std::FILE* out = asked ? stdout : stderr;
+  std::fprintf(
+      out,
+      "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock]%s [INPUT] "
+      "[FRAMES]\n"
+      "  --csv FILE   write the final positions to FILE (x,y,z per vertex); without it\n"
+      "               no positions are written\n"
+      "  --check      exit nonzero when a final position is not finite\n"
+      "  --cg-tol T   CG stops at r'r <= T (default: the example's)\n"
+      "  --cg-max N   CG iteration cap (default: the example's)\n"
+      "  --cpu-clock  time frames in thread CPU time instead of wall time\n"
+      "%s"
+      "  --help       print this and exit\n",
+      name.c_str(), has_sim_form ? " [--sim-form]" : "",
+      has_sim_form ? "  --sim-form   evaluate element matrices as the .sim writes them\n" : "");
+  std::exit(asked ? 0 : 2);
 }
 
 }  // namespace
@@ -28,11 +40,12 @@ Options parse_options(int argc, char** argv, const std::string& default_input, b
   o.input = default_input;
   std::string name = argv[0];
   name = name.substr(name.find_last_of('/') + 1);
-  o.csv = name + "_positions.csv";
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--check") {
+    if (arg == "--help" || arg == "-h") {
+      usage(name, has_sim_form, true);
+    } else if (arg == "--check") {
       o.check = true;
     } else if (arg == "--csv" && i + 1 < argc) {
       o.csv = argv[++i];
@@ -229,17 +242,19 @@ void FrameLog::summary() const {
 }
 
 bool finish(const Options& options, const Vec3s& x) {
-  std::ofstream out(options.csv);
-  out.precision(17);
-  out << "x,y,z\n";
   bool finite = true;
-  for (const Vec3& p : x) {
-    out << p.x() << ',' << p.y() << ',' << p.z() << '\n';
-    finite = finite && p.allFinite();
-  }
-  if (!out) std::fprintf(stderr, "cannot write %s\n", options.csv.c_str());
+  for (const Vec3& p : x) finite = finite && p.allFinite();
   if (options.check && !finite) std::fprintf(stderr, "non-finite position\n");
-  return bool(out) && (!options.check || finite);
+  bool written = true;
+  if (!options.csv.empty()) {  // positions only where --csv asks, never into the working folder
+    std::ofstream out(options.csv);
+    out.precision(17);
+    out << "x,y,z\n";
+    for (const Vec3& p : x) out << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+    written = bool(out);
+    if (!written) std::fprintf(stderr, "cannot write %s\n", options.csv.c_str());
+  }
+  return written && (!options.check || finite);
 }
 
 }  // namespace simit::baseline

@@ -19,7 +19,7 @@ using Vec3s = std::vector<Vec3>;
 struct Options {
   std::string input;  // mesh path (or, for cloth, the grid size)
   int frames = 10;
-  std::string csv;         // final positions go here
+  std::string csv;         // --csv: final positions go here (empty: not written)
   bool check = false;      // exit nonzero when a position is not finite
   double cg_tol = -1.0;    // --cg-tol: CG stops at r'r <= cg_tol (< 0: the example's default)
   int cg_max = -1;         // --cg-max: CG iteration cap (< 0: the example's default)
@@ -28,7 +28,8 @@ struct Options {
 };
 
 // NAME [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock] [--sim-form] INPUT
-// [FRAMES]; prints usage and exits on bad arguments (--sim-form only where has_sim_form).
+// [FRAMES]; prints usage and exits on bad arguments or --help (--sim-form only where
+// has_sim_form).
 Options parse_options(int argc, char** argv, const std::string& default_input,
                       bool has_sim_form = false);
 
@@ -118,8 +119,8 @@ struct FrameLog {
   void summary() const;
 };
 
-// Writes "x,y,z" per vertex (17 significant digits) and, with options.check, returns false
-// when a coordinate is not finite.
+// With --csv, writes "x,y,z" per vertex (17 significant digits) to that file; returns false
+// when it cannot be written or, with options.check, when a coordinate is not finite.
 bool finish(const Options& options, const Vec3s& x);
 
 }  // namespace simit::baseline

@@ -3,6 +3,7 @@
 // Each step is two passes: the forces over faces and hinges, then one over the points
 // (acceleration, velocity and the next step's positions fused).
 // Usage: cloth_baseline [--check] [--csv FILE] [N] [FRAMES]   (N x N vertices, default 32)
+// Final positions are written only with --csv FILE; --help lists every option.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

@@ -3,6 +3,7 @@
 // of 3x3 blocks holding only the blocks fem.sim writes: the diagonal, and the pairs of
 // vertices that share a tet when neither is pinned.
 // Usage: fem_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--sim-form] [MESH] [FRAMES]
+// Final positions are written only with --csv FILE; --help lists every option.
 #include <cmath>
 #include <cstdio>
 

@@ -3,6 +3,7 @@
 // block-CSR of 3x3 blocks holding only the blocks springs.sim writes: the diagonal, and the
 // pairs of points joined by a spring when neither is pinned.
 // Usage: springs_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [MESH] [FRAMES]
+// Final positions are written only with --csv FILE; --help lists every option.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
