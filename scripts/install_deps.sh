@@ -11,6 +11,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libreadline-dev
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
   libpng-dev libtinyobjloader-dev clang libclang-rt-14-dev tmux python3
+  clang-format
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with.
 test_packages=(python3-vtk9)
