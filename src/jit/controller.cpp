@@ -27,6 +27,7 @@ using interp::Value;
 struct TraceController::Entry {
   TracedSite traced;
   std::unique_ptr<Kernel> kernel;
+  MapWrites writes = MapWrites::Shared;
   TraceStats stats;
   // Per result: its specialised pattern (jit/specialise.h), the last matrix made on it
   // (reused, zeroed, when the program has dropped it), the pattern the guard dropped (reused
@@ -240,7 +241,9 @@ void zero_results(interp::SiteCall& call) {
 TraceController::TraceController(JitOptions options) : options_(options) {
   HostCalls host;
   host.decompose = reinterpret_cast<void*>(&simit_jit_decompose);
-  backend_ = make_cpu_backend(host, backend_error_);
+  target_ = make_cpu_target(host, options_.cache_dir, target_error_);
+  executor_ = options_.shuffle_seed ? make_shuffled_executor(options_.shuffle_seed)
+                                    : make_serial_executor();
 }
 
 TraceController::~TraceController() = default;
@@ -264,8 +267,8 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
     e->stats.status = std::move(why);
     if (++s.failures >= kMaxFailures) s.gave_up = e->stats.status;
   };
-  if (!backend_) {
-    give_up("no code generator: " + backend_error_);
+  if (!target_) {
+    give_up("no code generator: " + target_error_);
   } else {
     SiteShape shape;
     shape.site = call.plan.site;
@@ -290,11 +293,12 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
       const Trace& t = *e->traced.trace;
       e->stats.ir_nodes = node_count(t);
       std::string error;
-      e->kernel = backend_->compile(t, options_.dump_llvm, error);
+      e->kernel = target_->compile(t, options_.dump_llvm, error);
       if (!e->kernel) {
         give_up("interpreted: " + error);
       } else {
         e->stats.status = "compiled";
+        e->writes = writes_of(t);
         if (e->kernel->lanes > 1)
           e->stats.note = "; " + std::to_string(e->kernel->lanes) + " elements at once";
         e->stats.compile_ms = e->kernel->compile_ms;
@@ -497,37 +501,34 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           break;
       }
     }
-  const int32_t* endpoints = call.target.endpoints();
-  const int n = call.target.size();
+  const MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
   interp::Trap& trap = call.interpreter.trap();
-  for (int begin = 0; begin < n; begin += kChunkElements) {
-    const int end = std::min(n, begin + kChunkElements);
-    int32_t failed = -1;
-    const int32_t rc = e.kernel->fn(arrays.data(), scalars.data(), endpoints, begin, end, &failed);
-    if (rc != 0) {
-      const ErrorSite& err = t.errors[static_cast<size_t>(rc - 1)];
-      for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing
-      if (!t.writes_fields) {
-        // Nothing but the results changed: the interpreter runs the site again from zero
-        // and reports the error in its own words, with its call stack (on full patterns).
-        for (size_t i = 0; i < call.results.size(); ++i)
-          if (call.plan.results[i].is_matrix && call.results[i].matrix() &&
-              call.results[i].matrix()->shared_pattern() != call.plan.results[i].pattern)
-            call.results[i] = Value::of_matrix(nullptr);
-        zero_results(call);
-        return false;
-      }
-      // Located as the interpreter locates it: the mapped function's frame names the element.
-      interp::RuntimeError error(err.span, err.message);
-      for (const auto& [callee, at] : err.frames) error.add_frame(callee, at);
-      error.add_frame(call.plan.func->name, call.at);
-      error.note_element(call.plan.func->name, element_note(call, failed));
-      throw error;
+  const MapOutcome out =
+      executor_->run_map(*e.kernel, args, call.target.size(), kChunkElements, e.writes,
+                         [&trap] { return trap.interrupt_pending(); });
+  if (out.code != 0) {
+    const ErrorSite& err = t.errors[static_cast<size_t>(out.code - 1)];
+    for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing
+    if (!t.writes_fields) {
+      // Nothing but the results changed: the interpreter runs the site again from zero
+      // and reports the error in its own words, with its call stack (on full patterns).
+      for (size_t i = 0; i < call.results.size(); ++i)
+        if (call.plan.results[i].is_matrix && call.results[i].matrix() &&
+            call.results[i].matrix()->shared_pattern() != call.plan.results[i].pattern)
+          call.results[i] = Value::of_matrix(nullptr);
+      zero_results(call);
+      return false;
     }
-    if (end < n && trap.interrupt_pending()) {
-      trap.take_interrupt();
-      throw interp::Interrupted(call.at, "interrupted");
-    }
+    // Located as the interpreter locates it: the mapped function's frame names the element.
+    interp::RuntimeError error(err.span, err.message);
+    for (const auto& [callee, at] : err.frames) error.add_frame(callee, at);
+    error.add_frame(call.plan.func->name, call.at);
+    error.note_element(call.plan.func->name, element_note(call, out.element));
+    throw error;
+  }
+  if (out.interrupted) {
+    trap.take_interrupt();
+    throw interp::Interrupted(call.at, "interrupted");
   }
   specialise_results(e, call);
   return true;
@@ -547,8 +548,8 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
     e->stats.status = "interpreted: " + std::move(why);
     if (final || ++s.failures >= kMaxFailures) s.gave_up = e->stats.status;
   };
-  if (!backend_) {
-    fail("no code generator: " + backend_error_, true);
+  if (!target_) {
+    fail("no code generator: " + target_error_, true);
   } else if (options_.check_finite) {
     fail("--check-finite runs system statements in the interpreter", true);
   } else {
@@ -580,7 +581,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
       std::string error;
       if (std::string bad = verify(t); !bad.empty()) {
         fail("loop IR failed verification: " + bad, true);
-      } else if (e->kernel = backend_->compile(t, options_.dump_llvm, error); !e->kernel) {
+      } else if (e->kernel = target_->compile(t, options_.dump_llvm, error); !e->kernel) {
         fail(error, false);
       } else {
         e->stats.status = "compiled";
@@ -654,7 +655,7 @@ void TraceController::note_loop(const ast::While& loop) {
 // one, unless it lies in a loop that may itself still compile. One that does not compile is
 // left out of the stats (the interpreter runs most system statements, matrix sums among them).
 bool TraceController::run_alone(const ast::Stmt& stmt, interp::Interpreter& in) {
-  if (!backend_ || options_.check_finite || checking_run_) return false;
+  if (!target_ || options_.check_finite || checking_run_) return false;
   if (auto loop = loop_of_stmt_.find(&stmt);
       loop != loop_of_stmt_.end() && may_compile(*loop->second))
     return false;
@@ -677,7 +678,7 @@ size_t TraceController::run_statements(const ast::Block& block, size_t first, si
                                        interp::Interpreter& in) {
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
-  if (!backend_ || options_.check_finite) return 0;
+  if (!target_ || options_.check_finite) return 0;
   auto& state = runs_[block[first].get()];
   if (!state) {
     state = std::make_unique<LoopState>();
@@ -860,7 +861,8 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in)
   }
   interp::Trap& trap = in.trap();
   const int32_t rc =
-      e->kernel->system(arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag());
+      executor_->run_system(
+          *e->kernel, {arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag()});
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
   // the scalars go back to their variables, and the interrupt is raised below.
@@ -1158,7 +1160,7 @@ const FusedSums& TraceController::fused_sums(const interp::Interpreter& in) {
 // where the interpreter looks at s * K on its own, and when M has a block outside K's pattern.
 bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
                                     interp::Interpreter& in) {
-  if (!backend_ || options_.float32 || options_.check_finite || checking_run_) return false;
+  if (!target_ || options_.float32 || options_.check_finite || checking_run_) return false;
   SumState& s = sums_[&stmt];
   if (s.stats.site.empty()) {
     s.stats.line = static_cast<int>(stmt.span.start().line);

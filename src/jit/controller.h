@@ -11,7 +11,8 @@
 #include <vector>
 
 #include "interp/assembly_plan.h"
-#include "jit/backend.h"
+#include "jit/executor.h"
+#include "jit/target.h"
 #include "jit/matrix_sum.h"
 #include "jit/system_trace.h"
 #include "jit/trace_site.h"
@@ -21,6 +22,11 @@ namespace simit::jit {
 
 struct JitOptions {
   long threshold = kHotThreshold;  // executions before a site is compiled (0: at once)
+  // A production run (not the REPL): a site over a set of at least kEagerElements elements
+  // compiles at its first execution, whatever the threshold.
+  bool eager = false;
+  // Where compiled kernels are cached between runs; empty: no cache.
+  std::string cache_dir;
   bool float32 = false;            // the interpreter's float32 mode
   bool check_finite = false;       // the interpreter's check-finite mode
   // Where `--dump=loop-ir,llvm` prints each compiled trace; null prints nothing.
@@ -33,6 +39,9 @@ struct JitOptions {
   // For the tests of the check alone: the lowest bit of a compiled map's first matrix or
   // vector value is flipped after the kernel runs.
   bool corrupt_for_test = false;
+  // For the tests of the executor seam: nonzero runs map kernels through the shuffled
+  // executor (jit/executor.h) with this seed instead of the serial one.
+  uint64_t shuffle_seed = 0;
 };
 
 // One trace's figures for `--jit-stats`.
@@ -68,7 +77,7 @@ class TraceController : public interp::SiteHook {
   // A table of stats(), one line per trace.
   void print_stats(std::ostream& os) const;
   // Whether the host can compile at all (LLVM found a target); why not otherwise.
-  const std::string& unavailable() const { return backend_error_; }
+  const std::string& unavailable() const { return target_error_; }
 
  private:
   struct Entry;
@@ -91,8 +100,9 @@ class TraceController : public interp::SiteHook {
 
   JitOptions options_;
   std::unique_ptr<Pending> pending_;
-  std::unique_ptr<Backend> backend_;
-  std::string backend_error_;
+  std::unique_ptr<Target> target_;
+  std::string target_error_;
+  std::unique_ptr<Executor> executor_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
   std::map<const void*, std::unique_ptr<LoopState>> loops_;  // by while loop
   std::map<const void*, std::unique_ptr<LoopState>> runs_;   // by a run's first statement

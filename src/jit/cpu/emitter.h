@@ -14,7 +14,7 @@
 #include <llvm/IR/MDBuilder.h>
 #include <llvm/IR/Module.h>
 
-#include "jit/backend.h"
+#include "jit/target.h"
 #include "jit/tunables.h"
 
 namespace simit::jit::cpu {
@@ -25,7 +25,8 @@ using llvm::Value;
 // Whether a map kernel computes kLanes elements at once (jit/cpu/emit_lanes.cpp).
 bool lanes_fit(const Trace& t);
 
-// Emits one trace as a function of the KernelFn signature, or a system trace as a SystemFn.
+// Emits one trace as a map kernel function, or a system trace as a system kernel function
+// (their arguments: jit/target.h).
 class Emitter {
  public:
   Emitter(const Trace& t, llvm::Module& m, const HostCalls& host)

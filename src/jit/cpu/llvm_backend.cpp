@@ -106,12 +106,28 @@ class Session {
   std::unique_ptr<llvm::TargetMachine> tm_;
 };
 
+// The compiled function's signatures (jit/target.h describes the arguments).
+using MapFn = int32_t (*)(void* const* arrays, const double* scalars, const int32_t* endpoints,
+                          int32_t begin, int32_t end, int32_t* failed_element);
+using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes,
+                             const void* interrupt);
+
 class CpuKernel : public Kernel {
  public:
   explicit CpuKernel(llvm::orc::ResourceTrackerSP rt) : rt_(std::move(rt)) {}
   void* address = nullptr;
+  bool system = false;
   ~CpuKernel() override {
     if (rt_) llvm::consumeError(rt_->remove());
+  }
+  int32_t run(const MapArgs& a, ElementRange r, int32_t* failed) const override {
+    return system ? 0
+                  : reinterpret_cast<MapFn>(address)(a.arrays, a.scalars, a.endpoints, r.begin,
+                                                     r.end, failed);
+  }
+  int32_t run(const SystemArgs& a) const override {
+    return system ? reinterpret_cast<SystemFn>(address)(a.arrays, a.scalars, a.sizes, a.interrupt)
+                  : 0;
   }
 
  private:
@@ -141,9 +157,10 @@ void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
   mpm.run(m, mam);
 }
 
-class CpuBackend : public Backend {
+class CpuTarget : public Target {
  public:
-  CpuBackend(Session& s, const HostCalls& host) : s_(s), host_(host) {}
+  CpuTarget(Session& s, const HostCalls& host) : s_(s), host_(host) {}
+  const char* name() const override { return "cpu"; }
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
     const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace);
@@ -153,10 +170,7 @@ class CpuBackend : public Backend {
       if (fast) m.addModuleFlag(llvm::Module::Warning, kFastCodegen, 1);
       return Emitter(trace, m, host_).run(name);
     });
-    if (k) {
-      k->fn = reinterpret_cast<KernelFn>(k->address);
-      k->lanes = lanes ? kLanes : 1;
-    }
+    if (k) k->lanes = lanes ? kLanes : 1;
     return k;
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
@@ -164,7 +178,7 @@ class CpuBackend : public Backend {
     auto k = build(kOptLevel, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
       return Emitter(trace, m).run_system(name);
     });
-    if (k) k->system = reinterpret_cast<SystemFn>(k->address);
+    if (k) k->system = true;
     return k;
   }
 
@@ -222,10 +236,12 @@ class CpuBackend : public Backend {
 
 }  // namespace
 
-std::unique_ptr<Backend> make_cpu_backend(const HostCalls& host, std::string& error) {
+std::unique_ptr<Target> make_cpu_target(const HostCalls& host, const std::string& cache_dir,
+                                        std::string& error) {
+  (void)cache_dir;
   Session* s = Session::get(error);
   if (!s) return nullptr;
-  return std::make_unique<CpuBackend>(*s, host);
+  return std::make_unique<CpuTarget>(*s, host);
 }
 
 }  // namespace simit::jit

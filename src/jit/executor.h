@@ -1,0 +1,56 @@
+// Executors: how a compiled map kernel's elements are split into kernel calls, in which
+// order and on which threads. The controller marshals a site's arguments once and hands the
+// kernel to its executor; no caller holds a function pointer. Every executor leaves the
+// results the serial one leaves, bit for bit (docs/arithmetic.md).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "jit/target.h"
+
+namespace simit::jit {
+
+// What a map kernel's run came to: code 0, or 1 + the index of the failed check in
+// Trace::errors with `element` the lowest element whose check failed.
+struct MapOutcome {
+  int32_t code = 0;
+  int32_t element = -1;
+  bool interrupted = false;  // stopped between two chunks for the interrupt flag
+};
+
+// How the kernel's writes relate across elements, as its trace says.
+enum class MapWrites {
+  Disjoint,  // each element writes only its own blocks and fields: any chunk order gives the
+             // same bits
+  Shared,    // elements add into shared blocks (assembly): element order decides the bits
+};
+
+class Executor {
+ public:
+  virtual ~Executor() = default;
+  virtual const char* name() const = 0;
+  // Runs `kernel` over the elements [0, n) in chunks of `chunk` elements. `interrupt`, when
+  // set, is asked between two chunks whether to stop there.
+  virtual MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
+                             MapWrites writes, const std::function<bool()>& interrupt) = 0;
+  // A system kernel runs in one call (its loops over sets are inside it).
+  virtual int32_t run_system(const Kernel& kernel, const SystemArgs& args) {
+    return kernel.run(args);
+  }
+};
+
+// Whether the elements of a map kernel write apart (fields and results at their own index
+// only) or add into shared blocks.
+MapWrites writes_of(const Trace& trace);
+
+// The chunks in element order on the calling thread.
+std::unique_ptr<Executor> make_serial_executor();
+// For the tests of the seam: a map whose writes are disjoint runs its chunks in an order
+// shuffled by `seed` (a map that adds into shared blocks runs them in element order, which
+// its bits depend on); a failure is the one of the lowest element, as the serial executor
+// reports it.
+std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed);
+
+}  // namespace simit::jit

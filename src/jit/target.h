@@ -1,0 +1,82 @@
+// What a code generation target offers the JIT: a trace in, a kernel out. A kernel runs
+// through Kernel::run (no caller holds a function pointer), and an Executor (jit/executor.h)
+// decides how a map kernel's elements are split into calls. Only the targets' own folders
+// (jit/cpu, jit/llvm) include LLVM's headers.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "jit/loop_ir.h"
+
+namespace simit::jit {
+
+// A map kernel's arguments: one pointer per ArraySlot, one double per scalar argument (ints
+// and booleans converted exactly), the target set's endpoint table.
+struct MapArgs {
+  void* const* arrays = nullptr;
+  const double* scalars = nullptr;
+  const int32_t* endpoints = nullptr;
+};
+
+// The elements [begin, end) of a map's target set.
+struct ElementRange {
+  int32_t begin = 0;
+  int32_t end = 0;
+};
+
+// A system kernel's arguments: `scalars` holds the program's scalars (in, then out), `sizes`
+// the lengths the trace names, `interrupt` the host's interrupt flag (a byte, nonzero while
+// an interrupt is pending: interp::Trap::interrupt_flag), which its while loop reads at the
+// top of every iteration.
+struct SystemArgs {
+  void* const* arrays = nullptr;
+  double* scalars = nullptr;
+  const int64_t* sizes = nullptr;
+  const void* interrupt = nullptr;
+};
+
+// A system kernel's return when its loop stopped for the interrupt flag (the scalars written
+// back: everything as a whole number of iterations leaves it, the ops after the loop not run).
+inline constexpr int32_t kSystemInterrupted = -1;
+
+class Kernel {
+ public:
+  virtual ~Kernel() = default;
+  // A map kernel over `range`: 0, or 1 + the index of the failed check in Trace::errors with
+  // the element in *failed_element.
+  virtual int32_t run(const MapArgs& args, ElementRange range, int32_t* failed_element) const = 0;
+  // A system kernel: 0; kSystemInterrupted; or 1 + the index in SystemTrace::errors of the
+  // error statement it reached (the scalars and vectors are then partly updated).
+  virtual int32_t run(const SystemArgs& args) const = 0;
+
+  double compile_ms = 0.0;
+  int lanes = 1;        // elements computed at once (a map kernel in SIMD lanes)
+  bool cached = false;  // loaded from the kernel cache rather than compiled
+  std::string llvm_ir;  // the optimised module, when asked for (`--dump=llvm`)
+};
+
+// A code generation target (the host CPU; NVIDIA GPUs next).
+class Target {
+ public:
+  virtual ~Target() = default;
+  virtual const char* name() const = 0;
+  // Null with `error` set when the trace could not be compiled.
+  virtual std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) = 0;
+  virtual std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
+                                          std::string& error) = 0;
+};
+
+// Functions of the host process compiled code calls (their addresses are built into it).
+struct HostCalls {
+  // int32_t (int32_t fn, int32_t n, int32_t float32, const double* in, double* out)
+  void* decompose = nullptr;
+};
+
+// The host CPU through LLVM ORC; null with `error` set when LLVM cannot target this machine.
+// With a `cache_dir`, compiled kernels are kept there and reused by later runs.
+std::unique_ptr<Target> make_cpu_target(const HostCalls& host, const std::string& cache_dir,
+                                        std::string& error);
+
+}  // namespace simit::jit
