@@ -102,8 +102,11 @@ class MatrixPattern {
 
 using PatternPtr = std::shared_ptr<const MatrixPattern>;
 
-// The union of two patterns of one shape, where each operand's blocks land in it, and for
-// each of its blocks the operands' block there (-1: none).
+// The union of two patterns of one shape (canonical, even when an operand repeats a column),
+// where each operand's blocks land in it (from_a, from_b: every block), and for each of its
+// blocks the operands' block there (to_a, to_b; -1: none). Where an operand's pattern repeats
+// a column (a stencil), several of its blocks land in one union block and to_a / to_b name
+// only one of them: only from_a / from_b describe such an operand completely.
 struct PatternUnion {
   PatternPtr pattern;
   std::vector<int32_t> from_a, from_b;

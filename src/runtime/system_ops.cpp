@@ -196,6 +196,22 @@ void scatter_scaled(Complex s, const SystemMatrix& m, const std::vector<int32_t>
   }
 }
 
+std::shared_ptr<const PatternUnion> union_of(const SystemMatrix& a, const SystemMatrix& b,
+                                             PatternRegistry* registry) {
+  return registry ? registry->united(a.shared_pattern(), b.shared_pattern())
+                  : std::make_shared<const PatternUnion>(unite(a.pattern(), b.pattern()));
+}
+
+// m on a canonical pattern: the blocks that m's pattern repeats in a row (stencil offsets
+// that wrap to one point) summed into one, as every product and sum reads them. For the
+// operations that are not linear in each block: element-wise products and int division.
+SystemMatrix merged(const SystemMatrix& m, PatternRegistry* registry) {
+  std::shared_ptr<const PatternUnion> u = union_of(m, m, registry);
+  SystemMatrix out(u->pattern, m.block_rows(), m.block_cols(), m.kind());
+  by_kind(m.kind(), [&](auto t) { scatter_scaled<decltype(t)>(1.0, m, u->from_a, out); });
+  return out;
+}
+
 // out = alpha a + beta b over the union, each block written once, with the bits of zeroing out
 // and scattering alpha a, then beta b, into it: 0.0 + alpha a where a has the block (+0.0
 // where it has none), then + beta b where b has it.
@@ -341,10 +357,11 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, dou
     });
     return out;
   }
-  std::shared_ptr<const PatternUnion> u =
-      registry ? registry->united(a.shared_pattern(), b.shared_pattern())
-               : std::make_shared<const PatternUnion>(unite(a.pattern(), b.pattern()));
-  if (a.is_float()) {
+  std::shared_ptr<const PatternUnion> u = union_of(a, b, registry);
+  // sum_blocks reads one operand block per union block (to_a, to_b); a pattern that repeats a
+  // column (a stencil whose offsets wrap to one point) has several, which must all be summed,
+  // so such operands are scattered block by block instead.
+  if (a.is_float() && a.pattern().canonical() && b.pattern().canonical()) {
     SystemMatrix out(SystemMatrix::Unset{}, u->pattern, a.block_rows(), a.block_cols());
     sum_blocks(a, b, alpha, beta, *u, out.values());
     return out;
@@ -410,6 +427,11 @@ bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta)
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry) {
   check_block_match(a, b, "multiply element-wise");
+  // A component is the product of the operands' components, each the sum of the blocks its
+  // pattern holds there: repeated blocks are summed before they are multiplied.
+  if (!a.pattern().canonical() || !b.pattern().canonical())
+    return multiply_elementwise(a.pattern().canonical() ? a : merged(a, registry),
+                                b.pattern().canonical() ? b : merged(b, registry), registry);
   // Both operands on the union pattern (zero where absent), then the component products.
   SystemMatrix x = add(a, b, 1.0, 0.0, registry), y = add(a, b, 0.0, 1.0, registry);
   by_kind(x.kind(), [&](auto t) {
@@ -451,6 +473,9 @@ SystemMatrix divided(const SystemMatrix& a, Complex s) {
   }
   const int32_t d = int_factor(r);
   if (d == 0) throw Fault("integer division by zero");
+  // Truncation does not distribute over a sum: blocks that a stencil pattern repeats are
+  // summed first ((1 + 1) / 2 is 1, 1 / 2 + 1 / 2 is 0).
+  if (!a.pattern().canonical()) out = merged(a, nullptr);
   int32_t* v = out.ints();
   // INT32_MIN / -1 wraps like the other int operations instead of trapping.
   for (size_t i = 0; i < out.value_count(); ++i)
