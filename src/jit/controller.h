@@ -12,6 +12,7 @@
 
 #include "interp/assembly_plan.h"
 #include "jit/executor.h"
+#include "jit/lower.h"
 #include "jit/target.h"
 #include "jit/matrix_sum.h"
 #include "jit/system_trace.h"
@@ -33,6 +34,7 @@ struct JitOptions {
   std::ostream* dump = nullptr;
   bool dump_loop_ir = false;
   bool dump_llvm = false;
+  bool dump_passes = false;  // `--dump=passes`: the loop IR as traced and after each pass
   // Differential mode (`--check-jit`): each compiled call also runs interpreted on the same
   // inputs; the first result, field or variable that differs stops the run naming it.
   bool check = false;
@@ -80,6 +82,7 @@ class TraceController : public interp::SiteHook {
   const std::string& unavailable() const { return target_error_; }
 
  private:
+  LowerOptions lower_options() const;
   struct Entry;
   struct SiteState;
   struct LoopEntry;

@@ -1,0 +1,92 @@
+// --jit-stats: each trace's site, key, status, compile time, calls and time in its kernels.
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <functional>
+#include <sstream>
+
+#include "interp/interpreter.h"
+#include "interp/runtime_error.h"
+#include "interp/set_binding.h"
+#include "jit/controller_state.h"
+#include "jit/matrix_sum.h"
+#include "jit/pruned_matrix.h"
+#include "jit/specialise.h"
+#include "jit/write_guard.h"
+#include "runtime/system_ops.h"
+
+namespace simit::jit {
+
+namespace ast = frontend::ast;
+using interp::Value;
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+std::vector<TraceStats> TraceController::stats() const {
+  std::vector<TraceStats> out;
+  for (const auto& [site, s] : sites_)
+    for (const auto& [key, e] : s->kernels) {
+      out.push_back(e->stats);
+      for (size_t i = 0; i < e->special.size(); ++i) {
+        const Entry::Special& sp = e->special[i];
+        char note[160];
+        if (sp.pattern) {
+          std::snprintf(note, sizeof note,
+                        "; result %zu specialised to %.1f%% of its blocks (%lld of %lld, built in "
+                        "%.2f ms)",
+                        i,
+                        100.0 * static_cast<double>(sp.pattern->kept) /
+                            static_cast<double>(std::max<int64_t>(sp.pattern->total, 1)),
+                        static_cast<long long>(sp.pattern->kept),
+                        static_cast<long long>(sp.pattern->total), sp.pattern->build_ms);
+          out.back().note += note;
+        }
+      }
+      if (e->guard_calls > 0) {
+        char note[200];
+        std::snprintf(note, sizeof note,
+                      "; guard: %zu field version%s and %zu scalar%s compared per call, %.0f ns "
+                      "per call",
+                      e->deciders->fields.size(), e->deciders->fields.size() == 1 ? "" : "s",
+                      e->deciders->scalars.size(), e->deciders->scalars.size() == 1 ? "" : "s",
+                      1e6 * e->guard_ms / static_cast<double>(e->guard_calls));
+        out.back().note += note;
+      }
+      if (e->guard_failures > 0)
+        out.back().note += "; the guard failed on " + std::to_string(e->guard_failures) + " call" +
+                           (e->guard_failures > 1 ? "s" : "") + " (blocks recorded again)";
+      if (!e->full_why.empty()) out.back().note += "; full patterns: " + e->full_why;
+    }
+  for (const auto* states : {&runs_, &loops_})
+    for (const auto& [at, s] : *states)
+      for (const auto& e : s->entries) out.push_back(e->stats);
+  for (const auto& [at, s] : alone_)
+    for (const auto& e : s->entries)
+      if (e->kernel) out.push_back(e->stats);
+  for (const auto& [at, s] : sums_)
+    if (!s.stats.status.empty()) out.push_back(s.stats);
+  std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
+    return a.line != b.line ? a.line < b.line : a.site < b.site;
+  });
+  return out;
+}
+
+void TraceController::print_stats(std::ostream& os) const {
+  os << "jit traces:\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-28s %10s %8s %10s %10s %8s  %s\n", "site", "compile ms",
+                "calls", "run ms", "cpu ms", "ir nodes", "status");
+  os << line;
+  for (const TraceStats& s : stats()) {
+    std::snprintf(line, sizeof line, "  %-28s %10.1f %8ld %10.2f %10.2f %8zu  ", s.site.c_str(),
+                  s.compile_ms, s.calls, s.run_ms, s.cpu_ms, s.ir_nodes);
+    os << line << s.status << "\n      key: " << s.key << s.note << "\n";
+  }
+}
+
+}  // namespace simit::jit

@@ -1,0 +1,184 @@
+// A map site's kernel call: the site's arrays and scalars marshalled for its kernel, run
+// through the executor, and a failed check reported as the interpreter reports it.
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <functional>
+#include <sstream>
+
+#include "interp/interpreter.h"
+#include "interp/runtime_error.h"
+#include "interp/set_binding.h"
+#include "jit/controller_state.h"
+#include "jit/matrix_sum.h"
+#include "jit/pruned_matrix.h"
+#include "jit/specialise.h"
+#include "jit/write_guard.h"
+#include "runtime/system_ops.h"
+
+namespace simit::jit {
+
+namespace ast = frontend::ast;
+using interp::Value;
+
+namespace {
+
+// "mapping over element 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')", as the
+// interpreter writes it.
+std::string element_note(const interp::SiteCall& call, int element) {
+  const runtime::Set& t = call.target;
+  const ast::Variable* target = call.plan.site->target_set;
+  std::string note = "mapping over element " + std::to_string(element) + " of set '" +
+                     (target ? target->name : t.name()) + "'";
+  if (element < 0 || element >= t.size() || t.arity() == 0) return note;
+  std::string list;
+  for (int k = 0; k < t.arity(); ++k)
+    list += (k ? ", " : "") + std::to_string(t.endpoint(element, k));
+  const bool one_set = t.homogeneous();
+  return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") +
+         ")";
+}
+
+// Where each block a trace reads from a global matrix argument lies in its pattern, per
+// element (-1 outside it). False where the interpreter must read it: a pattern that repeats
+// blocks (they are summed) or a member outside the matrix's rows or columns (an error).
+bool find_positions(const ArraySlot& a, const interp::SiteCall& call, std::vector<int32_t>& out) {
+  const Value& v = call.partial_args[a.index];
+  if (v.kind() != Value::Kind::Matrix || !v.matrix()) return false;
+  const runtime::MatrixPattern& p = v.matrix()->pattern();
+  if (!p.canonical()) return false;
+  const runtime::Set& t = call.target;
+  out.resize(static_cast<size_t>(t.size()) * a.reads.size());
+  size_t k = 0;
+  for (int e = 0; e < t.size(); ++e)
+    for (const auto& [rm, cm] : a.reads) {
+      const int32_t row = runtime::member_element(t, e, rm),
+                    col = runtime::member_element(t, e, cm);
+      if (row < 0 || row >= p.rows() || col < 0 || col >= p.cols()) return false;
+      out[k++] = p.find(row, col);
+    }
+  return true;
+}
+
+}  // namespace
+
+double component(const Value& v, int i) {
+  switch (v.kind()) {
+    case Value::Kind::Float: return v.as_float();
+    case Value::Kind::Int: return v.as_int();
+    case Value::Kind::Bool: return v.as_bool() ? 1.0 : 0.0;
+    case Value::Kind::Tensor: {
+      const runtime::Tensor& t = v.tensor();
+      switch (t.kind()) {
+        case runtime::ComponentKind::Float: return t.floats()[i];
+        case runtime::ComponentKind::Int: return t.ints()[i];
+        case runtime::ComponentKind::Bool: return t.bools()[i] ? 1.0 : 0.0;
+        default: return 0.0;
+      }
+    }
+    default: return 0.0;
+  }
+}
+
+void zero_results(interp::SiteCall& call) {
+  for (Value& r : call.results) {
+    if (r.kind() == Value::Kind::Matrix && r.matrix()) r.matrix()->set_zero();  // null: made later
+    if (r.is_tensor()) {
+      runtime::Tensor& t = r.tensor();
+      if (t.kind() == runtime::ComponentKind::Float) t.fill(0, t.size(), 0.0);
+    }
+  }
+}
+
+bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
+  const Trace& t = *e.traced.trace;
+  std::vector<double> scalars;
+  for (const ScalarSource& s : e.traced.scalar_sources)
+    scalars.push_back(component(
+        s.partial >= 0 ? call.partial_args[s.partial] : call.interpreter.global(*s.global),
+        s.component));
+  guard_results(e, call, scalars);
+  const std::vector<const int32_t*> tables = prepare_results(e, call);
+  std::vector<void*> arrays(t.arrays.size(), nullptr);
+  // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
+  // pointers read afterwards then see the copy.
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t i = 0; i < t.arrays.size(); ++i) {
+      const ArraySlot& a = t.arrays[i];
+      if (a.written != (pass == 0)) continue;
+      switch (a.kind) {
+        case ArraySlot::Kind::Field: {
+          auto& set = const_cast<runtime::Set&>(runtime::member_set(call.target, a.member));
+          runtime::Field& f = set.field(a.index);
+          arrays[i] = a.written ? static_cast<void*>(f.bytes())
+                                : const_cast<std::byte*>(std::as_const(f).bytes());
+          break;
+        }
+        case ArraySlot::Kind::Vector:
+          arrays[i] = const_cast<double*>(call.partial_args[a.index].tensor().floats());
+          break;
+        case ArraySlot::Kind::Result: {
+          Value& r = call.results[a.index];
+          if (r.kind() == Value::Kind::Matrix)
+            arrays[i] = r.matrix()->values();
+          else if (r.is_tensor())
+            arrays[i] = r.tensor().mutable_floats();
+          else
+            return false;
+          break;
+        }
+        case ArraySlot::Kind::Table: arrays[i] = const_cast<int32_t*>(tables[a.index]); break;
+        case ArraySlot::Kind::Marks: {
+          const size_t r = static_cast<size_t>(a.index);
+          arrays[i] = r < e.special.size() && !e.special[r].marks.empty()
+                          ? e.special[r].marks.data()
+                          : nullptr;
+          break;
+        }
+        case ArraySlot::Kind::Matrix: {
+          const Value& m = call.partial_args[a.index];
+          if (m.kind() != Value::Kind::Matrix || !m.matrix()) return false;
+          arrays[i] = const_cast<double*>(m.matrix()->values());
+          break;
+        }
+        case ArraySlot::Kind::Positions:
+          e.positions.resize(t.arrays.size());
+          if (!find_positions(a, call, e.positions[i])) return false;
+          arrays[i] = e.positions[i].data();
+          break;
+      }
+    }
+  const MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
+  interp::Trap& trap = call.interpreter.trap();
+  const MapOutcome out =
+      executor_->run_map(*e.kernel, args, call.target.size(), kChunkElements, e.writes,
+                         [&trap] { return trap.interrupt_pending(); });
+  if (out.code != 0) {
+    const ErrorSite& err = t.errors[static_cast<size_t>(out.code - 1)];
+    for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing
+    if (!t.writes_fields) {
+      // Nothing but the results changed: the interpreter runs the site again from zero
+      // and reports the error in its own words, with its call stack (on full patterns).
+      for (size_t i = 0; i < call.results.size(); ++i)
+        if (call.plan.results[i].is_matrix && call.results[i].matrix() &&
+            call.results[i].matrix()->shared_pattern() != call.plan.results[i].pattern)
+          call.results[i] = Value::of_matrix(nullptr);
+      zero_results(call);
+      return false;
+    }
+    // Located as the interpreter locates it: the mapped function's frame names the element.
+    interp::RuntimeError error(err.span, err.message);
+    for (const auto& [callee, at] : err.frames) error.add_frame(callee, at);
+    error.add_frame(call.plan.func->name, call.at);
+    error.note_element(call.plan.func->name, element_note(call, out.element));
+    throw error;
+  }
+  if (out.interrupted) {
+    trap.take_interrupt();
+    throw interp::Interrupted(call.at, "interrupted");
+  }
+  specialise_results(e, call);
+  return true;
+}
+
+}  // namespace simit::jit
