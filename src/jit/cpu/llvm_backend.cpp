@@ -1,22 +1,36 @@
-// The CPU code generator: loop IR to LLVM IR (jit/cpu/emitter.h), optimised for the host and
-// linked through one ORC session, one resource tracker per kernel (dropping a kernel frees
-// its code).
+// The CPU code generator: loop IR to LLVM IR (jit/cpu/emitter.h), optimised for the host,
+// compiled to object code and linked through one ORC session, one JITDylib per kernel
+// (dropping a kernel frees its code). With a cache folder the object code is kept there,
+// keyed by the trace and what it was compiled for, and a later run links it without
+// compiling (jit/kernel_cache.h; docs/jit.md, "Kernel cache").
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <functional>
 #include <mutex>
+#include <optional>
 
+#include <llvm/Config/llvm-config.h>
 #include <llvm/ExecutionEngine/Orc/CompileUtils.h>
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
 #include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
 #include <llvm/ExecutionEngine/Orc/LLJIT.h>
+#include <llvm/IR/Constants.h>
+#include <llvm/IR/Instructions.h>
 #include <llvm/IR/Verifier.h>
 #include <llvm/Passes/PassBuilder.h>
+#include <llvm/Support/MemoryBuffer.h>
+#include <llvm/Support/SHA256.h>
 #include <llvm/Support/TargetSelect.h>
 #include <llvm/Support/raw_ostream.h>
 #include <llvm/Target/TargetMachine.h>
 
 #include "jit/cpu/emitter.h"
+#include "jit/kernel_cache.h"
+
+#ifndef SIMIT_VERSION
+#define SIMIT_VERSION "unknown"
+#endif
 
 namespace simit::jit {
 
@@ -26,30 +40,6 @@ using cpu::Emitter;
 using cpu::lanes_fit;
 
 std::string message_of(llvm::Error e) { return llvm::toString(std::move(e)); }
-
-// A module flag: compile with LLVM's fast instruction selector and register allocator.
-constexpr const char* kFastCodegen = "simit.fast-codegen";
-
-// Object code for each module from a target machine of its own (so compiles on several
-// threads stay apart), at the host's best code generation unless the module asks for the fast
-// one (jit/tunables.h, kLargeTraceFastCodegen).
-class Compiler : public llvm::orc::IRCompileLayer::IRCompiler {
- public:
-  explicit Compiler(llvm::orc::JITTargetMachineBuilder jtmb, const llvm::TargetOptions& options)
-      : IRCompiler(llvm::orc::irManglingOptionsFromTargetOptions(options)),
-        jtmb_(std::move(jtmb)) {}
-
-  llvm::Expected<std::unique_ptr<llvm::MemoryBuffer>> operator()(llvm::Module& m) override {
-    llvm::orc::JITTargetMachineBuilder jtmb = jtmb_;
-    if (m.getModuleFlag(kFastCodegen)) jtmb.setCodeGenOptLevel(llvm::CodeGenOptLevel::None);
-    auto tm = jtmb.createTargetMachine();
-    if (!tm) return tm.takeError();
-    return llvm::orc::SimpleCompiler(**tm)(m);
-  }
-
- private:
-  llvm::orc::JITTargetMachineBuilder jtmb_;
-};
 
 // The one ORC session of the process: its code lives as long as the kernels that own it.
 class Session {
@@ -72,6 +62,16 @@ class Session {
   llvm::orc::LLJIT& jit() { return *jit_; }
   llvm::TargetMachine& target() { return *tm_; }
 
+  // Object code for a module, from a target machine of its own (so that compiles on several
+  // threads stay apart), at the host's best code generation or LLVM's fast one.
+  llvm::Expected<std::unique_ptr<llvm::MemoryBuffer>> compile(llvm::Module& m, bool fast) {
+    llvm::orc::JITTargetMachineBuilder jtmb = *jtmb_;
+    if (fast) jtmb.setCodeGenOptLevel(llvm::CodeGenOptLevel::None);
+    auto tm = jtmb.createTargetMachine();
+    if (!tm) return tm.takeError();
+    return llvm::orc::SimpleCompiler(**tm)(m);
+  }
+
  private:
   std::string start() {
     auto jtmb = llvm::orc::JITTargetMachineBuilder::detectHost();
@@ -84,15 +84,8 @@ class Session {
     auto tm = jtmb->createTargetMachine();
     if (!tm) return message_of(tm.takeError());
     tm_ = std::move(*tm);
-    auto jit =
-        llvm::orc::LLJITBuilder()
-            .setJITTargetMachineBuilder(*jtmb)
-            .setCompileFunctionCreator(
-                [options = tm_->Options](llvm::orc::JITTargetMachineBuilder b)
-                    -> llvm::Expected<std::unique_ptr<llvm::orc::IRCompileLayer::IRCompiler>> {
-                  return std::make_unique<Compiler>(std::move(b), options);
-                })
-            .create();
+    jtmb_ = std::move(*jtmb);
+    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*jtmb_).create();
     if (!jit) return message_of(jit.takeError());
     jit_ = std::move(*jit);
     auto gen = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
@@ -102,6 +95,7 @@ class Session {
     return "";
   }
 
+  std::optional<llvm::orc::JITTargetMachineBuilder> jtmb_;
   std::unique_ptr<llvm::orc::LLJIT> jit_;
   std::unique_ptr<llvm::TargetMachine> tm_;
 };
@@ -112,14 +106,15 @@ using MapFn = int32_t (*)(void* const* arrays, const double* scalars, const int3
 using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes,
                              const void* interrupt);
 
+// A kernel's code lives in a JITDylib of its own: a cached object keeps the name its function
+// had when it was compiled, and two kernels of the same key (two engines, two threads) may
+// both be linked without their names meeting.
 class CpuKernel : public Kernel {
  public:
-  explicit CpuKernel(llvm::orc::ResourceTrackerSP rt) : rt_(std::move(rt)) {}
+  CpuKernel(llvm::orc::ExecutionSession& es, llvm::orc::JITDylib& jd) : es_(es), jd_(&jd) {}
   void* address = nullptr;
   bool system = false;
-  ~CpuKernel() override {
-    if (rt_) llvm::consumeError(rt_->remove());
-  }
+  ~CpuKernel() override { llvm::consumeError(es_.removeJITDylib(*jd_)); }
   int32_t run(const MapArgs& a, ElementRange r, int32_t* failed) const override {
     return system ? 0
                   : reinterpret_cast<MapFn>(address)(a.arrays, a.scalars, a.endpoints, r.begin,
@@ -131,7 +126,8 @@ class CpuKernel : public Kernel {
   }
 
  private:
-  llvm::orc::ResourceTrackerSP rt_;
+  llvm::orc::ExecutionSession& es_;
+  llvm::orc::JITDylib* jd_;
 };
 
 void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
@@ -157,39 +153,150 @@ void optimise(llvm::Module& m, llvm::TargetMachine& tm, int level_number) {
   mpm.run(m, mam);
 }
 
+// Whether a constant converts an integer to a pointer: an address of this process built into
+// the code (the emitter's calls into the host before they were made by name).
+bool bakes_address(const llvm::Value* v) {
+  const auto* c = llvm::dyn_cast<llvm::Constant>(v);
+  if (!c || llvm::isa<llvm::GlobalValue>(c)) return false;
+  if (const auto* ce = llvm::dyn_cast<llvm::ConstantExpr>(c);
+      ce && ce->getOpcode() == llvm::Instruction::IntToPtr)
+    return true;
+  for (const llvm::Use& u : c->operands())
+    if (bakes_address(u.get())) return true;
+  return false;
+}
+
+// Whether the module's code is valid in another process: it names every host function it
+// calls rather than holding its address.
+bool relocatable(const llvm::Module& m) {
+  for (const llvm::GlobalVariable& g : m.globals())
+    if (g.hasInitializer() && bakes_address(g.getInitializer())) return false;
+  for (const llvm::Function& f : m)
+    for (const llvm::BasicBlock& bb : f)
+      for (const llvm::Instruction& i : bb) {
+        if (llvm::isa<llvm::IntToPtrInst>(i) && llvm::isa<llvm::Constant>(i.getOperand(0)))
+          return false;
+        for (const llvm::Use& u : i.operands())
+          if (bakes_address(u.get())) return false;
+      }
+  return true;
+}
+
 class CpuTarget : public Target {
  public:
-  CpuTarget(Session& s, const HostCalls& host) : s_(s), host_(host) {}
+  CpuTarget(Session& s, const HostCalls& host, const std::string& cache_dir)
+      : s_(s), host_(host), cache_(cache_dir) {}
   const char* name() const override { return "cpu"; }
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
     const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace);
     const int level = !large ? kOptLevel : lanes ? kLargeLanesTraceOptLevel : kLargeTraceOptLevel;
     const bool fast = large && !lanes && kLargeTraceFastCodegen;
-    auto k = build(level, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
-      if (fast) m.addModuleFlag(llvm::Module::Warning, kFastCodegen, 1);
-      return Emitter(trace, m, host_).run(name);
-    });
+    auto k = build(key_of(trace), level, fast, keep_ir, error,
+                   [&](llvm::Module& m, const std::string& name) {
+                     return Emitter(trace, m, host_).run(name);
+                   });
     if (k) k->lanes = lanes ? kLanes : 1;
     return k;
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
                                   std::string& error) override {
-    auto k = build(kOptLevel, keep_ir, error, [&](llvm::Module& m, const std::string& name) {
-      return Emitter(trace, m).run_system(name);
-    });
+    auto k = build(key_of(trace), kOptLevel, false, keep_ir, error,
+                   [&](llvm::Module& m, const std::string& name) {
+                     return Emitter(trace, m).run_system(name);
+                   });
     if (k) k->system = true;
     return k;
   }
 
  private:
-  // Emits a function into a new module, optimises it for the host and links it.
+  // The trace's key text, needed only with a cache.
+  template <class T>
+  std::string key_of(const T& trace) const {
+    return cache_.enabled() ? kernel_key_text(trace) : "";
+  }
+
+  // The cache key: the trace's key text and everything else that decides its object code.
+  std::string digest_of(const std::string& trace_key, int level, bool fast) const {
+    llvm::SHA256 sha;
+    const std::string head =
+        "simit kernel format " + std::to_string(kKernelFormatVersion) +
+        "\nsimit " SIMIT_VERSION "\nllvm " LLVM_VERSION_STRING "\ntriple " +
+        s_.target().getTargetTriple().str() + "\ncpu " + s_.target().getTargetCPU().str() +
+        "\nfeatures " + s_.target().getTargetFeatureString().str() + "\nopt " +
+        std::to_string(level) + (fast ? " fast" : "") + "\nlanes " + std::to_string(kLanes) + "\n";
+    sha.update(head);
+    sha.update(trace_key);
+    const std::array<uint8_t, 32> d = sha.final();
+    return std::string(d.begin(), d.end());
+  }
+
+  // Links object code into a JITDylib of its own, in which the host functions the code calls
+  // by name resolve to this process's (the main JITDylib's generator finds the C library's).
+  std::unique_ptr<CpuKernel> link(const std::string& symbol,
+                                  std::unique_ptr<llvm::MemoryBuffer> obj, std::string& error) {
+    static std::atomic<uint64_t> serial{0};
+    llvm::orc::LLJIT& jit = s_.jit();
+    auto jd = jit.createJITDylib("simit_kernel_" + std::to_string(serial++));
+    if (!jd) {
+      error = message_of(jd.takeError());
+      return nullptr;
+    }
+    jd->addToLinkOrder(jit.getMainJITDylib());
+    auto k = std::make_unique<CpuKernel>(jit.getExecutionSession(), *jd);
+    if (host_.decompose) {
+      llvm::orc::SymbolMap calls;
+      calls[jit.mangleAndIntern("simit_jit_decompose")] = {
+          llvm::orc::ExecutorAddr::fromPtr(host_.decompose),
+          llvm::JITSymbolFlags::Exported | llvm::JITSymbolFlags::Callable};
+      if (llvm::Error e = jd->define(llvm::orc::absoluteSymbols(std::move(calls)))) {
+        error = message_of(std::move(e));
+        return nullptr;
+      }
+    }
+    if (llvm::Error e = jit.addObjectFile(*jd, std::move(obj))) {
+      error = message_of(std::move(e));
+      return nullptr;
+    }
+    auto sym = jit.lookup(*jd, symbol);
+    if (!sym) {
+      error = message_of(sym.takeError());
+      return nullptr;
+    }
+    k->address = sym->toPtr<void*>();
+    return k;
+  }
+
+  // The kernel from the cache when it holds one (and the IR is not asked for); otherwise
+  // emits a function into a new module, optimises it for the host, compiles it, keeps the
+  // object in the cache, and links it.
   std::unique_ptr<CpuKernel> build(
-      int level, bool keep_ir, std::string& error,
+      const std::string& trace_key, int level, bool fast, bool keep_ir, std::string& error,
       const std::function<llvm::Function*(llvm::Module&, const std::string&)>& emit) {
     const auto start = std::chrono::steady_clock::now();
-    static std::atomic<int> serial{0};
-    const std::string name = "simit_kernel_" + std::to_string(serial++);
+    const auto elapsed_ms = [&] {
+      return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+          .count();
+    };
+    const std::string digest = cache_.enabled() ? digest_of(trace_key, level, fast) : "";
+    if (cache_.enabled() && !keep_ir) {
+      if (std::optional<CacheEntry> entry = cache_.load(digest)) {
+        std::string link_error;  // an entry that does not link is compiled again
+        auto k =
+            link(entry->symbol, llvm::MemoryBuffer::getMemBufferCopy(entry->object, entry->symbol),
+                 link_error);
+        if (k) {
+          k->cached = true;
+          k->compile_ms = elapsed_ms();
+          return k;
+        }
+      }
+    }
+    // The function's name: the key's (stable, so a cached object and its lookup agree), or a
+    // serial number without a cache.
+    static std::atomic<uint64_t> serial{0};
+    const std::string name = cache_.enabled() ? "simit_k_" + hex_of(digest.substr(0, 8))
+                                              : "simit_kernel_" + std::to_string(serial++);
     auto ctx = std::make_unique<llvm::LLVMContext>();
     auto mod = std::make_unique<llvm::Module>(name, *ctx);
     mod->setDataLayout(s_.jit().getDataLayout());
@@ -203,45 +310,42 @@ class CpuTarget : public Target {
       error = "LLVM rejected the generated code: " + bs.str();
       return nullptr;
     }
+    const bool keep = cache_.enabled() && relocatable(*mod);
     if (level > 0) optimise(*mod, s_.target(), level);
     std::string ir;
     if (keep_ir) {
       llvm::raw_string_ostream os(ir);
       mod->print(os, nullptr);
     }
-    auto rt = s_.jit().getMainJITDylib().createResourceTracker();
-    if (llvm::Error e =
-            s_.jit().addIRModule(rt, llvm::orc::ThreadSafeModule(std::move(mod), std::move(ctx)))) {
-      error = message_of(std::move(e));
+    auto obj = s_.compile(*mod, fast);
+    if (!obj) {
+      error = message_of(obj.takeError());
       return nullptr;
     }
-    auto sym = s_.jit().lookup(name);
-    if (!sym) {
-      error = message_of(sym.takeError());
-      llvm::consumeError(rt->remove());
-      return nullptr;
+    if (keep) {
+      // A cache that cannot be written is no cache for this kernel: nothing is reported.
+      std::string store_error;
+      cache_.store(digest, CacheEntry{name, (*obj)->getBuffer().str()}, store_error);
     }
-    auto k = std::make_unique<CpuKernel>(rt);
-    k->address = sym->toPtr<void*>();
+    auto k = link(name, std::move(*obj), error);
+    if (!k) return nullptr;
     k->llvm_ir = std::move(ir);
-    k->compile_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    k->compile_ms = elapsed_ms();
     return k;
   }
 
- private:
   Session& s_;
   HostCalls host_;
+  KernelCache cache_;
 };
 
 }  // namespace
 
 std::unique_ptr<Target> make_cpu_target(const HostCalls& host, const std::string& cache_dir,
                                         std::string& error) {
-  (void)cache_dir;
   Session* s = Session::get(error);
   if (!s) return nullptr;
-  return std::make_unique<CpuTarget>(*s, host);
+  return std::make_unique<CpuTarget>(*s, host, cache_dir);
 }
 
 }  // namespace simit::jit

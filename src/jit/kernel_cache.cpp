@@ -1,0 +1,334 @@
+// The kernel cache's key text and entry files (jit/kernel_cache.h).
+#include "jit/kernel_cache.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <unordered_map>
+
+namespace simit::jit {
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// The key text
+
+class KeyWriter {
+ public:
+  std::string out;
+
+  void num(int64_t v) {
+    out += std::to_string(v);
+    out += ' ';
+  }
+  void bits(double f) {  // exact: -0.0, NaN payloads and the last bit all differ
+    uint64_t u;
+    std::memcpy(&u, &f, sizeof u);
+    char buf[20];
+    std::snprintf(buf, sizeof buf, "%llx ", static_cast<unsigned long long>(u));
+    out += buf;
+  }
+  void tag(const char* t) {
+    out += t;
+    out += ' ';
+  }
+
+  void expr(const ExprRef& e) {
+    if (!e) {
+      tag("-");
+      return;
+    }
+    auto [it, fresh] = ids_.emplace(e.get(), static_cast<int>(ids_.size()));
+    if (!fresh) {
+      out += '#';
+      num(it->second);
+      return;
+    }
+    out += '(';
+    num(static_cast<int>(e->kind));
+    num(static_cast<int>(e->ty));
+    num(e->op);
+    num(e->slot);
+    num(e->comp);
+    bits(e->f);
+    num(e->i);
+    num(e->loose);
+    num(static_cast<int64_t>(e->ops.size()));
+    for (const ExprRef& o : e->ops) expr(o);
+    out += ") ";
+  }
+
+  void block(const std::vector<Stmt>& body) {
+    out += "{ ";
+    for (const Stmt& s : body) stmt(s);
+    out += "} ";
+  }
+
+  void stmt(const Stmt& s) {
+    out += '[';
+    num(static_cast<int>(s.kind));
+    num(s.slot);
+    num(s.comp);
+    num(s.pair);
+    num(s.error);
+    num(s.fn);
+    num(s.n);
+    expr(s.index);
+    expr(s.value);
+    num(static_cast<int64_t>(s.args.size()));
+    for (const ExprRef& a : s.args) expr(a);
+    num(static_cast<int64_t>(s.outs.size()));
+    for (int o : s.outs) num(o);
+    block(s.body);
+    block(s.orelse);
+    out += "]\n";
+  }
+
+  void arrays(const std::vector<ArraySlot>& slots) {
+    tag("arrays");
+    num(static_cast<int64_t>(slots.size()));
+    for (const ArraySlot& a : slots) {
+      num(static_cast<int>(a.kind));
+      num(a.member);
+      num(a.index);
+      num(static_cast<int>(a.ty));
+      num(a.single);
+      num(a.written);
+      num(a.components);
+      num(static_cast<int64_t>(a.reads.size()));
+      for (const auto& [row, col] : a.reads) {
+        num(row);
+        num(col);
+      }
+    }
+    out += '\n';
+  }
+
+  void types(const char* what, const std::vector<Ty>& ts) {
+    tag(what);
+    num(static_cast<int64_t>(ts.size()));
+    for (Ty t : ts) num(static_cast<int>(t));
+    out += '\n';
+  }
+
+  void ops(const char* what, const std::vector<VectorOp>& list) {
+    tag(what);
+    num(static_cast<int64_t>(list.size()));
+    for (const VectorOp& op : list) {
+      num(static_cast<int>(op.kind));
+      num(op.length);
+      num(op.row_ptr);
+      num(op.cols);
+      num(op.values);
+      num(op.rows);
+      num(op.x);
+      num(op.y);
+      num(op.block);
+      num(op.group);
+      num(op.guard);
+      num(static_cast<int64_t>(op.sums.size()));
+      for (int s : op.sums) num(s);
+      block(op.body);
+    }
+    out += '\n';
+  }
+
+ private:
+  std::unordered_map<const Expr*, int> ids_;
+};
+
+// ---------------------------------------------------------------------------
+// The entry files
+
+constexpr char kMagic[8] = {'S', 'I', 'M', 'I', 'T', 'K', 'O', '\0'};
+// The header's layout (bump when it changes; what the object holds is kKernelFormatVersion's).
+constexpr uint32_t kFileVersion = 1;
+// magic, version, symbol length, object length, checksum, digest.
+constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8 + KernelCache::kDigestBytes;
+// A symbol is a short generated name; an object above this is not one of ours.
+constexpr uint32_t kMaxSymbol = 1024;
+constexpr uint64_t kMaxObject = uint64_t{1} << 30;
+
+void put_le(std::string& s, uint64_t v, int bytes) {
+  for (int i = 0; i < bytes; ++i) s += static_cast<char>((v >> (8 * i)) & 0xff);
+}
+uint64_t get_le(const char* p, int bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v |= uint64_t{static_cast<unsigned char>(p[i])} << (8 * i);
+  return v;
+}
+
+uint64_t checksum(const CacheEntry& e) {
+  return fnv1a64(e.object.data(), e.object.size(), fnv1a64(e.symbol.data(), e.symbol.size()));
+}
+
+// A name no other writer picks: this process, a counter, and random bits (for processes of
+// the same id on machines sharing the folder).
+std::string temporary_name(const std::string& final_name) {
+  static std::atomic<uint64_t> counter{0};
+  static const uint64_t salt = [] {
+    std::random_device rd;
+    return (uint64_t{rd()} << 32) ^ rd();
+  }();
+  char buf[64];
+  std::snprintf(buf, sizeof buf, ".tmp.%ld.%llu.%016llx", static_cast<long>(::getpid()),
+                static_cast<unsigned long long>(counter++), static_cast<unsigned long long>(salt));
+  return final_name + buf;
+}
+
+bool write_all(int fd, const std::string& data) {
+  size_t done = 0;
+  while (done < data.size()) {
+    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string kernel_key_text(const Trace& t) {
+  KeyWriter w;
+  w.tag("map");
+  w.num(t.arity);
+  w.num(t.reduce);
+  w.num(t.writes_fields);
+  w.num(t.float32);
+  w.num(static_cast<int64_t>(t.errors.size()));
+  w.out += '\n';
+  w.arrays(t.arrays);
+  w.types("scalars", t.scalars);
+  w.types("locals", t.locals);
+  w.tag("mutable");
+  for (bool m : t.local_mutable) w.num(m);
+  w.tag("\npairs");
+  for (int p : t.pairs) w.num(p);
+  w.tag("\nscratch");
+  for (int s : t.scratch) w.num(s);
+  w.out += "\nbody\n";
+  w.block(t.body);
+  return std::move(w.out);
+}
+
+std::string kernel_key_text(const SystemTrace& t) {
+  KeyWriter w;
+  w.tag("system");
+  w.num(t.scalars);
+  w.num(static_cast<int64_t>(t.sizes.size()));
+  w.num(t.matrices_in_place);
+  w.num(static_cast<int64_t>(t.errors.size()));
+  w.out += '\n';
+  w.arrays(t.arrays);
+  w.types("locals", t.locals);
+  w.ops("before", t.before);
+  w.tag("while");
+  w.expr(t.condition);
+  w.out += '\n';
+  w.ops("body", t.body);
+  w.ops("after", t.after);
+  return std::move(w.out);
+}
+
+std::string hex_of(const std::string& bytes) {
+  static const char* const digits = "0123456789abcdef";
+  std::string s;
+  s.reserve(bytes.size() * 2);
+  for (unsigned char c : bytes) {
+    s += digits[c >> 4];
+    s += digits[c & 15];
+  }
+  return s;
+}
+
+uint64_t fnv1a64(const char* data, size_t size, uint64_t seed) {
+  uint64_t h = seed;
+  for (size_t i = 0; i < size; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+std::string KernelCache::path_of(const std::string& digest) const {
+  return (std::filesystem::path(folder_) / (hex_of(digest) + ".o")).string();
+}
+
+std::optional<CacheEntry> KernelCache::load(const std::string& digest) const {
+  if (!enabled() || digest.size() != kDigestBytes) return std::nullopt;
+  std::ifstream in(path_of(digest), std::ios::binary);
+  if (!in) return std::nullopt;
+  char h[kHeaderBytes];
+  if (!in.read(h, sizeof h)) return std::nullopt;
+  if (std::memcmp(h, kMagic, sizeof kMagic) != 0 || get_le(h + 8, 4) != kFileVersion)
+    return std::nullopt;
+  const uint64_t symbol_size = get_le(h + 12, 4), object_size = get_le(h + 16, 8);
+  const uint64_t sum = get_le(h + 24, 8);
+  if (std::memcmp(h + 32, digest.data(), kDigestBytes) != 0) return std::nullopt;
+  if (symbol_size == 0 || symbol_size > kMaxSymbol || object_size > kMaxObject) return std::nullopt;
+  CacheEntry e;
+  e.symbol.resize(symbol_size);
+  e.object.resize(object_size);
+  if (!in.read(e.symbol.data(), static_cast<std::streamsize>(symbol_size)) ||
+      !in.read(e.object.data(), static_cast<std::streamsize>(object_size)))
+    return std::nullopt;                                                // truncated
+  if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;  // trailing bytes
+  if (checksum(e) != sum) return std::nullopt;
+  return e;
+}
+
+bool KernelCache::store(const std::string& digest, const CacheEntry& entry,
+                        std::string& error) const {
+  if (!enabled()) return true;
+  if (digest.size() != kDigestBytes || entry.symbol.empty() || entry.symbol.size() > kMaxSymbol ||
+      entry.object.size() > kMaxObject) {
+    error = "not a kernel cache entry";
+    return false;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(folder_, ec);
+  if (ec) {
+    error = "cannot create " + folder_ + ": " + ec.message();
+    return false;
+  }
+  std::string data(kMagic, sizeof kMagic);
+  put_le(data, kFileVersion, 4);
+  put_le(data, entry.symbol.size(), 4);
+  put_le(data, entry.object.size(), 8);
+  put_le(data, checksum(entry), 8);
+  data += digest;
+  data += entry.symbol;
+  data += entry.object;
+
+  const std::string final_name = path_of(digest), temp = temporary_name(final_name);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    error = "cannot create " + temp + ": " + std::strerror(errno);
+    return false;
+  }
+  const bool written = write_all(fd, data);
+  const int write_errno = errno;
+  // No fsync: a file a crash left short fails its checks and is compiled again.
+  const bool closed = ::close(fd) == 0;
+  if (!written || !closed) {
+    error = "cannot write " + temp + ": " + std::strerror(written ? errno : write_errno);
+    ::unlink(temp.c_str());
+    return false;
+  }
+  if (::rename(temp.c_str(), final_name.c_str()) != 0) {
+    error = "cannot rename " + temp + ": " + std::strerror(errno);
+    ::unlink(temp.c_str());
+    return false;
+  }
+  return true;
+}
+
+}  // namespace simit::jit
