@@ -28,13 +28,14 @@ using Clock = std::chrono::steady_clock;
 
 struct Grid {
   simit::runtime::Set verts{"verts"};
-  simit::runtime::Set hexes{"hexes", {&verts, &verts, &verts, &verts, &verts, &verts, &verts,
-                                      &verts}};
+  simit::runtime::Set hexes{"hexes",
+                            {&verts, &verts, &verts, &verts, &verts, &verts, &verts, &verts}};
 
   explicit Grid(int n) {
     const int m = n + 1;
     verts.add_many(m * m * m);
-    verts.add_field("x", simit::runtime::FieldType{simit::runtime::ComponentKind::Float, {3}, false});
+    verts.add_field("x",
+                    simit::runtime::FieldType{simit::runtime::ComponentKind::Float, {3}, false});
     auto id = [&](int i, int j, int k) { return (k * m + j) * m + i; };
     for (int k = 0; k < m; ++k)
       for (int j = 0; j < m; ++j)
@@ -63,13 +64,13 @@ Timing time_assembly(const std::shared_ptr<const CompiledProgram>& program, Exec
                      int n, int repeat) {
   Grid grid(n);
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
   // SIMIT_HEX_DUMP=1: the compiled trace's loop IR to stderr.
   std::ostringstream dump;
   if (const char* d = std::getenv("SIMIT_HEX_DUMP"); d && *d == '1') {
-    o.jit.dump = &dump;
-    o.jit.dump_loop_ir = true;
+    o.dump = &dump;
+    o.executor.dump_loop_ir = true;
   }
   Engine engine(program, o);
   engine.bind_set(*program->find_extern("verts"), grid.verts);
@@ -125,10 +126,11 @@ int main(int argc, char** argv) {
       differ += std::memcmp(&u, &v, sizeof u) != 0 && !(u == 0.0 && v == 0.0);
     }
   std::printf("%d hexes (24 x 24 element matrices), median of %d assemblies:\n", n * n * n, repeat);
-  std::printf("  interpreter %9.2f ms\n  jit         %9.2f ms  (%.1fx; first call with the compile "
-              "%.1f ms)\n  components that differ: %zu of %lld\n",
-              in.median_ms, jit.median_ms, in.median_ms / jit.median_ms, jit.first_ms, differ,
-              static_cast<long long>(a.scalar_rows() * a.scalar_cols()));
+  std::printf(
+      "  interpreter %9.2f ms\n  jit         %9.2f ms  (%.1fx; first call with the compile "
+      "%.1f ms)\n  components that differ: %zu of %lld\n",
+      in.median_ms, jit.median_ms, in.median_ms / jit.median_ms, jit.first_ms, differ,
+      static_cast<long long>(a.scalar_rows() * a.scalar_cols()));
   std::printf("%s", jit.stats.c_str());
   return differ == 0 ? 0 : 1;
 }

@@ -28,12 +28,13 @@ namespace {
 
 constexpr int kUsageError = 2;
 
-// Where the executor options of `simit run` and `simit test` land.
-struct JitTargets {
-  std::string& backend;
-  long& threshold;
-  bool& stats;
-  bool& check;
+// Where the executor options of `simit run` and `simit test` land: each value parsed once,
+// here, into the typed choice the engine receives.
+struct ExecutorFlags {
+  ExecutorChoice* choice = nullptr;
+  bool* stats = nullptr;
+  CLI::Option* kind = nullptr;   // --executor: given or not
+  CLI::Option* cache = nullptr;  // --jit-cache: given or not
 };
 
 struct Commands {
@@ -50,47 +51,78 @@ struct Commands {
   RunOptions run_options;
   SceneOptions scene_options;
   bool no_finite_check = false;  // simit run --no-finite-check (scenes)
+  ExecutorFlags run_executor{&run_options.executor, &run_options.jit_stats};
+  ExecutorFlags test_executor{&test_options.executor, &test_options.jit_stats};
 };
 
-JitTargets run_jit_targets(Commands& c) {
-  RunOptions& o = c.run_options;
-  return {o.backend, o.jit_threshold, o.jit_stats, o.check_jit};
-}
-
-JitTargets test_jit_targets(Commands& c) {
-  TestCommandOptions& o = c.test_options;
-  return {o.backend, o.jit_threshold, o.jit_stats, o.check_jit};
+// An option whose value one of simit/executor.h's parsers turns into the choice; CLI11
+// reports the parser's error as a usage error ("--executor: unknown executor ...").
+template <typename Parse>
+CLI::Option* add_parsed(CLI::App& sub, const std::string& names, Parse parse,
+                        const std::string& help) {
+  const std::string name = names.substr(0, names.find(','));
+  return sub.add_option_function<std::string>(
+      names,
+      [parse, name](const std::string& text) {
+        std::string error;
+        if (!parse(text, error)) throw CLI::ValidationError(name, error);
+      },
+      help);
 }
 
 // The executor options, defined once for both commands: the same names, checks and words.
-// `runs` says what the backend runs; `stats_when` when --jit-stats prints.
-void add_jit_options(CLI::App& sub, const JitTargets& t, const std::string& runs,
-                     const std::string& stats_when) {
-  sub.add_option("--backend", t.backend,
-                 "What runs " + runs +
-                     ": interpreter (default) or jit (hot map and apply sites, solver loops and "
-                     "other system statements compiled to native code with LLVM; the rest "
-                     "interpreted)")
-      ->check(CLI::IsMember({"interpreter", "jit"}));
-  sub.add_option("--jit-threshold", t.threshold,
-                 "jit: executions of a site before it is compiled (0: at once; default 2)")
-      ->check(CLI::NonNegativeNumber);
-  sub.add_flag("--jit-stats", t.stats,
+// `runs` says what the executor runs; `stats_when` when --jit-stats prints.
+void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& runs,
+                          const std::string& stats_when) {
+  ExecutorChoice& x = *t.choice;
+  t.kind = add_parsed(
+               sub, "--executor,--backend",
+               [&x](const std::string& s, std::string& error) {
+                 std::optional<ExecutorKind> k = parse_executor_kind(s, error);
+                 if (k) x.kind = *k;
+                 return k.has_value();
+               },
+               "What runs " + runs +
+                   ": interpreter (default) or jit (hot map and apply sites, solver loops and "
+                   "other system statements compiled to native code with LLVM; the rest "
+                   "interpreted). --backend is another name of this option")
+               ->type_name("interpreter|jit");
+  add_parsed(
+      sub, "--jit-threshold",
+      [&x](const std::string& s, std::string& error) {
+        std::optional<long> n = parse_jit_threshold(s, error);
+        if (n) x.threshold = *n;
+        return n.has_value();
+      },
+      "jit: executions of a site before it is compiled (0: at once; default 2)")
+      ->type_name("N");
+  t.cache = add_parsed(
+                sub, "--jit-cache",
+                [&x](const std::string& s, std::string& error) {
+                  std::optional<std::string> c = parse_jit_cache(s, error);
+                  if (c) x.jit_cache = *c;
+                  return c.has_value();
+                },
+                "jit: where compiled kernels are kept between runs: off, or a folder (default: " +
+                    std::string(x.jit_cache == "off" ? "off" : "the user's cache folder") + ")")
+                ->type_name("off|DIR");
+  sub.add_flag("--jit-stats", *t.stats,
                "jit: print each trace (site, key, compile ms, calls, ms spent, or why it ran "
                "interpreted) " +
-                   stats_when + "; needs --backend jit");
-  sub.add_flag("--check-jit", t.check,
+                   stats_when + "; needs --executor jit");
+  sub.add_flag("--check-jit", x.check,
                "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
                "the first result, field or variable that differs (bit for bit), naming it; needs "
-               "--backend jit");
+               "--executor jit");
 }
 
 // --jit-stats and --check-jit say something about the JIT only: without it they would do
-// nothing, silently. "" or the usage error.
-std::string jit_options_misused(const JitTargets& t) {
-  if (t.backend == "jit") return "";
-  if (t.check) return "--check-jit needs --backend jit";
-  if (t.stats) return "--jit-stats needs --backend jit";
+// nothing, silently. "" or the usage error. A scene's own `executor` key may choose the JIT
+// when the command line does not: Scene::open checks those.
+std::string jit_options_misused(const ExecutorFlags& t, bool scene) {
+  if (t.choice->kind == ExecutorKind::Jit || (scene && t.kind->count() == 0)) return "";
+  if (t.choice->check) return "--check-jit needs --executor jit";
+  if (*t.stats) return "--jit-stats needs --executor jit";
   return "";
 }
 
@@ -123,15 +155,15 @@ void add_test(CLI::App& app, Commands& c) {
   c.test->add_flag("--float32", c.test_options.float32, "Run programs with 32-bit floats");
   c.test->add_flag("--check-finite", c.test_options.check_finite,
                    "Stop a run with a run-time error at the first NaN or infinity it produces");
-  add_jit_options(*c.test, test_jit_targets(c), "the sections",
-                  "under each section listed (failures; every section with -v) that made one, "
-                  "and before the last line how many traces all sections made, compiled and "
-                  "interpreted, with the reasons counted");
+  add_executor_options(*c.test, c.test_executor, "the sections",
+                       "under each section listed (failures; every section with -v) that made one, "
+                       "and before the last line how many traces all sections made, compiled and "
+                       "interpreted, with the reasons counted");
   c.test->footer(
       "Each section is compiled on its own. Sections in a folder named 'illegal', or with a "
       "'%@ error' directive, must be rejected; the others must compile, and their %! tests "
       "run in the interpreter, as do their graph directives (%@ set, %@ run, %@ expect, ...); "
-      "with --backend jit, hot maps and runs of system statements (solver loops) run compiled.\n"
+      "with --executor jit, hot maps and runs of system statements (solver loops) run compiled.\n"
       "With --check-jit a section whose compiled code differs from the interpreter fails with "
       "the '--check-jit: ...' message naming the difference.\n"
       "Ends with 'N passed, N failed[, N skipped]'. Exit status: 0 when nothing failed, 1 "
@@ -169,14 +201,22 @@ void add_run(CLI::App& app, Commands& c) {
                   "Scenes: let NaN and infinity through (by default the run stops at the first "
                   "one in the sets' float fields or step's results, checked after init and after "
                   "every frame; the frames before it stay written)");
-  add_jit_options(*c.run, run_jit_targets(c), "the program",
-                  "after the run, also after the error message when it stops on a run-time "
-                  "error, a NaN or infinity, or Ctrl-C (which then stops the run at its next "
-                  "statement; a second Ctrl-C ends it at once)");
-  c.run->add_option("--dump", o.dump, "jit: print each compiled trace: loop-ir, llvm (or both)")
+  add_executor_options(*c.run, c.run_executor, "the program",
+                       "after the run, also after the error message when it stops on a run-time "
+                       "error, a NaN or infinity, or Ctrl-C (which then stops the run at its next "
+                       "statement; a second Ctrl-C ends it at once)");
+  c.run
+      ->add_option_function<std::vector<std::string>>(
+          "--dump",
+          [&o](const std::vector<std::string>& kinds) {
+            std::string error;
+            for (const std::string& k : kinds)
+              if (!parse_dump_kind(k, o.executor, error))
+                throw CLI::ValidationError("--dump", error);
+          },
+          "jit: print each compiled trace: loop-ir, llvm (or both)")
       ->type_name("KIND")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"loop-ir", "llvm"}));
+      ->delimiter(',');
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
       ->check(frame_count());
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
@@ -248,12 +288,8 @@ bool names_unknown_command(const CLI::App& app, int argc, const char* const* arg
   return true;
 }
 
-}  // namespace
-
-int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
-  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+void add_commands(CLI::App& app, Commands& c) {
   app.set_version_flag("--version", "simit " SIMIT_VERSION);
-  Commands c;
   add_check(app, c);
   add_test(app, c);
   add_run(app, c);
@@ -265,6 +301,31 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 #else
   app.require_subcommand(1);
 #endif
+}
+
+}  // namespace
+
+std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const* argv,
+                                                    std::ostream& err) {
+  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+  Commands c;
+  add_commands(app, c);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    err << "simit: error: " << e.what() << "\n";
+    return std::nullopt;
+  }
+  if (c.run->parsed()) return c.run_options.executor;
+  if (c.test->parsed()) return c.test_options.executor;
+  err << "simit: error: neither run nor test\n";
+  return std::nullopt;
+}
+
+int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+  Commands c;
+  add_commands(app, c);
   if (names_unknown_command(app, argc, argv))
     return usage_error(app, std::string("unknown command '") + argv[1] + "'", err);
   try {
@@ -281,10 +342,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   if (app.get_subcommands().empty()) return repl::run_repl("");
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
-  for (const auto& [sub, targets] :
-       {std::pair{c.run, run_jit_targets(c)}, std::pair{c.test, test_jit_targets(c)}})
+  const bool scene = c.run->parsed() && ends_with(c.run_options.file, ".toml");
+  for (const auto& [sub, flags] :
+       {std::pair{c.run, &c.run_executor}, std::pair{c.test, &c.test_executor}})
     if (sub->parsed())
-      if (std::string bad = jit_options_misused(targets); !bad.empty())
+      if (std::string bad = jit_options_misused(*flags, scene); !bad.empty())
         return usage_error(app, sub->get_name() + ": " + bad, err);
   if (c.run->parsed()) {
     if (ends_with(c.run_options.file, ".toml")) {
@@ -294,11 +356,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       so.file = c.run_options.file;
       so.float32 = c.run_options.float32;
       so.check_finite = c.run_options.check_finite;
-      so.backend = c.run_options.backend;
-      so.jit_threshold = c.run_options.jit_threshold;
+      so.executor = c.run_options.executor;
+      so.executor_given = c.run_executor.kind->count() > 0;
+      so.jit_cache_given = c.run_executor.cache->count() > 0;
       so.jit_stats = c.run_options.jit_stats;
-      so.dump = c.run_options.dump;
-      so.check_jit = c.run_options.check_jit;
       so.finite_check = !c.no_finite_check;
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       scene::remove_temporaries_on_signals();  // a killed run leaves complete files only

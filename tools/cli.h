@@ -1,12 +1,21 @@
 // The `simit` command line: subcommands and their options.
 #pragma once
 
+#include <optional>
 #include <ostream>
+
+#include "simit/executor.h"
 
 namespace simit::tools {
 
 // Parses the arguments and runs a subcommand. Returns the process exit status: the
 // subcommand's, 0 for --help and --version, 2 for a usage error.
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+
+// The executor choice the arguments of `simit run` or `simit test` hand to the engine, parsed
+// as run_cli parses them, nothing run (tests of the parsing); nullopt after a usage error
+// on `err`.
+std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const* argv,
+                                                    std::ostream& err);
 
 }  // namespace simit::tools

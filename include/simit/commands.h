@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "simit/executor.h"
+
 namespace simit::tools {
 
 struct CheckOptions {
@@ -25,12 +27,10 @@ struct RunOptions {
   std::vector<std::string> args;  // one literal per parameter, e.g. `2.5`, `[1.0, 2.0]'`
   bool float32 = false;
   bool check_finite = false;
-  // The executor: "interpreter" (the reference) or "jit" (hot sites compiled with LLVM).
-  std::string backend = "interpreter";
-  long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
-  bool jit_stats = false;         // jit: print each trace's figures after the run
-  bool check_jit = false;         // jit: each compiled call also run interpreted and compared
-  std::vector<std::string> dump;  // jit: "loop-ir", "llvm": print each compiled trace
+  // What runs the function (`--executor`, `--jit-threshold`, `--check-jit`, `--dump`,
+  // `--jit-cache`), as parsed from the command line; dumps print to `out`.
+  ExecutorChoice executor;
+  bool jit_stats = false;  // jit: print each trace's figures after the run
 };
 
 // Prints what the program prints, then one `name = literal` line per result, to `out`.

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "simit/executor.h"
 #include "simit/set.h"
 #include "simit/tensor.h"
 
@@ -20,15 +21,14 @@ class CompiledProgram;
 namespace runtime {
 class SystemMatrix;
 class Tensor;
-}
+}  // namespace runtime
 
 // Settings of one Program and the Functions compiled from it (there is no process-wide
 // configuration).
 struct Options {
-  enum class Backend { Interpreter, Cpu, Gpu };
-  // Cpu compiles hot maps with the JIT where the build has one (SIMIT_WITH_LLVM=ON) and runs
-  // the reference interpreter otherwise; Gpu is refused with "no GPU backend in this build".
-  Backend backend = Backend::Interpreter;
+  // What runs the compiled functions (simit/executor.h): the interpreter by default; the JIT
+  // (kind Jit) needs a build with -DSIMIT_WITH_LLVM=ON, and compile() refuses it otherwise.
+  ExecutorChoice executor;
   // 8: Simit `float` is binary64 and float fields are `double` on the host; 4: Simit `float`
   // is rounded to binary32 and float fields are `float` on the host.
   int float_size = 8;
@@ -38,8 +38,10 @@ struct Options {
   std::ostream* out = nullptr;
 };
 
-// Options from the original's `init(backend, floatSize)` spelling ("cpu", "interpreter",
-// "gpu"; 4 or 8). It sets nothing globally: pass the result to Program.
+// Options from the original's `init(backend, floatSize)` spelling: "cpu" (the JIT),
+// "interpreter" or "jit"; 4 or 8. Throws Error on any other name, on "gpu" (no GPU executor is
+// built) and on "cpu" or "jit" in a build without the JIT. It sets nothing globally: pass the
+// result to Program.
 [[nodiscard]] Options init(const std::string& backend = "cpu", int float_size = 8);
 
 // One compile diagnostic; `rendered` is `file:line:col: error: message`, the line and a caret.
@@ -188,6 +190,9 @@ class Function {
   // of a run's wall time is everything outside assembly (solves, vector algebra, control).
   RunStats stats() const;
   void reset_stats();
+  // What runs the function: after init(), the choice its engine received; before, the
+  // Options' choice it will receive.
+  const ExecutorChoice& executor() const;
 
   // The spellings of the original API: on this in-process backend running is always safe
   // and there is nothing to map (API.md §8.7).

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "simit/executor.h"
+
 namespace simit::scene {
 
 struct SceneOptions {
@@ -25,13 +27,13 @@ struct SceneOptions {
   // frame, stopping at the first NaN or infinity (the scene's `finite_check = false`, or this
   // option false, turns it off).
   bool finite_check = true;
-  // The executor: "interpreter" (the reference) or "jit" (hot sites compiled with LLVM).
-  std::string backend = "interpreter";
-  long jit_threshold = -1;        // jit: executions before a site is compiled (-1: default)
-  bool jit_stats = false;         // jit: print each trace's figures after the run
-  bool check_jit = false;         // jit: each compiled call also run interpreted and compared
-  std::vector<std::string> dump;  // jit: "loop-ir", "llvm": print each compiled trace
-  bool progress_line = false;  // rewrite one progress line (a terminal) instead of plain lines
+  // What runs the frames (dumps print to the run's `out`). The scene file's `executor` and
+  // `jit_cache` keys choose the kind and the cache unless these flags say the options did.
+  ExecutorChoice executor;
+  bool executor_given = false;   // `executor.kind` was given (`--executor`): the file's is ignored
+  bool jit_cache_given = false;  // `executor.jit_cache` was given (`--jit-cache`): likewise
+  bool jit_stats = false;        // jit: print each trace's figures after the run
+  bool progress_line = false;    // rewrite one progress line (a terminal) instead of plain lines
   // No output files and no timings (simit debug: its transcript must be reproducible).
   bool quiet = false;
 };

@@ -6,15 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "simit/executor.h"
+
 namespace simit::tools {
 
 struct TestCommandOptions {
-  bool verbose = false;                 // list every section, not only failures
-  bool float32 = false;                 // run programs with 32-bit floats
-  bool check_finite = false;            // stop a run at the first NaN or infinity
-  std::string backend = "interpreter";  // or "jit": sections' runs through the JIT
-  long jit_threshold = -1;              // jit: executions before a site is compiled
-  bool check_jit = false;               // jit: each compiled call also run interpreted and compared
+  bool verbose = false;       // list every section, not only failures
+  bool float32 = false;       // run programs with 32-bit floats
+  bool check_finite = false;  // stop a run at the first NaN or infinity
+  // What runs the sections. No kernel cache unless one is asked for (`--jit-cache DIR`): a
+  // test run writes nothing into the user's cache folder.
+  ExecutorChoice executor = ExecutorChoice{.jit_cache = "off"};
   // jit: the traces of each section listed (failures; all with `verbose`) and a summary
   bool jit_stats = false;
 };

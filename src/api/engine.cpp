@@ -1,6 +1,7 @@
 // The engine: constructs the executor the options choose and forwards binding and runs to it.
 #include "api/engine.h"
 
+#include <cstdlib>
 #include <stdexcept>
 
 #ifdef SIMIT_HAS_JIT
@@ -9,45 +10,24 @@
 
 namespace simit::api {
 
-const char* executor_name(ExecutorKind k) { return k == ExecutorKind::Jit ? "jit" : "interpreter"; }
-
-bool executor_from_name(const std::string& name, ExecutorKind& kind) {
-  if (name == "interpreter") kind = ExecutorKind::Interpreter;
-  else if (name == "jit") kind = ExecutorKind::Jit;
-  else return false;
-  return true;
-}
-
-std::string configure_backend(EngineOptions& o, const std::string& backend, long threshold,
-                              const std::vector<std::string>& dump, std::ostream* dump_to) {
-  if (!executor_from_name(backend, o.executor))
-    return "unknown backend '" + backend + "' (interpreter or jit)";
-  if (o.executor == ExecutorKind::Jit && !jit_available())
-    return "this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON (LLVM 19)";
-  o.jit.threshold = threshold;
-  for (const std::string& d : dump) {
-    if (d == "loop-ir") o.jit.dump_loop_ir = true;
-    else if (d == "llvm") o.jit.dump_llvm = true;
-    else return "unknown dump '" + d + "' (loop-ir, llvm)";
-  }
-  if (!dump.empty()) o.jit.dump = dump_to;
+std::string jit_cache_folder(const std::string& setting) {
+  if (setting == "off") return "";
+  if (!setting.empty()) return setting;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+    return std::string(xdg) + "/simit/kernels";
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return std::string(home) + "/.cache/simit/kernels";
   return "";
-}
-
-bool jit_available() {
-#ifdef SIMIT_HAS_JIT
-  return true;
-#else
-  return false;
-#endif
 }
 
 namespace ast = frontend::ast;
 
 Engine::Engine(std::shared_ptr<const CompiledProgram> program, EngineOptions options)
     : compiled_(std::move(program)), options_(options) {
+  if (std::string bad = executor_unavailable(options_.executor); !bad.empty())
+    throw std::runtime_error(bad);
   executor_ = make_executor();
-  if (options_.executor == ExecutorKind::Jit) install_jit();
+  if (options_.executor.kind == ExecutorKind::Jit) install_jit();
 }
 
 Engine::Engine(const ast::Program& program, EngineOptions options)
@@ -71,30 +51,35 @@ std::unique_ptr<interp::Interpreter> Engine::make_executor() const {
 
 void Engine::install_jit() {
 #ifdef SIMIT_HAS_JIT
+  // The choice mapped onto the JIT's own options; what the choice leaves open (threshold -1)
+  // keeps the JIT's default.
+  const ExecutorChoice& x = options_.executor;
   jit::JitOptions j;
-  if (options_.jit.threshold >= 0) j.threshold = options_.jit.threshold;
+  if (x.threshold >= 0) j.threshold = x.threshold;
+  j.eager = x.eager;
+  j.cache_dir = jit_cache_folder(x.jit_cache);
   j.float32 = options_.float32;
   j.check_finite = options_.check_finite;
-  j.dump = options_.jit.dump;
-  j.dump_loop_ir = options_.jit.dump_loop_ir;
-  j.dump_llvm = options_.jit.dump_llvm;
-  j.check = options_.jit.check;
-  j.corrupt_for_test = options_.jit.corrupt_for_test;
+  j.dump = options_.dump;
+  j.dump_loop_ir = x.dump_loop_ir;
+  j.dump_llvm = x.dump_llvm;
+  j.check = x.check;
+  j.corrupt_for_test = options_.corrupt_for_test;
   jit_ = std::make_unique<jit::TraceController>(j);
   executor_->set_site_hook(jit_.get());
 #else
-  throw std::runtime_error("this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON (LLVM 19)");
+  throw std::runtime_error(executor_unavailable(ExecutorChoice{.kind = ExecutorKind::Jit}));
 #endif
 }
 
 void Engine::set_executor(ExecutorKind kind) {
-  if (kind == options_.executor) return;
+  if (kind == options_.executor.kind) return;
   if (kind == ExecutorKind::Jit) {
     install_jit();  // throws, changing nothing, without a JIT
-    options_.executor = kind;
+    options_.executor.kind = kind;
     return;
   }
-  options_.executor = kind;
+  options_.executor.kind = kind;
   executor_->set_site_hook(options_.sites);
   jit_.reset();
 }
@@ -116,15 +101,20 @@ std::vector<std::string> Engine::jit_trace_statuses() const {
   return out;
 }
 
-void Engine::bind_set(const ast::Variable& var, runtime::Set& set) { executor_->bind_set(var, set); }
+void Engine::bind_set(const ast::Variable& var, runtime::Set& set) {
+  executor_->bind_set(var, set);
+}
 
 void Engine::set_global(const ast::Variable& var, interp::Value value) {
   executor_->set_global(var, std::move(value));
 }
 
-const interp::Value& Engine::global(const ast::Variable& var) const { return executor_->global(var); }
+const interp::Value& Engine::global(const ast::Variable& var) const {
+  return executor_->global(var);
+}
 
-std::vector<interp::Value> Engine::call(const ast::FuncDecl& func, std::vector<interp::Value> args) {
+std::vector<interp::Value> Engine::call(const ast::FuncDecl& func,
+                                        std::vector<interp::Value> args) {
   return executor_->call(func, std::move(args));
 }
 

@@ -13,41 +13,30 @@
 #include "interp/interpreter.h"
 #include "interp/value.h"
 #include "runtime/set.h"
+#include "simit/executor.h"
 
 namespace simit::api {
 
-// What executes the program's functions: the reference interpreter, or the tracing JIT
-// (src/jit), which is the interpreter's site hook (interp/assembly_plan.h): it is offered
-// every planned map and apply site and compiles the hot ones to native code, so the
+// What executes the program's functions (simit/executor.h): the reference interpreter, or the
+// tracing JIT (src/jit), which is the interpreter's site hook (interp/assembly_plan.h): it is
+// offered every planned map and apply site and compiles the hot ones to native code, so the
 // interpreter stays the driver of every run and the host-facing calls below do not change.
-enum class ExecutorKind { Interpreter, Jit };
+using simit::executor_name;
+using simit::ExecutorChoice;
+using simit::ExecutorKind;
+using simit::jit_available;
 
-// "interpreter" or "jit".
-const char* executor_name(ExecutorKind k);
-// Whether this build has the JIT (configured with SIMIT_WITH_LLVM=ON).
-bool jit_available();
-// The executor named "interpreter" or "jit"; false for any other name.
-bool executor_from_name(const std::string& name, ExecutorKind& kind);
-// Sets `o`'s executor and JIT settings from a front end's options (`--backend`,
-// `--jit-threshold`, `--dump=loop-ir,llvm` printing to `dump_to`). Returns "" or what is wrong
-// (an unknown backend or dump kind, a JIT asked of a build without one).
-std::string configure_backend(struct EngineOptions& o, const std::string& backend, long threshold,
-                              const std::vector<std::string>& dump, std::ostream* dump_to);
-
-// The JIT's settings (ignored by the interpreter).
-struct JitSettings {
-  long threshold = -1;          // executions before a site is compiled; -1: the default
-  std::ostream* dump = nullptr;  // where --dump prints compiled traces (null: nowhere)
-  bool dump_loop_ir = false;
-  bool dump_llvm = false;
-  bool check = false;  // --check-jit: every compiled call checked against the interpreter
-  // Tests of the check only: flips the lowest bit of a compiled map's first result value.
-  bool corrupt_for_test = false;
-};
+// Where a JIT cache setting (ExecutorChoice::jit_cache) puts the kernels: "" the user's cache
+// folder ($XDG_CACHE_HOME/simit/kernels, else $HOME/.cache/simit/kernels; no cache when
+// neither is set), "off" no cache (""), anything else that folder.
+std::string jit_cache_folder(const std::string& setting);
 
 // Settings of one engine; passed down, never global.
 struct EngineOptions {
-  ExecutorKind executor = ExecutorKind::Interpreter;
+  // What runs the functions, as the front end's user chose it. The engine's own default keeps
+  // no kernel cache (tests and tools that build an engine directly write nothing into the
+  // user's cache folder); front ends hand their user's whole choice down instead.
+  ExecutorChoice executor = ExecutorChoice{.jit_cache = "off"};
   // Round every float to binary32 when produced (Simit `float` is float32).
   bool float32 = false;
   // Stop with a run-time error at the first NaN or infinity produced.
@@ -63,7 +52,10 @@ struct EngineOptions {
   // executor seam); null with ExecutorKind::Interpreter runs everything in the interpreter.
   // ExecutorKind::Jit installs its own.
   interp::SiteHook* sites = nullptr;
-  JitSettings jit;
+  // Where the JIT's dumps (ExecutorChoice::dump_loop_ir, dump_llvm) print; null: nowhere.
+  std::ostream* dump = nullptr;
+  // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value.
+  bool corrupt_for_test = false;
 };
 
 // Runs the functions of one compiled program. Bindings and globals persist between calls,
@@ -71,6 +63,8 @@ struct EngineOptions {
 // Run-time errors throw interp::RuntimeError (front ends render them in their own terms).
 class Engine {
  public:
+  // Throws std::runtime_error with executor_unavailable()'s reason when this build cannot run
+  // the options' executor choice (front ends check it first, to report it their own way).
   explicit Engine(std::shared_ptr<const CompiledProgram> program, EngineOptions options = {});
   // Over a program checked elsewhere (`simit test` sections); it must outlive the engine.
   explicit Engine(const frontend::ast::Program& program, EngineOptions options = {});
@@ -104,10 +98,10 @@ class Engine {
   // receives it with every statement).
   const interp::Interpreter& interpreter() const { return *executor_; }
 
-  // Switches the executor between calls (the REPL's `:set backend`); bindings, values and
-  // patterns stay. Throws std::runtime_error when this build has no JIT.
+  // Switches the executor between calls; bindings, values and patterns stay. Throws
+  // std::runtime_error when this build has no JIT.
   void set_executor(ExecutorKind kind);
-  ExecutorKind executor() const { return options_.executor; }
+  ExecutorKind executor() const { return options_.executor.kind; }
   // `--jit-stats`: each trace's site, key, compile time, calls and time spent (nothing
   // under the interpreter).
   void print_jit_stats(std::ostream& os) const;

@@ -2,12 +2,12 @@
 #include <cstring>
 #include <map>
 
-#include "binding_check.h"
-#include "tensor_values.h"
 #include "api/engine.h"
 #include "api/set_access.h"
+#include "binding_check.h"
 #include "runtime/fault.h"
 #include "simit/program.h"
+#include "tensor_values.h"
 
 namespace simit {
 
@@ -119,8 +119,8 @@ struct Function::Impl {
   std::shared_ptr<const api::CompiledProgram> loaded;
   Options options;
   const ast::FuncDecl* func = nullptr;
-  std::map<std::string, Slot> slots;          // every bindable name
-  std::vector<std::string> needed;            // externs used and parameters, in order
+  std::map<std::string, Slot> slots;  // every bindable name
+  std::vector<std::string> needed;    // externs used and parameters, in order
   std::unique_ptr<api::Engine> engine;
   std::vector<std::pair<const runtime::Set*, uint64_t>> topology;  // at init
   std::vector<Value> results;
@@ -166,8 +166,7 @@ const std::string& Function::name() const { return impl().func->name; }
 
 Function Program::compile(const std::string& name) const {
   if (!loaded_) throw Error("compile('" + name + "'): no program is loaded");
-  if (options_.backend == Options::Backend::Gpu)
-    throw Error("no GPU backend in this build");
+  if (std::string bad = executor_unavailable(options_.executor); !bad.empty()) throw Error(bad);
   const ast::Program& program = loaded_->program();
   const ast::FuncDecl* f = program.find_func(name);
   if (!f || f->is_extern) throw Error("the program has no function '" + name + "' to compile");
@@ -249,9 +248,7 @@ void Function::Impl::init() {
     throw BindError(std::move(problems));
   }
   api::EngineOptions eo;
-  // Cpu is the JIT where this build has one, the interpreter otherwise.
-  eo.executor = options.backend == Options::Backend::Cpu && api::jit_available() ? api::ExecutorKind::Jit
-                                                                                 : api::ExecutorKind::Interpreter;
+  eo.executor = options.executor;  // the user's choice, whole (checked by compile)
   eo.float32 = options.float_size == 4;
   eo.check_finite = options.check_finite;
   eo.out = options.out;
@@ -308,7 +305,8 @@ void Function::Impl::run() {
 DenseResult Function::result(const std::string& name) const {
   Impl& im = impl();
   const Slot& s = im.slot(name);
-  if (s.role != Slot::Role::Result) throw Error("'" + name + "' is not a result of '" + im.func->name + "'");
+  if (s.role != Slot::Role::Result)
+    throw Error("'" + name + "' is not a result of '" + im.func->name + "'");
   if (im.results.empty()) throw Error("'" + im.func->name + "' has not run yet");
   const Value& v = im.results.at(s.index);
   if (v.kind() == Value::Kind::Matrix)
@@ -320,10 +318,16 @@ DenseResult Function::result(const std::string& name) const {
 RunStats Function::stats() const { return impl().stats; }
 void Function::reset_stats() { impl().stats = RunStats{}; }
 
+const ExecutorChoice& Function::executor() const {
+  const Impl& im = impl();
+  return im.engine ? im.engine->options().executor : im.options.executor;
+}
+
 SystemMatrixView Function::matrix(const std::string& name) const {
   Impl& im = impl();
   const Slot& s = im.slot(name);
-  if (s.role != Slot::Role::Result) throw Error("'" + name + "' is not a result of '" + im.func->name + "'");
+  if (s.role != Slot::Role::Result)
+    throw Error("'" + name + "' is not a result of '" + im.func->name + "'");
   if (im.results.empty()) throw Error("'" + im.func->name + "' has not run yet");
   const Value& v = im.results.at(s.index);
   if (v.kind() != Value::Kind::Matrix || !v.matrix())

@@ -1,10 +1,11 @@
 // Programs: loading and checking source, diagnostics, and compiling functions.
 #include <fstream>
+#include <optional>
 #include <sstream>
 
+#include "api/compiled_program.h"
 #include "frontend/diagnostics.h"
 #include "frontend/frontend.h"
-#include "api/compiled_program.h"
 #include "simit/program.h"
 
 namespace simit {
@@ -13,14 +14,17 @@ namespace ast = frontend::ast;
 
 Options init(const std::string& backend, int float_size) {
   Options o;
-  if (backend == "cpu")
-    o.backend = Options::Backend::Cpu;
-  else if (backend == "interpreter" || backend == "interp")
-    o.backend = Options::Backend::Interpreter;
-  else if (backend == "gpu")
-    o.backend = Options::Backend::Gpu;
+  if (backend == "gpu")
+    throw Error(
+        "no GPU executor in this build: valid executors are cpu (the JIT), jit, interpreter");
+  std::string error;
+  if (backend == "cpu")  // the original's name of its JIT-compiled native code
+    o.executor.kind = ExecutorKind::Jit;
+  else if (std::optional<ExecutorKind> kind = parse_executor_kind(backend, error))
+    o.executor.kind = *kind;
   else
-    throw Error("unknown backend '" + backend + "' (expected cpu, interpreter or gpu)");
+    throw Error(error + " (or cpu, the JIT)");
+  if (std::string bad = executor_unavailable(o.executor); !bad.empty()) throw Error(bad);
   if (float_size != 4 && float_size != 8)
     throw Error("float size must be 4 or 8, not " + std::to_string(float_size));
   o.float_size = float_size;

@@ -82,11 +82,10 @@ int run_function(const RunOptions& options, const RunHooks& hooks, std::ostream&
   run_options.check_finite = options.check_finite;
   run_options.out = &out;
   run_options.trap = hooks.trap;
-  if (std::string bad = api::configure_backend(run_options, options.backend, options.jit_threshold,
-                                               options.dump, &out);
-      !bad.empty())
+  if (std::string bad = executor_unavailable(options.executor); !bad.empty())
     return usage(err, bad);
-  run_options.jit.check = options.check_jit;
+  run_options.executor = options.executor;
+  run_options.dump = &out;
   // --jit-stats: Ctrl-C stops the run with an error instead of ending the process, so that
   // the stats still print (a debugger's trap already stops it its own way).
   interp::Trap own_trap;

@@ -1,6 +1,7 @@
 // The REPL's `:` commands (unambiguous prefixes accepted) and tab completion.
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <sstream>
 
 #include "frontend/ast.h"
@@ -30,8 +31,9 @@ const CommandHelp kCommands[] = {
     {"print", ":print SET.FIELD[i]", "one element's field value (or a whole field)"},
     {"time", ":time STMT", "run a statement and print how long it took"},
     {"run", ":run FUNC [N]", "run a function without parameters N times (default 1)"},
-    {"set", ":set OPTION VALUE", "float32 on|off, check_finite on|off, print_limit N, backend interpreter|jit"},
-    {"jit", ":jit", "what the JIT compiled for :run (backend jit): site, compile ms, calls, ms"},
+    {"set", ":set OPTION VALUE",
+     "float32 on|off, check_finite on|off, print_limit N, executor interpreter|jit"},
+    {"jit", ":jit", "what the JIT compiled for :run (executor jit): site, compile ms, calls, ms"},
     {"reset", ":reset", "forget every declaration, variable and scene"},
     {"quit", ":quit", "leave (Ctrl-D too)"},
 };
@@ -108,8 +110,10 @@ void Session::command(const std::string& line) {
     scene_.reset();
     refresh_program();
   } else if (cmd == "type") {
-    if (arg.empty()) err_ << ":type needs an expression\n";
-    else statements(arg, true, true);
+    if (arg.empty())
+      err_ << ":type needs an expression\n";
+    else
+      statements(arg, true, true);
   } else if (cmd == "load" || cmd == "reload") {
     load_files(cmd, arg);
   } else if (cmd == "scene") {
@@ -182,7 +186,8 @@ void Session::load_files(const std::string& cmd, const std::string& arg) {
     scene_.reset();
     scene(path);
   }
-  out_ << (cmd == "load" ? "loaded " + arg : "reloaded " + std::to_string(files_.size()) + " file(s)")
+  out_ << (cmd == "load" ? "loaded " + arg
+                         : "reloaded " + std::to_string(files_.size()) + " file(s)")
        << "\n";
 }
 
@@ -216,7 +221,7 @@ void Session::set_option(const std::string& arg) {
   std::vector<std::string> w = split_blanks(arg);
   if (w.size() != 2) {
     err_ << ":set needs an option and a value (float32 on|off, check_finite on|off, "
-            "print_limit N, backend interpreter|jit)\n";
+            "print_limit N, executor interpreter|jit)\n";
     return;
   }
   bool flag = false;
@@ -230,7 +235,8 @@ void Session::set_option(const std::string& arg) {
     } else if (options_.float32 != flag) {
       options_.float32 = flag;
       if (scene_) {
-        out_ << "float32 " << (flag ? "on" : "off") << ": reloading the scene (fields start over)\n";
+        out_ << "float32 " << (flag ? "on" : "off")
+             << ": reloading the scene (fields start over)\n";
         std::string path = scene_->path;
         drop_run_engine();
         scene_.reset();
@@ -243,15 +249,20 @@ void Session::set_option(const std::string& arg) {
     } catch (const std::exception&) {
       err_ << ":set print_limit: expected a whole number, not '" << w[1] << "'\n";
     }
-  } else if (w[0] == "backend") {
-    api::EngineOptions probe;
-    if (std::string bad = api::configure_backend(probe, w[1], 0, {}, nullptr); !bad.empty()) {
-      err_ << ":set backend: " << bad << "\n";
+  } else if (w[0] == "executor" || w[0] == "backend") {  // backend: its former name
+    // Parsed and checked here, once: a bad or unbuilt choice keeps the current one.
+    std::string error;
+    std::optional<ExecutorKind> kind = parse_executor_kind(w[1], error);
+    ExecutorChoice choice = options_.executor;
+    if (kind) choice.kind = *kind;
+    if (kind) error = executor_unavailable(choice);
+    if (!error.empty()) {
+      err_ << ":set " << w[0] << ": " << error << "\n";
       return;
     }
-    options_.backend = w[1];
+    options_.executor = choice;
   } else {
-    err_ << ":set: no option '" << w[0] << "' (float32, check_finite, print_limit, backend)\n";
+    err_ << ":set: no option '" << w[0] << "' (float32, check_finite, print_limit, executor)\n";
     return;
   }
 }
@@ -297,14 +308,15 @@ void Session::run_command(const std::string& arg) {
   }
   std::string key = c->source->text();
   key += std::string(1, '\0') + (options_.float32 ? " float32" : "") +
-         (options_.check_finite ? " check_finite" : "") + " " + options_.backend;
+         (options_.check_finite ? " check_finite" : "") + " " +
+         executor_name(options_.executor.kind);
   if (key != run_.key || !run_.engine) run_ = RunEngine{std::move(key), std::move(c), nullptr};
   run_function(*run_.program, w[0], times);
 }
 
 void Session::jit_command() {
-  if (!run_.engine || options_.backend != "jit") {
-    out_ << "no traces: :set backend jit, then :run a function\n";
+  if (!run_.engine || options_.executor.kind != ExecutorKind::Jit) {
+    out_ << "no traces: :set executor jit, then :run a function\n";
     return;
   }
   run_.engine->print_jit_stats(out_);
@@ -324,7 +336,8 @@ std::vector<std::string> Session::completions(const std::string& prefix) const {
   if (dot != std::string::npos) {
     // `verts.x`: the fields of a bound set.
     if (const runtime::Set* s = bound_set(prefix.substr(0, dot)))
-      for (int f = 0; f < s->field_count(); ++f) add(prefix.substr(0, dot + 1) + s->field(f).name());
+      for (int f = 0; f < s->field_count(); ++f)
+        add(prefix.substr(0, dot + 1) + s->field(f).name());
     return out;
   }
   for (const auto& n : names_) add(n);

@@ -173,8 +173,7 @@ api::EngineOptions Session::run_options() {
   o.float32 = options_.float32;
   o.check_finite = options_.check_finite;
   o.trap = &debugger_.trap();
-  // Each input runs once: the JIT compiles a map at its first execution. Checked by :set.
-  api::configure_backend(o, options_.backend, 0, {}, nullptr);
+  o.executor = options_.executor;  // checked by :set
   return o;
 }
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "api/engine.h"
 #include "debugger.h"
 #include "frontend/frontend.h"
-#include "api/engine.h"
 #include "interp/value.h"
 #include "line_map.h"
 #include "scene_data.h"
@@ -25,7 +25,9 @@ struct SessionOptions {
   bool float32 = false;       // round every float to binary32 (scenes are reloaded)
   bool check_finite = false;  // stop at the first NaN or infinity
   int print_limit = 20;       // elements `:print SET.FIELD` lists before summarising
-  std::string backend = "interpreter";  // or "jit": hot maps compiled (threshold 0 here)
+  // What runs the inputs (`:set executor interpreter|jit`). Each input runs once: the JIT
+  // compiles a site at its first execution (threshold 0), not eagerly by set size.
+  ExecutorChoice executor = ExecutorChoice{.threshold = 0, .eager = false};
 };
 
 class Session {
@@ -53,6 +55,7 @@ class Session {
   // Where the debugger reads its commands while a run is stopped (the terminal or stdin);
   // without one, a stop ends the run.
   void set_line_source(Debugger::LineSource source) { line_source_ = std::move(source); }
+  const SessionOptions& options() const { return options_; }
   // Stops the computation running now at its next statement (async-signal-safe: Ctrl-C).
   void interrupt() { debugger_.trap().request_interrupt(); }
   // Drops a multi-line input being typed (Ctrl-C at the prompt).
@@ -80,7 +83,8 @@ class Session {
   api::EngineOptions run_options();
   // Runs `body` (which runs `c`) under the debugger; reports its run-time error. False when
   // the run did not complete.
-  bool debug_run(const frontend::Compilation& c, int input_offset, const std::function<void()>& body);
+  bool debug_run(const frontend::Compilation& c, int input_offset,
+                 const std::function<void()>& body);
   // The program alone (files and declarations), for breakpoints set between runs: compiled
   // again when declarations change, and given back to the debugger after each run.
   void refresh_program();
@@ -112,12 +116,12 @@ class Session {
 
   std::ostream& out_;
   std::ostream& err_;
-  std::string buffer_;                 // lines of an incomplete input
-  std::vector<std::string> files_;     // loaded with :load, in order
+  std::string buffer_;              // lines of an incomplete input
+  std::vector<std::string> files_;  // loaded with :load, in order
   std::vector<std::string> file_texts_;
-  std::string decls_;                  // declarations entered at the prompt
-  std::map<std::string, Var> vars_;    // persistent variables
-  std::vector<std::string> names_;     // declared names (for completion)
+  std::string decls_;                // declarations entered at the prompt
+  std::map<std::string, Var> vars_;  // persistent variables
+  std::vector<std::string> names_;   // declared names (for completion)
   bool quit_ = false;
   int counter_ = 0;
   SessionOptions options_;

@@ -25,14 +25,24 @@ Scene::~Scene() = default;
 std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& err) {
   auto impl = std::make_unique<Impl>();
   impl->options = options;
-  api::EngineOptions probe;
-  if (std::string bad = api::configure_backend(probe, options.backend, options.jit_threshold, options.dump, nullptr);
-      !bad.empty()) {
+  // A choice the command line made is checked before the file is read.
+  if (std::string bad = executor_unavailable(options.executor); !bad.empty()) {
     err << options.file << ": error: " << bad << "\n";
     return nullptr;
   }
   try {
     impl->file = read_scene_file(options.file);
+    // The scene's own keys choose what the command line left open.
+    const SceneFile& file = *impl->file;
+    ExecutorChoice& choice = impl->options.executor;
+    if (file.executor && !options.executor_given) choice.kind = *file.executor;
+    if (file.jit_cache && !options.jit_cache_given) choice.jit_cache = *file.jit_cache;
+    if (std::string bad = executor_unavailable(choice); !bad.empty())
+      file.fail(file.doc.get("executor"), "executor: " + bad);
+    // What says something about the JIT only would do nothing, silently, under the interpreter.
+    if (choice.kind != ExecutorKind::Jit && (choice.check || options.jit_stats))
+      throw SceneError(options.file + ": error: " + (choice.check ? "--check-jit" : "--jit-stats") +
+                       " needs the JIT: --executor jit, or executor = \"jit\" in the scene");
   } catch (const SceneError& e) {
     err << e.what() << "\n";
     return nullptr;
@@ -50,6 +60,10 @@ std::unique_ptr<Scene> SceneAccess::open(const SceneOptions& options, interp::Tr
   std::unique_ptr<Scene> scene = Scene::open(options, err);
   if (scene) scene->impl_->trap = trap;
   return scene;
+}
+
+const ExecutorChoice& SceneAccess::executor(const Scene& scene) {
+  return scene.impl_->options.executor;
 }
 
 const frontend::ast::Program& SceneAccess::program(const Scene& scene) {

@@ -77,6 +77,23 @@ void read_frames(SceneFile& file) {
   }
 }
 
+// `executor = "interpreter" | "jit"` and `jit_cache = "off" | FOLDER` (relative to the scene's
+// folder), parsed as the command line parses `--executor` and `--jit-cache`.
+void read_executor(SceneFile& file) {
+  std::string error;
+  if (const toml::node* n = file.doc.get("executor")) {
+    if (!n->is_string()) file.fail(n, "executor: expected a string: interpreter or jit");
+    file.executor = parse_executor_kind(*n->value<std::string>(), error);
+    if (!file.executor) file.fail(n, "executor: " + error);
+  }
+  if (const toml::node* n = file.doc.get("jit_cache")) {
+    if (!n->is_string()) file.fail(n, "jit_cache: expected a string: \"off\" or a folder");
+    file.jit_cache = parse_jit_cache(*n->value<std::string>(), error);
+    if (!file.jit_cache) file.fail(n, "jit_cache: " + error);
+    if (*file.jit_cache != "off") file.jit_cache = file.resolve(*file.jit_cache);
+  }
+}
+
 }  // namespace
 
 void SceneFile::fail(const toml::node* at, const std::string& what) const {
@@ -189,12 +206,13 @@ std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
   }
   file->dir = fs::path(path).parent_path().string();
   file->check_keys(file->doc, "the scene",
-                   {"program", "init", "step", "frames", "frame_time", "finite_check", "sets",
-                    "tensors", "output"});
+                   {"program", "init", "step", "frames", "frame_time", "finite_check", "executor",
+                    "jit_cache", "sets", "tensors", "output"});
   file->program_path = file->resolve(file->required_string(file->doc, "the scene", "program"));
   file->init_name = file->optional_string(file->doc, "the scene", "init").value_or("");
   file->step_name = file->required_string(file->doc, "the scene", "step");
   read_frames(*file);
+  read_executor(*file);
   compile_program(*file);
   return file;
 }

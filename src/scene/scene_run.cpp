@@ -145,9 +145,9 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.check_finite = options_.check_finite;
   eo.out = &out;
   eo.trap = trap_;
-  // Checked by Scene::open: cannot fail here.
-  api::configure_backend(eo, options_.backend, options_.jit_threshold, options_.dump, &out);
-  eo.jit.check = options_.check_jit;
+  eo.executor =
+      options_.executor;  // resolved with the scene file's keys and checked by Scene::open
+  eo.dump = &out;
   return eo;
 }
 

@@ -40,6 +40,8 @@ struct SceneAccess {
   // (interp/hook.h: the step debugger).
   static std::unique_ptr<Scene> open(const SceneOptions& options, interp::Trap* trap,
                                      std::ostream& err);
+  // The executor the runs use: the options' choice with the scene file's keys applied.
+  static const ExecutorChoice& executor(const Scene& scene);
   // The compiled program the runs execute (the debugger resolves breakpoints against it).
   static const frontend::ast::Program& program(const Scene& scene);
   // Builds the sets afresh and reads the tensors, running nothing; nullopt after reporting a

@@ -10,14 +10,13 @@ int run_test_command(const std::vector<std::string>& paths, const TestCommandOpt
   api::EngineOptions engine;
   engine.float32 = options.float32;
   engine.check_finite = options.check_finite;
-  if (std::string bad =
-          api::configure_backend(engine, options.backend, options.jit_threshold, {}, nullptr);
-      !bad.empty()) {
+  if (std::string bad = executor_unavailable(options.executor); !bad.empty()) {
     err << "simit test: " << bad << "\n";
     return 2;
   }
-  // Every section's runs checked against the interpreter: a difference fails the section.
-  engine.jit.check = options.check_jit;
+  // With check, every section's runs are checked against the interpreter: a difference fails
+  // the section.
+  engine.executor = options.executor;
   InterpExecutor executor(engine, options.jit_stats);
   TestOptions run;
   run.verbose = options.verbose;

@@ -93,9 +93,9 @@ TEST(ApiProgram, CompileErrorsCarryRenderedDiagnostics) {
 }
 
 TEST(ApiProgram, InitBuildsOptionsWithoutGlobalState) {
-  EXPECT_EQ(simit::init("cpu", 4).float_size, 4);
+  EXPECT_EQ(simit::init("interpreter", 4).float_size, 4);
   EXPECT_THROW((void)simit::init("tpu"), simit::Error);
-  EXPECT_THROW((void)simit::init("cpu", 2), simit::Error);
+  EXPECT_THROW((void)simit::init("interpreter", 2), simit::Error);
   EXPECT_EQ(simit::Options{}.float_size, 8);
 }
 
@@ -198,8 +198,7 @@ TEST(ApiBind, EveryFieldMismatchIsReportedByNameInOneError) {
     EXPECT_EQ(e.problems()[1],
               "extern 'nodes': field 'm' is float in the program but the set's field 'm' has "
               "int components");
-    EXPECT_EQ(e.problems()[2],
-              "extern 'nodes': field 'id' (int) is missing from set 'nodes'");
+    EXPECT_EQ(e.problems()[2], "extern 'nodes': field 'id' (int) is missing from set 'nodes'");
   }
 }
 
@@ -211,14 +210,16 @@ TEST(ApiBind, FieldShapeAndPrecisionMismatches) {
   nodes.add_field<float>("m");         // binary32 while float size is 8
   nodes.add_field<int>("id");
   std::string text = message_of<simit::BindError>([&] { step.bind("nodes", nodes); });
-  EXPECT_TRUE(contains(text, "field 'x' is vector[3](float) in the program but the set's "
-                             "field 'x' has dimensions 3x1"));
-  EXPECT_TRUE(contains(text, "field 'm' is float in the program but the set's field 'm' "
-                             "stores binary32 components, but the program's float size is 8"));
+  EXPECT_TRUE(contains(text,
+                       "field 'x' is vector[3](float) in the program but the set's "
+                       "field 'x' has dimensions 3x1"));
+  EXPECT_TRUE(contains(text,
+                       "field 'm' is float in the program but the set's field 'm' "
+                       "stores binary32 components, but the program's float size is 8"));
 }
 
 TEST(ApiBind, FloatSizeFourWantsSinglePrecisionFields) {
-  simit::Program p(simit::init("cpu", 4));
+  simit::Program p(simit::init("interpreter", 4));
   p.load_string(kProgram);
   simit::Function step = p.compile("step");
   simit::Set nodes("nodes");
@@ -266,10 +267,10 @@ TEST(ApiBind, TensorExternShapesAndKinds) {
   EXPECT_TRUE(contains(message_of<simit::BindError>([&] { step.bind("dt", three); }),
                        "extern 'dt' is vector[2](float) in the program but the host tensor "
                        "(double 3) has 3 components"));
-  EXPECT_TRUE(contains(message_of<simit::BindError>([&] { step.bind("dt", ints); }),
-                       "has int components"));
-  EXPECT_TRUE(contains(message_of<simit::BindError>([&] { step.bind("dt", scalar); }),
-                       "has 1 component"));
+  EXPECT_TRUE(
+      contains(message_of<simit::BindError>([&] { step.bind("dt", ints); }), "has int components"));
+  EXPECT_TRUE(
+      contains(message_of<simit::BindError>([&] { step.bind("dt", scalar); }), "has 1 component"));
   EXPECT_NO_THROW(step.bind("unused", scalar));
 }
 
@@ -314,7 +315,7 @@ end
 }
 
 TEST(ApiRun, SinglePrecisionFieldsRunWithFloatSizeFour) {
-  simit::Program p(simit::init("cpu", 4));
+  simit::Program p(simit::init("interpreter", 4));
   p.load_string(kProgram);
   simit::Function step = p.compile("step");
   simit::Set nodes("nodes");
@@ -356,11 +357,12 @@ TEST(ApiRun, GrowingASetAfterInitReinitialises) {
 
 TEST(ApiRun, RuntimeErrorsNameTheLine) {
   simit::Program p;
-  p.load_string("extern v : vector[3](float);\n"
-                "export func f(i : int) -> r : float\n"
-                "  r = v(i);\n"
-                "end\n",
-                "oob.sim");
+  p.load_string(
+      "extern v : vector[3](float);\n"
+      "export func f(i : int) -> r : float\n"
+      "  r = v(i);\n"
+      "end\n",
+      "oob.sim");
   simit::Function f = p.compile("f");
   simit::Tensor<double, 3> v{1.0, 2.0, 3.0};
   simit::Tensor<int> i{5};

@@ -51,9 +51,9 @@ IdiomRun run(const std::string& source, ExecutorKind kind, int verts, std::vecto
   }
   e.add_edges(ends);
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
-  o.jit.check = check;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
+  o.executor.check = check;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("verts"), v);
   engine.bind_set(*compiled->find_extern("edges"), e);

@@ -503,8 +503,8 @@ struct Program {
   Program(ExecutorKind kind, bool inverted = false) : mesh(inverted) {
     EXPECT_TRUE(compiled->ok());
     EngineOptions o;
-    o.executor = kind;
-    o.jit.threshold = 0;
+    o.executor.kind = kind;
+    o.executor.threshold = 0;
     engine = std::make_unique<Engine>(compiled, o);
     engine->bind_set(*compiled->find_extern("verts"), mesh.verts);
     engine->bind_set(*compiled->find_extern("tets"), mesh.tets);
@@ -680,8 +680,8 @@ struct Chain {
     const int32_t ends[] = {0, 1, 1, 2, 2, 3, 3, 4, 4, 5};
     edges.add_edges(ends);
     EngineOptions o;
-    o.executor = kind;
-    o.jit.threshold = 0;
+    o.executor.kind = kind;
+    o.executor.threshold = 0;
     engine = std::make_unique<Engine>(compiled, o);
     engine->bind_set(*compiled->find_extern("verts"), verts);
     engine->bind_set(*compiled->find_extern("edges"), edges);
@@ -797,10 +797,10 @@ TEST(Jit, CheckModeRunsBothAndNamesTheFirstDifference) {
     auto compiled = CompiledProgram::from_source("jit_test.sim", kProgram);
     Mesh mesh;
     EngineOptions o;
-    o.executor = ExecutorKind::Jit;
-    o.jit.threshold = 0;
-    o.jit.check = true;
-    o.jit.corrupt_for_test = corrupt;
+    o.executor.kind = ExecutorKind::Jit;
+    o.executor.threshold = 0;
+    o.executor.check = true;
+    o.corrupt_for_test = corrupt;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("verts"), mesh.verts);
     engine.bind_set(*compiled->find_extern("tets"), mesh.tets);
@@ -886,8 +886,8 @@ TEST(Jit, DecompositionsComputeTheInterpretersBits) {
     tets.add_edges(ends);
     tets.add_field("e", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("verts"), verts);
     engine.bind_set(*compiled->find_extern("tets"), tets);
@@ -1015,8 +1015,8 @@ TEST(Jit, BlockedElementMatricesAndMatrixBlockReadsComputeTheInterpretersBits) {
     ASSERT_TRUE(compiled->ok());
     Mesh mesh;
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("verts"), mesh.verts);
     engine.bind_set(*compiled->find_extern("tets"), mesh.tets);
@@ -1071,10 +1071,10 @@ PointsRuns run_points_both_ways(const char* file, const char* program, int count
     fill(points);
     std::ostringstream dumped;
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
-    o.jit.dump = &dumped;
-    o.jit.dump_loop_ir = true;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
+    o.dump = &dumped;
+    o.executor.dump_loop_ir = true;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("points"), points);
     out.results[k] = engine.call(*compiled->find_func("step"), {});
@@ -1340,8 +1340,8 @@ end
   points.add_field("a", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
   for (int i = 0; i < 3; ++i) points.field(0).at<double>(i)[0] = 0.5 * i;
   EngineOptions o;
-  o.executor = ExecutorKind::Jit;
-  o.jit.threshold = 0;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 0;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("points"), points);
   const std::vector<Value> r = engine.call(*compiled->find_func("step"), {});
@@ -1427,10 +1427,10 @@ TEST(Jit, ASolverLoopFusesIntoThreeLoopsAndComputesTheInterpretersBits) {
       links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
     std::ostringstream dumped;
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
-    o.jit.dump = &dumped;
-    o.jit.dump_loop_ir = true;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
+    o.dump = &dumped;
+    o.executor.dump_loop_ir = true;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("points"), points);
     engine.bind_set(*compiled->find_extern("links"), links);
@@ -1504,8 +1504,8 @@ TEST(Jit, CheckFiniteIsCompiledAndStopsWhereTheInterpreterStops) {
     ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
     for (int i = 0; i < 5; ++i) ps.field(0).at<double>(i)[0] = i == 3 ? -1.0 : 1.0 + i;
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
     o.check_finite = true;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("ps"), ps);
@@ -1587,8 +1587,8 @@ ErrorRun run_errors(ExecutorKind kind, bool bad) {
   ps.add_field("b", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
   for (int i = 0; i < 5; ++i) ps.field(0).at<double>(i)[0] = bad && i == 3 ? -1.5 : 0.25 * i;
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);
   ErrorRun run;
@@ -1697,10 +1697,10 @@ ZeroRun run_zeros(ExecutorKind kind, bool inf) {
   if (inf) ps.field(1).at<double>(2)[2] = HUGE_VAL;
   std::ostringstream dump;
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
-  o.jit.dump = &dump;
-  o.jit.dump_loop_ir = true;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
+  o.dump = &dump;
+  o.executor.dump_loop_ir = true;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);
   ZeroRun r;
@@ -1820,8 +1820,8 @@ LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1) {
   for (int i = 0; i + 1 < n; ++i)
     ss.field(0).at<double>(i)[0] = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
   o.check_finite = zero_at >= 0;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);
@@ -1967,12 +1967,12 @@ PcgRun run_pcg(ExecutorKind kind, bool check, const std::vector<int>& stops) {
   }
   for (int e = 0; e < links.size(); ++e) links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
   EngineOptions o;
-  o.executor = kind;
-  o.jit.threshold = 0;
-  o.jit.check = check;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
+  o.executor.check = check;
   std::ostringstream dump;
-  o.jit.dump = &dump;
-  o.jit.dump_loop_ir = true;
+  o.dump = &dump;
+  o.executor.dump_loop_ir = true;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("points"), points);
   engine.bind_set(*compiled->find_extern("links"), links);
@@ -2120,8 +2120,8 @@ TEST(Jit, EveryCallThatReachesAnErrorStatementIsHandedBack) {
   ps.field(0).at<double>(0)[0] = 1.0;
   ps.field(0).at<double>(1)[0] = 2.0;
   EngineOptions o;
-  o.executor = ExecutorKind::Jit;
-  o.jit.threshold = 0;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 0;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);
   // x'x is 5, 20, then 45: halved to [1.5, 3], 11.25, at k = 2.
@@ -2231,13 +2231,13 @@ RunsRun run_runs(ExecutorKind kind, bool check, bool float32 = false) {
   links.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
   for (int e = 0; e < links.size(); ++e) links.field(0).at<double>(e)[0] = 1.0 + 0.5 * std::cos(e);
   EngineOptions o;
-  o.executor = kind;
+  o.executor.kind = kind;
   o.float32 = float32;
-  o.jit.threshold = 0;
-  o.jit.check = check;
+  o.executor.threshold = 0;
+  o.executor.check = check;
   std::ostringstream dump;
-  o.jit.dump = &dump;
-  o.jit.dump_loop_ir = true;
+  o.dump = &dump;
+  o.executor.dump_loop_ir = true;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("points"), points);
   engine.bind_set(*compiled->find_extern("links"), links);
@@ -2416,8 +2416,8 @@ TEST(Jit, ARunWhoseLoopReachesAnErrorStatementIsInterpretedOnce) {
     ps.field(0).at<double>(0)[0] = 1.0;
     ps.field(0).at<double>(1)[0] = 2.0;
     EngineOptions o;
-    o.executor = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
-    o.jit.threshold = 0;
+    o.executor.kind = k ? ExecutorKind::Jit : ExecutorKind::Interpreter;
+    o.executor.threshold = 0;
     Engine engine(compiled, o);
     engine.bind_set(*compiled->find_extern("ps"), ps);
     try {
@@ -2491,8 +2491,8 @@ TEST(Jit, AnInterruptStopsACompiledLoopAtAnIterationBoundary) {
   for (int i = 0; i < n; ++i) ps.field(0).at<double>(i)[0] = 1.0 + i % 7;  // small integers
   interp::Trap trap;  // what the REPL's SIGINT handler asks to interrupt
   EngineOptions o;
-  o.executor = ExecutorKind::Jit;
-  o.jit.threshold = 0;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 0;
   o.trap = &trap;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);

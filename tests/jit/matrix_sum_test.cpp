@@ -102,10 +102,10 @@ struct Chain {
     for (int i = 0; i + 1 < vertices - isolated; ++i) ends.insert(ends.end(), {i, i + 1});
     edges.add_edges(ends);
     EngineOptions o;
-    o.executor = kind;
+    o.executor.kind = kind;
     o.float32 = float32;
-    o.jit.threshold = 0;
-    o.jit.check = check;
+    o.executor.threshold = 0;
+    o.executor.check = check;
     engine = std::make_unique<Engine>(compiled, o);
     engine->bind_set(*compiled->find_extern("verts"), verts);
     engine->bind_set(*compiled->find_extern("edges"), edges);

@@ -135,8 +135,8 @@ struct Runner {
          ExecutorKind kind)
       : world(g.sets) {
     EngineOptions o;
-    o.executor = kind;
-    o.jit.threshold = 0;
+    o.executor.kind = kind;
+    o.executor.threshold = 0;
     o.float32 = g.float32;
     engine = std::make_unique<Engine>(program, o);
     engine->bind_set(*program->find_extern("verts"), world.verts);

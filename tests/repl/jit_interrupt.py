@@ -1,4 +1,4 @@
-"""Ctrl-C under `:set backend jit` stops a compiled loop that never ends (a ctest).
+"""Ctrl-C under `:set executor jit` stops a compiled loop that never ends (a ctest).
 
 jit_interrupt.py SIMIT SOURCE_DIR
 
@@ -68,7 +68,7 @@ def main():
 
     send(":scene tests/scene/fem_bar2k.toml")
     expect(r"scene tests/scene/fem_bar2k\.toml: .*")
-    send(":set backend jit")
+    send(":set executor jit")
     send("w = 0.0 * verts.v;")
     send("rr = 1.0;")
     send("rr")

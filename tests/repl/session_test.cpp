@@ -6,8 +6,8 @@
 
 #include <chrono>
 #include <fstream>
-#include <thread>
 #include <sstream>
+#include <thread>
 
 namespace simit::repl {
 namespace {
@@ -123,7 +123,8 @@ std::string scene_program() {
   f << "element Vertex\n  x : vector[3](float);\n  pinned : bool;\nend\n"
        "extern verts : set{Vertex};\nextern dy : float;\n"
        "func lift_one(inout v : Vertex)\n  if not v.pinned\n    v.x(1) = v.x(1) + dy;\n  end\nend\n"
-       "export func lift() -> (moved : int)\n  apply lift_one to verts;\n  moved = 2;\n  dy = 2.0 * dy;\nend\n";
+       "export func lift() -> (moved : int)\n  apply lift_one to verts;\n  moved = 2;\n  dy = 2.0 "
+       "* dy;\nend\n";
   return path;
 }
 
@@ -150,6 +151,57 @@ TEST(Session, SceneSetsFieldsAndRuns) {
   EXPECT_EQ(r.s.completions("verts.p"), std::vector<std::string>{"verts.pinned"});
   EXPECT_EQ(r.s.completions("ver"), std::vector<std::string>{"verts"});
   EXPECT_NE(r.feed(":print verts.x[3]").find("out of range"), std::string::npos);
+}
+
+// `:set executor jit` (or its former name, `:set backend jit`) is parsed once and reaches the
+// `:run` engine whole: the JIT, compiling each site at its first execution (threshold 0, no
+// eager compiles), with the interpreter's values; a bad value keeps the current setting.
+TEST(Session, SetExecutorReachesTheEngine) {
+  FakeScene scene;
+  Repl r;
+  r.s.set_scene_loader(scene.loader(scene_program()));
+  r.feed(":scene fake.toml");
+  EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
+  std::string bad = r.feed(":set executor jti");
+  EXPECT_EQ(bad, ":set executor: unknown executor 'jti': valid executors are interpreter, jit\n");
+  EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
+  if (!jit_available()) {
+    EXPECT_EQ(r.feed(":set executor jit")
+                  .rfind(":set executor: this build has no JIT: configure "
+                         "with -DSIMIT_WITH_LLVM=ON",
+                         0),
+              0u);
+    EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
+    GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  }
+  EXPECT_EQ(r.feed(":set executor jit"), "");
+  const ExecutorChoice& x = r.s.options().executor;
+  EXPECT_EQ(x.kind, ExecutorKind::Jit);
+  EXPECT_EQ(x.threshold, 0);
+  EXPECT_FALSE(x.eager);
+  EXPECT_FALSE(x.check);
+  EXPECT_EQ(r.feed(":set backend fast"),
+            ":set backend: unknown executor 'fast': valid executors are interpreter, jit\n");
+  EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Jit);
+  std::string run = r.feed(":run lift 2");
+  EXPECT_NE(run.find("moved = 2"), std::string::npos) << run;
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(0)[1], 0.5 + 0.25 + 0.5);
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(2)[1], 2.5);  // pinned
+  // The apply compiled at its first run and ran compiled both times.
+  std::string traces = r.feed(":jit");
+  EXPECT_EQ(traces.rfind("jit traces:\n", 0), 0u) << traces;
+  const size_t site = traces.find("\n  lift_one (line ");
+  ASSERT_NE(site, std::string::npos) << traces;
+  const std::string row = traces.substr(site + 1, traces.find('\n', site + 1) - site - 1);
+  EXPECT_TRUE(row.ends_with("  compiled")) << row;
+  std::istringstream fields(row.substr(row.find(')') + 1));
+  double compile_ms = 0;
+  long calls = 0;
+  fields >> compile_ms >> calls;
+  EXPECT_EQ(calls, 2) << row;
+  EXPECT_EQ(r.feed(":set backend interpreter"), "");
+  EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
+  EXPECT_EQ(r.feed(":jit"), "no traces: :set executor jit, then :run a function\n");
 }
 
 TEST(Session, RuntimeErrorsNameTheInputLine) {

@@ -281,6 +281,84 @@ TEST_F(SceneTest, OpenReportsTheProgramsDiagnostics) {
   EXPECT_NE(err.str().find("tet.toml: error: the program '"), std::string::npos) << err.str();
 }
 
+// The scene file's `executor` key reaches the engine with the options' threshold and check:
+// step's apply runs compiled (and checked) in every frame, with the interpreter's values.
+TEST_F(SceneTest, TheSceneFileChoosesTheExecutor) {
+  write("jit.toml", std::string("executor = \"jit\"\njit_cache = \"off\"\n") + kScene);
+  SceneOptions o = options("jit.toml");
+  o.executor.threshold = 0;
+  o.executor.check = true;
+  o.jit_stats = true;
+  std::ostringstream out, err;
+  std::unique_ptr<Scene> scene = Scene::open(o, err);
+  if (!jit_available()) {
+    EXPECT_EQ(scene, nullptr);
+    EXPECT_EQ(err.str().rfind(path("jit.toml") +
+                                  ":1:12: error: executor: this build has no JIT: configure with "
+                                  "-DSIMIT_WITH_LLVM=ON",
+                              0),
+              0u)
+        << err.str();
+    GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  }
+  ASSERT_TRUE(scene) << err.str();
+  const ExecutorChoice& x = SceneAccess::executor(*scene);
+  EXPECT_EQ(x.kind, ExecutorKind::Jit);
+  EXPECT_EQ(x.threshold, 0);
+  EXPECT_TRUE(x.check);
+  EXPECT_EQ(x.jit_cache, "off");
+  ASSERT_EQ(scene->run(out, err, 3), 0) << err.str();
+  EXPECT_NE(out.str().find("n = 11, squares = 56"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("n = 13, squares = 56"), std::string::npos) << out.str();
+  // Both applies compiled at their first execution (threshold 0): lift ran in 3 frames.
+  const size_t table = out.str().find("jit traces:\n");
+  ASSERT_NE(table, std::string::npos) << out.str();
+  const size_t lift = out.str().find("\n  lift (line ", table);
+  ASSERT_NE(lift, std::string::npos) << out.str();
+  const std::string row = out.str().substr(lift + 1, out.str().find('\n', lift + 1) - lift - 1);
+  EXPECT_TRUE(row.ends_with("  compiled")) << row;
+  std::istringstream fields(row.substr(row.find(')') + 1));
+  double compile_ms = 0;
+  long calls = 0;
+  fields >> compile_ms >> calls;
+  EXPECT_EQ(calls, 3) << row;
+}
+
+// The command line's choice wins over the file's; either's unknown value is an error naming
+// the file, the line and the key.
+TEST_F(SceneTest, TheCommandLineOverridesTheFileAndBadValuesAreLocated) {
+  write("jit.toml", std::string("executor = \"jit\"\n") + kScene);
+  SceneOptions o = options("jit.toml");
+  o.quiet = true;
+  o.executor_given = true;  // --executor interpreter
+  std::ostringstream out, err;
+  std::unique_ptr<Scene> scene = Scene::open(o, err);
+  ASSERT_TRUE(scene) << err.str();
+  EXPECT_EQ(SceneAccess::executor(*scene).kind, ExecutorKind::Interpreter);
+  EXPECT_EQ(SceneAccess::executor(*scene).jit_cache, "");  // the user's cache: not given
+
+  write("bad.toml",
+        std::string("frames = 3\nexecutor = \"jti\"\n") +
+            std::string(kScene).replace(std::string(kScene).find("frames = 3\n"), 11, ""));
+  EXPECT_EQ(run_scene(options("bad.toml"), out, err), 1);
+  EXPECT_EQ(err.str(), path("bad.toml") +
+                           ":2:12: error: executor: unknown executor 'jti': valid executors are "
+                           "interpreter, jit\n");
+  err.str("");
+  write("bad.toml", std::string("jit_cache = 3\n") + kScene);
+  EXPECT_EQ(run_scene(options("bad.toml"), out, err), 1);
+  EXPECT_EQ(err.str(),
+            path("bad.toml") + ":1:13: error: jit_cache: expected a string: \"off\" or a folder\n");
+  // --jit-stats with the interpreter would print nothing: refused, naming both ways to the JIT.
+  err.str("");
+  SceneOptions stats = options();
+  stats.jit_stats = true;
+  EXPECT_EQ(run_scene(stats, out, err), 1);
+  EXPECT_EQ(err.str(), path("tet.toml") +
+                           ": error: --jit-stats needs the JIT: --executor jit, or executor = "
+                           "\"jit\" in the scene\n");
+}
+
 TEST(PositionExpr, EvaluatesOverThePositionAndTheBox) {
   const double p[3] = {1.0, 2.0, 3.0}, lo[3] = {0, 0, 0}, hi[3] = {4, 4, 4};
   EXPECT_DOUBLE_EQ(PositionExpr("x + 2 * y ^ 2 - z").eval(p, lo, hi), 6.0);

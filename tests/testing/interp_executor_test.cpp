@@ -91,10 +91,10 @@ const char* kMapSection =
 
 api::EngineOptions checked_jit(bool corrupt) {
   api::EngineOptions o;
-  o.executor = api::ExecutorKind::Jit;
-  o.jit.threshold = 0;
-  o.jit.check = true;
-  o.jit.corrupt_for_test = corrupt;  // flips the last bit of the compiled map's result
+  o.executor.kind = api::ExecutorKind::Jit;
+  o.executor.threshold = 0;
+  o.executor.check = true;
+  o.corrupt_for_test = corrupt;  // flips the last bit of the compiled map's result
   return o;
 }
 

@@ -128,9 +128,11 @@ TEST(Cli, TestAndRunShareTheJitOptions) {
   for (const char* command : {"test", "run"}) {
     Result r = cli({command, "--help"});
     EXPECT_EQ(r.status, 0);
-    for (const char* option : {"--backend", "--jit-threshold", "--jit-stats", "--check-jit"})
+    for (const char* option : {"--executor", "--backend", "--jit-threshold", "--jit-stats",
+                               "--check-jit", "--jit-cache"})
       EXPECT_NE(r.out.find(option), std::string::npos) << command << " " << option;
-    EXPECT_NE(r.out.find("that differs (bit for bit), naming it; needs --backend jit"),
+    EXPECT_NE(r.out.find("--backend is another name of this option"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("that differs (bit for bit), naming it; needs --executor jit"),
               std::string::npos)
         << r.out;
   }
@@ -146,9 +148,11 @@ TEST(Cli, JitOptionsNeedTheJitBackend) {
       Result r = cli(args);
       EXPECT_EQ(r.status, 2) << command << " " << option;
       EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
-                std::string("simit: error: ") + command + ": " + option + " needs --backend jit");
-      r = cli({command, file.path, option, "--backend", "interpreter"});
-      EXPECT_EQ(r.status, 2) << command << " " << option;
+                std::string("simit: error: ") + command + ": " + option + " needs --executor jit");
+      for (const char* spelling : {"--executor", "--backend"}) {
+        r = cli({command, file.path, option, spelling, "interpreter"});
+        EXPECT_EQ(r.status, 2) << command << " " << option << " " << spelling;
+      }
     }
 }
 

@@ -1,0 +1,57 @@
+// The executor choice: what runs a program's functions and how, as one typed value. Each
+// front end (the command line, the REPL's `:set`, a scene file's keys, the API's Options)
+// parses what its user wrote once, with the functions below, and hands the value down to the
+// engine unchanged.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace simit {
+
+// The reference interpreter, or the tracing JIT (hot map and apply sites and runs of system
+// statements compiled to native code with LLVM; a build with -DSIMIT_WITH_LLVM=ON).
+enum class ExecutorKind { Interpreter, Jit };
+
+struct ExecutorChoice {
+  ExecutorKind kind = ExecutorKind::Interpreter;
+  // Threads of a threaded executor (to come); only 1 runs today.
+  int threads = 1;
+  // jit: executions of a site before it is compiled (0: at once); -1: the JIT's default.
+  long threshold = -1;
+  // jit (`--check-jit`): every compiled call also runs interpreted on the same inputs, and the
+  // first result, field or variable that differs stops the run, naming it.
+  bool check = false;
+  // jit (`--dump=loop-ir,llvm`): print each compiled trace's loop IR and/or LLVM IR.
+  bool dump_loop_ir = false;
+  bool dump_llvm = false;
+  // jit: where compiled kernels are cached between runs: "" the user's cache folder
+  // ($XDG_CACHE_HOME/simit/kernels, else $HOME/.cache/simit/kernels), "off" none, or a folder.
+  std::string jit_cache{};
+  // jit: a site over a large set compiles at its first execution, whatever the threshold (a
+  // production run: its sites run many times). The REPL turns it off and keeps its threshold.
+  bool eager = true;
+};
+
+// "interpreter" or "jit".
+const char* executor_name(ExecutorKind kind);
+
+// The parsers of what a user writes. Each returns nullopt (or false) with `error` naming the
+// bad value and listing the valid ones, e.g. "unknown executor 'jti': valid executors are
+// interpreter, jit".
+std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error);
+// One dump kind, "loop-ir" or "llvm", switched on in `choice`.
+bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string& error);
+// A whole number of executions from 0.
+std::optional<long> parse_jit_threshold(std::string_view text, std::string& error);
+// "off" or a folder (not empty).
+std::optional<std::string> parse_jit_cache(std::string_view text, std::string& error);
+
+// Whether this build has the JIT (configured with -DSIMIT_WITH_LLVM=ON).
+bool jit_available();
+// "" when this build can run `choice`, otherwise why not (a JIT asked of a build without one,
+// more than one thread).
+std::string executor_unavailable(const ExecutorChoice& choice);
+
+}  // namespace simit

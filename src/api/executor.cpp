@@ -1,0 +1,64 @@
+// The executor choice's parsers (simit/executor.h): the one place each spelling a user writes
+// is turned into the typed value, with the one wording of its errors.
+#include "simit/executor.h"
+
+#include <charconv>
+
+namespace simit {
+
+const char* executor_name(ExecutorKind kind) {
+  return kind == ExecutorKind::Jit ? "jit" : "interpreter";
+}
+
+std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error) {
+  if (text == "interpreter") return ExecutorKind::Interpreter;
+  if (text == "jit") return ExecutorKind::Jit;
+  error = "unknown executor '" + std::string(text) + "': valid executors are interpreter, jit";
+  return std::nullopt;
+}
+
+bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string& error) {
+  if (text == "loop-ir") {
+    choice.dump_loop_ir = true;
+  } else if (text == "llvm") {
+    choice.dump_llvm = true;
+  } else {
+    error = "unknown dump kind '" + std::string(text) + "': valid dump kinds are loop-ir, llvm";
+    return false;
+  }
+  return true;
+}
+
+std::optional<long> parse_jit_threshold(std::string_view text, std::string& error) {
+  long n = 0;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec == std::errc() && end == text.data() + text.size() && n >= 0) return n;
+  error = "bad JIT threshold '" + std::string(text) +
+          "': expected a whole number of executions from 0 (0: compile at once)";
+  return std::nullopt;
+}
+
+std::optional<std::string> parse_jit_cache(std::string_view text, std::string& error) {
+  if (!text.empty()) return std::string(text);
+  error = "empty JIT cache: expected 'off' or a folder";
+  return std::nullopt;
+}
+
+bool jit_available() {
+#ifdef SIMIT_HAS_JIT
+  return true;
+#else
+  return false;
+#endif
+}
+
+std::string executor_unavailable(const ExecutorChoice& choice) {
+  if (choice.kind == ExecutorKind::Jit && !jit_available())
+    return "this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON (LLVM 19)";
+  if (choice.threads != 1)
+    return std::to_string(choice.threads) +
+           " threads asked: the executors run on 1 thread (a threaded executor is not built yet)";
+  return "";
+}
+
+}  // namespace simit

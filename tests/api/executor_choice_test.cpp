@@ -1,0 +1,227 @@
+// The executor choice (simit/executor.h): its parsers' values and errors, the API's spellings
+// of it (Options::executor, init("cpu")), the choice reaching the engine whole, and the engine's
+// resolution of the JIT cache setting.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <optional>
+#include <string>
+
+#include "api/engine.h"
+#include "api_test_util.h"
+#include "simit/simit.h"
+
+namespace {
+
+using simit::ExecutorChoice;
+using simit::ExecutorKind;
+using simit::testing::message_of;
+
+constexpr const char* kNoJit = "this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON";
+
+TEST(ExecutorChoice, ParsesTheKindsAndNamesTheValidOnes) {
+  std::string error;
+  EXPECT_EQ(simit::parse_executor_kind("interpreter", error), ExecutorKind::Interpreter);
+  EXPECT_EQ(simit::parse_executor_kind("jit", error), ExecutorKind::Jit);
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(simit::parse_executor_kind("jti", error), std::nullopt);
+  EXPECT_EQ(error, "unknown executor 'jti': valid executors are interpreter, jit");
+  EXPECT_EQ(simit::parse_executor_kind("", error), std::nullopt);
+  EXPECT_EQ(error, "unknown executor '': valid executors are interpreter, jit");
+  EXPECT_STREQ(simit::executor_name(ExecutorKind::Jit), "jit");
+  EXPECT_STREQ(simit::executor_name(ExecutorKind::Interpreter), "interpreter");
+}
+
+TEST(ExecutorChoice, ParsesDumpKindsThresholdsAndCaches) {
+  std::string error;
+  ExecutorChoice c;
+  EXPECT_TRUE(simit::parse_dump_kind("llvm", c, error));
+  EXPECT_TRUE(c.dump_llvm);
+  EXPECT_FALSE(c.dump_loop_ir);
+  EXPECT_TRUE(simit::parse_dump_kind("loop-ir", c, error));
+  EXPECT_TRUE(c.dump_loop_ir);
+  EXPECT_FALSE(simit::parse_dump_kind("asm", c, error));
+  EXPECT_EQ(error, "unknown dump kind 'asm': valid dump kinds are loop-ir, llvm");
+
+  EXPECT_EQ(simit::parse_jit_threshold("0", error), 0L);
+  EXPECT_EQ(simit::parse_jit_threshold("17", error), 17L);
+  for (const char* bad : {"-1", "2.5", "x", "", "3 "}) {
+    EXPECT_EQ(simit::parse_jit_threshold(bad, error), std::nullopt) << bad;
+    EXPECT_EQ(error, std::string("bad JIT threshold '") + bad +
+                         "': expected a whole number of executions from 0 (0: compile at once)");
+  }
+
+  EXPECT_EQ(simit::parse_jit_cache("off", error), "off");
+  EXPECT_EQ(simit::parse_jit_cache("/tmp/kernels", error), "/tmp/kernels");
+  EXPECT_EQ(simit::parse_jit_cache("", error), std::nullopt);
+  EXPECT_EQ(error, "empty JIT cache: expected 'off' or a folder");
+}
+
+TEST(ExecutorChoice, TheDefaultsAndWhatThisBuildRuns) {
+  const ExecutorChoice c;
+  EXPECT_EQ(c.kind, ExecutorKind::Interpreter);
+  EXPECT_EQ(c.threads, 1);
+  EXPECT_EQ(c.threshold, -1);
+  EXPECT_FALSE(c.check);
+  EXPECT_EQ(c.jit_cache, "");
+  EXPECT_TRUE(c.eager);
+  EXPECT_EQ(simit::executor_unavailable(c), "");
+  ExecutorChoice threads;
+  threads.threads = 4;
+  EXPECT_EQ(simit::executor_unavailable(threads),
+            "4 threads asked: the executors run on 1 thread (a threaded executor is not built "
+            "yet)");
+  ExecutorChoice jit;
+  jit.kind = ExecutorKind::Jit;
+  if (simit::jit_available())
+    EXPECT_EQ(simit::executor_unavailable(jit), "");
+  else
+    EXPECT_EQ(simit::executor_unavailable(jit).rfind(kNoJit, 0), 0u)
+        << simit::executor_unavailable(jit);
+}
+
+// init("cpu") is the original's name of its JIT; a build without one says how to get it.
+TEST(ExecutorChoice, InitSpellings) {
+  EXPECT_EQ(simit::init("interpreter").executor.kind, ExecutorKind::Interpreter);
+  if (simit::jit_available()) {
+    EXPECT_EQ(simit::init("cpu").executor.kind, ExecutorKind::Jit);
+    EXPECT_EQ(simit::init("jit", 4).executor.kind, ExecutorKind::Jit);
+  } else {
+    EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("cpu"); }).rfind(kNoJit, 0), 0u);
+  }
+  EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("jti"); }),
+            "unknown executor 'jti': valid executors are interpreter, jit (or cpu, the JIT)");
+  EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("gpu"); }),
+            "no GPU executor in this build: valid executors are cpu (the JIT), jit, interpreter");
+}
+
+const char* kProgram = R"(
+element Node
+  x : float;
+end
+extern nodes : set{Node};
+
+func grow(inout n : Node)
+  n.x = 2.0 * n.x + 1.0;
+end
+
+export func step()
+  apply grow to nodes;
+end
+)";
+
+// Options::executor is handed to the function's engine unchanged: the engine runs the JIT with
+// the threshold and check asked for, and the values are the interpreter's.
+TEST(ExecutorChoice, OptionsReachTheEngine) {
+  if (!simit::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  simit::Options o;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 0;
+  o.executor.check = true;
+  o.executor.jit_cache = "off";
+  simit::Program p(o);
+  p.load_string(kProgram, "grow.sim");
+  simit::Function step = p.compile("step");
+  simit::Set nodes("nodes");
+  simit::FieldRef<double> x = nodes.add_field<double>("x");
+  for (int i = 0; i < 3; ++i) x.set(nodes.add(), 1.0 * i);
+  step.bind("nodes", nodes);
+  step.init();
+  const ExecutorChoice& got = step.executor();
+  EXPECT_EQ(got.kind, ExecutorKind::Jit);
+  EXPECT_EQ(got.threshold, 0);
+  EXPECT_TRUE(got.check);
+  EXPECT_EQ(got.jit_cache, "off");
+  step.run();
+  step.run();
+  // x -> 2x + 1, twice: 0 -> 3, 1 -> 7, 2 -> 11.
+  EXPECT_EQ(double(x(simit::ElementRef(0))), 3.0);
+  EXPECT_EQ(double(x(simit::ElementRef(1))), 7.0);
+  EXPECT_EQ(double(x(simit::ElementRef(2))), 11.0);
+}
+
+// A choice this build cannot run is refused where the API meets it, naming why.
+TEST(ExecutorChoice, OptionsThisBuildCannotRunAreRefused) {
+  simit::Options o;
+  o.executor.threads = 2;
+  simit::Program p(o);
+  p.load_string(kProgram, "grow.sim");
+  EXPECT_EQ(message_of<simit::Error>([&] { (void)p.compile("step"); }),
+            "2 threads asked: the executors run on 1 thread (a threaded executor is not built "
+            "yet)");
+  if (simit::jit_available()) return;
+  simit::Options jit;
+  jit.executor.kind = ExecutorKind::Jit;
+  simit::Program q(jit);
+  q.load_string(kProgram, "grow.sim");
+  EXPECT_EQ(message_of<simit::Error>([&] { (void)q.compile("step"); }).rfind(kNoJit, 0), 0u);
+}
+
+// An environment variable set (or unset) for one test, restored after it.
+struct ScopedEnv {
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    if (value)
+      setenv(name, value, 1);
+    else
+      unsetenv(name);
+  }
+  ~ScopedEnv() {
+    if (old_)
+      setenv(name_, old_->c_str(), 1);
+    else
+      unsetenv(name_);
+  }
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+TEST(ExecutorChoice, TheJitCacheSettingResolves) {
+  using simit::api::jit_cache_folder;
+  EXPECT_EQ(jit_cache_folder("off"), "");
+  EXPECT_EQ(jit_cache_folder("/data/kernels"), "/data/kernels");
+  {
+    ScopedEnv xdg("XDG_CACHE_HOME", "/xdg/cache");
+    ScopedEnv home("HOME", "/home/someone");
+    EXPECT_EQ(jit_cache_folder(""), "/xdg/cache/simit/kernels");
+  }
+  {
+    ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+    ScopedEnv home("HOME", "/home/someone");
+    EXPECT_EQ(jit_cache_folder(""), "/home/someone/.cache/simit/kernels");
+  }
+  {
+    ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+    ScopedEnv home("HOME", nullptr);
+    EXPECT_EQ(jit_cache_folder(""), "");
+  }
+}
+
+// The engine keeps the choice it is given; built directly (tests, tools) it keeps no cache.
+TEST(ExecutorChoice, TheEngineKeepsItsChoice) {
+  auto compiled = simit::api::CompiledProgram::from_source("grow.sim", kProgram);
+  ASSERT_TRUE(compiled->ok());
+  EXPECT_EQ(simit::api::EngineOptions{}.executor.jit_cache, "off");
+  simit::api::EngineOptions o;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 5;
+  o.executor.check = true;
+  if (!simit::jit_available()) {
+    try {
+      simit::api::Engine engine(compiled, o);
+      ADD_FAILURE() << "a JIT engine in a build without one";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(kNoJit, 0), 0u) << e.what();
+    }
+    return;
+  }
+  simit::api::Engine engine(compiled, o);
+  EXPECT_EQ(engine.executor(), ExecutorKind::Jit);
+  EXPECT_EQ(engine.options().executor.threshold, 5);
+  EXPECT_TRUE(engine.options().executor.check);
+  engine.set_executor(ExecutorKind::Interpreter);
+  EXPECT_EQ(engine.options().executor.kind, ExecutorKind::Interpreter);
+  EXPECT_EQ(engine.options().executor.threshold, 5);  // the rest of the choice stays
+}
+
+}  // namespace

@@ -1,0 +1,163 @@
+// The command line's executor options: `--executor` (and its other name, `--backend`),
+// `--jit-threshold`, `--check-jit`, `--dump`, `--jit-cache`, each parsed once into the choice
+// the engine receives; bad values are usage errors naming the valid ones; and a scene run
+// shows the engine ran the JIT with the threshold given.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "cli.h"
+
+namespace simit::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<const char*> argv_of(std::vector<std::string>& args) {
+  args.insert(args.begin(), "simit");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  return argv;
+}
+
+std::optional<ExecutorChoice> parse(std::vector<std::string> args, std::string* error = nullptr) {
+  std::vector<const char*> argv = argv_of(args);
+  std::ostringstream err;
+  std::optional<ExecutorChoice> c =
+      parse_executor_choice(static_cast<int>(argv.size()), argv.data(), err);
+  if (error) *error = err.str();
+  return c;
+}
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result cli(std::vector<std::string> args) {
+  std::vector<const char*> argv = argv_of(args);
+  std::ostringstream out, err;
+  const int status = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
+  return {status, out.str(), err.str()};
+}
+
+TEST(ExecutorOptions, EachSpellingGivesOneChoice) {
+  for (const char* spelling : {"--executor", "--backend"}) {
+    std::optional<ExecutorChoice> c =
+        parse({"run", "f.sim", "--call", "main", spelling, "jit", "--jit-threshold", "3",
+               "--check-jit", "--dump=loop-ir,llvm", "--jit-cache", "off"});
+    ASSERT_TRUE(c) << spelling;
+    EXPECT_EQ(c->kind, ExecutorKind::Jit) << spelling;
+    EXPECT_EQ(c->threshold, 3);
+    EXPECT_TRUE(c->check);
+    EXPECT_TRUE(c->dump_loop_ir);
+    EXPECT_TRUE(c->dump_llvm);
+    EXPECT_EQ(c->jit_cache, "off");
+    EXPECT_EQ(c->threads, 1);
+    EXPECT_TRUE(c->eager);  // a production run
+  }
+  std::optional<ExecutorChoice> test =
+      parse({"test", "--executor=jit", "--jit-threshold=0", "--jit-cache", "/tmp/k", "x.sim"});
+  ASSERT_TRUE(test);
+  EXPECT_EQ(test->kind, ExecutorKind::Jit);
+  EXPECT_EQ(test->threshold, 0);
+  EXPECT_FALSE(test->check);
+  EXPECT_EQ(test->jit_cache, "/tmp/k");
+  // The defaults: the interpreter; `simit run` caches in the user's folder, `simit test` nowhere.
+  std::optional<ExecutorChoice> run = parse({"run", "s.toml"});
+  ASSERT_TRUE(run);
+  EXPECT_EQ(run->kind, ExecutorKind::Interpreter);
+  EXPECT_EQ(run->threshold, -1);
+  EXPECT_EQ(run->jit_cache, "");
+  std::optional<ExecutorChoice> tests = parse({"test", "x.sim"});
+  ASSERT_TRUE(tests);
+  EXPECT_EQ(tests->jit_cache, "off");
+}
+
+// Each bad value is a usage error (status 2) that names it and the valid ones.
+TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--executor", "jti"},
+       "--executor: unknown executor 'jti': valid executors are interpreter, jit"},
+      {{"--backend", "gpu"},
+       "--executor: unknown executor 'gpu': valid executors are interpreter, jit"},
+      {{"--jit-threshold", "-1"},
+       "--jit-threshold: bad JIT threshold '-1': expected a whole number of executions from 0 "
+       "(0: compile at once)"},
+      {{"--dump", "loop-ir,asm"},
+       "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, llvm"},
+      {{"--jit-cache", ""}, "--jit-cache: empty JIT cache: expected 'off' or a folder"},
+  };
+  for (const auto& [option, message] : cases) {
+    std::vector<std::string> args = {"run", "f.sim", "--call", "main"};
+    args.insert(args.end(), option.begin(), option.end());
+    Result r = cli(args);
+    EXPECT_EQ(r.status, 2) << message;
+    EXPECT_EQ(r.err.substr(0, r.err.find('\n')), "simit: error: " + message);
+    std::string error;
+    EXPECT_FALSE(parse(args, &error));
+    EXPECT_EQ(error, "simit: error: " + message + "\n");
+  }
+  Result r = cli({"test", "--executor", "jti", "x.sim"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+            "simit: error: --executor: unknown executor 'jti': valid executors are interpreter, "
+            "jit");
+}
+
+// What the command line gives reaches the engine: the JIT runs the scene's apply, compiling
+// it after `--jit-threshold` interpreted executions, whichever name chose it.
+TEST(ExecutorOptions, TheEngineRunsTheChoice) {
+  std::string pattern = (fs::temp_directory_path() / "simit-executor-XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const fs::path dir = pattern;
+  std::ofstream(dir / "nudge.sim") << "element Point\n  x : vector[3](float);\n  w : float;\nend\n"
+                                      "extern points : set{Point};\n"
+                                      "func nudge(inout p : Point)\n  p.w = p.w + 1.0;\nend\n"
+                                      "export func step()\n  apply nudge to points;\nend\n";
+  std::ofstream(dir / "scene.toml")
+      << "program = \"nudge.sim\"\nstep = \"step\"\nframes = 5\n[sets.points]\n"
+         "generate = \"square_cloth\"\nn = 3\nelements = \"vertices\"\n[sets.points.fields]\n"
+         "x = \"position\"\nw = 1.0\n";
+  const std::string scene = (dir / "scene.toml").string();
+  if (!jit_available()) {
+    Result r = cli({"run", "--executor", "jit", scene});
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err.rfind(scene + ": error: this build has no JIT: configure with "
+                                  "-DSIMIT_WITH_LLVM=ON",
+                          0),
+              0u)
+        << r.err;
+    fs::remove_all(dir);
+    GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  }
+  // 5 frames: with threshold T the apply runs T times interpreted, then 5 - T compiled.
+  for (const auto& [spelling, threshold, calls] :
+       {std::tuple{"--executor", "0", 5L}, std::tuple{"--backend", "2", 3L}}) {
+    Result r = cli({"run", spelling, "jit", "--jit-threshold", threshold, "--jit-stats",
+                    "--jit-cache", "off", scene});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const size_t table = r.out.find("jit traces:\n");
+    ASSERT_NE(table, std::string::npos) << r.out;
+    const size_t site = r.out.find("\n  nudge (line ", table);
+    ASSERT_NE(site, std::string::npos) << r.out;
+    const std::string row = r.out.substr(site + 1, r.out.find('\n', site + 1) - site - 1);
+    EXPECT_TRUE(row.ends_with("  compiled")) << row;
+    std::istringstream fields(row.substr(row.find(')') + 1));
+    double compile_ms = 0;
+    long n = 0;
+    fields >> compile_ms >> n;
+    EXPECT_EQ(n, calls) << spelling << " " << threshold << ": " << row;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace simit::tools
