@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -577,6 +578,69 @@ TEST(KernelCache, HostCallsResolveToTheLoadingTargetsFunctions) {
   run(*second);
   EXPECT_EQ(second_calls.load(), 2);
   EXPECT_EQ(first_calls.load(), 2);
+}
+
+// Another process (this test binary again, other addresses under ASLR) links what this one
+// stored: the fem-like map, the system loop and, where the emitter calls the host by name,
+// the decomposing apply, whose call then reaches the other process's function.
+constexpr const char* kChildFolder = "SIMIT_KERNEL_CACHE_TEST_FOLDER";
+
+TEST(KernelCache, AnotherProcessLinksTheStoredKernels) {
+  TempFolder dir;
+  compile(*target(dir.str()), fem_like(0.0));
+  std::string error;
+  ASSERT_TRUE(target(dir.str())->compile(counting_loop(1.5), false, error)) << error;
+  compile(*target(dir.str(), reinterpret_cast<void*>(&first_decompose)), decomposing());
+  const size_t stored = dir.entries().size();
+  ASSERT_GE(stored, 2u);
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const std::string command = kChildFolder + ("=" + dir.str()) + " " + self +
+                              " --gtest_filter=KernelCache.ChildLinksTheStoredKernels > " +
+                              (dir.path / "child.log").string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  EXPECT_EQ(status, 0) << read_file(dir.path / "child.log");
+  EXPECT_NE(read_file(dir.path / "child.log").find("[  PASSED  ] 1 test"), std::string::npos)
+      << read_file(dir.path / "child.log");
+  EXPECT_EQ(dir.entries().size(), stored);  // nothing compiled again
+}
+
+// The child's half: run only by the test above, in a process of its own.
+TEST(KernelCache, ChildLinksTheStoredKernels) {
+  const char* folder = std::getenv(kChildFolder);
+  if (!folder) GTEST_SKIP() << "the child half of AnotherProcessLinksTheStoredKernels";
+  const Mesh mesh;
+  auto map = compile(*target(folder), fem_like(0.0));
+  ASSERT_TRUE(map);
+  EXPECT_TRUE(map->cached);
+  expect_same_bits(run_map(*map, mesh), reference(mesh, 0.0));
+  std::string error;
+  auto loop = target(folder)->compile(counting_loop(1.5), false, error);
+  ASSERT_TRUE(loop) << error;
+  EXPECT_TRUE(loop->cached);
+  double scalars[2] = {1.0, 0.0};
+  const char interrupt = 0;
+  SystemArgs args;
+  args.scalars = scalars;
+  args.interrupt = &interrupt;
+  EXPECT_EQ(loop->run(args), 0);
+  EXPECT_EQ(scalars[1], 10.0);
+  auto apply = compile(*target(folder, reinterpret_cast<void*>(&second_decompose)), decomposing());
+  ASSERT_TRUE(apply);
+  // Stored where the emitter calls the host by name (then the three entries).
+  size_t entries = 0;
+  for (const auto& f : fs::directory_iterator(folder)) entries += f.path().extension() == ".o";
+  if (entries == 3) {
+    EXPECT_TRUE(apply->cached);
+  }
+  double field[4] = {1.5, 0, 0, 1};
+  void* arrays[] = {field};
+  MapArgs margs;
+  margs.arrays = arrays;
+  int32_t failed = -1;
+  EXPECT_EQ(apply->run(margs, ElementRange{0, 1}, &failed), 0);
+  EXPECT_EQ(field[0], 3.0);
+  EXPECT_EQ(second_calls.load(), 1);
+  EXPECT_EQ(first_calls.load(), 0);
 }
 
 }  // namespace
