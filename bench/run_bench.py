@@ -3,7 +3,8 @@
 
 Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
                           [--only SUBSTRING] [--baseline-only SUBSTRING]...
-                          [--compare-baseline LABEL=DIR]... [--fem-sim-form]
+                          [--compare-baseline LABEL=DIR]... [--compare-simit LABEL=DIR]...
+                          [--fem-sim-form]
                           [--executors interpreter,...] [--out FILE]...
 
 For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon160k;
@@ -35,7 +36,9 @@ prints one row per run:
 
 --baseline-only SUBSTRING runs only the baselines on the matching cases (dragon160k takes
 about 40 s a frame under the interpreter). --compare-baseline LABEL=DIR adds rows for the
-baselines of another build folder (an older version, say); --fem-sim-form adds a row for
+baselines of another build folder (an older version, say); --compare-simit LABEL=DIR runs
+the executors of another build's simit beside this one's, case by case (the previous commit,
+to show a change costs nothing); --fem-sim-form adds a row for
 fem_baseline --sim-form, whose stiffness is evaluated column by column from dP (as fem.sim
 wrote it before) rather than in closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
 machine's load inflates far less than wall time (compare baselines with baselines then).
@@ -352,15 +355,20 @@ def measure(case, args, workdir, notes):
         row, _, positions = run_baseline(case, args, workdir, notes, label, build, extra)
         others.append((row, positions))
     reference = None  # the first executor's final positions: the error column's reference
-    for name in ([] if baseline_only(case, args) else args.executors):
+    # Each executor of this simit, then of each --compare-simit build, side by side.
+    runs = [(name, name, args.simit) for name in args.executors]
+    runs += [(name + " " + label, name, os.path.join(build, "tools", "simit"))
+             for label, build in args.compare_simit for name in args.executors]
+    for runner, name, simit in ([] if baseline_only(case, args) else runs):
         make_argv, available = EXECUTORS[name]
-        if not available(args.simit):
-            notes.append("%s: executor %s is not available in this simit" % (case.name, name))
+        if not available(simit):
+            notes.append("%s: executor %s is not available in %s" % (case.name, name, simit))
             continue
-        outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" + name)
+        outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" +
+                              re.sub(r"[^\w-]+", "_", runner))
         shutil.rmtree(outdir, ignore_errors=True)
         positions = outdir + "-final.csv"
-        argv = make_argv(args.simit, case.scene, frames, outdir, positions)
+        argv = make_argv(simit, case.scene, frames, outdir, positions)
         print("  " + " ".join(argv), flush=True)
         code, peak, wall = run_child(argv, outdir + ".log", args.timeout)
         try:
@@ -368,13 +376,13 @@ def measure(case, args, workdir, notes):
         except (OSError, RuntimeError) as e:
             data = {"ms": [], "assembly": [], "solve": [], "iterations": [], "residual": [],
                     "energy": []}
-            notes.append("%s %s: %s" % (case.name, name, e))
+            notes.append("%s %s: %s" % (case.name, runner, e))
         if code != 0:
             notes.append("%s %s exited with %d after %.0f s (log %s.log)"
-                         % (case.name, name, code, wall, outdir))
-        row = row_of(case, name, frames, code, peak, data, count_loc(case.program))
+                         % (case.name, runner, code, wall, outdir))
+        row = row_of(case, runner, frames, code, peak, data, count_loc(case.program))
         for trace in jit_traces(outdir + ".log"):
-            notes.append("%s %s trace: %s" % (case.name, name, trace))
+            notes.append("%s %s trace: %s" % (case.name, runner, trace))
         if base_row["ms"] > 0:
             row["ratio"] = row["ms"] / base_row["ms"]
         if reference is None and code == 0:
@@ -387,9 +395,9 @@ def measure(case, args, workdir, notes):
                      enumerate(zip(data["iterations"], base["iterations"])) if a != b]
             if diffs or len(data["iterations"]) != len(base["iterations"]):
                 notes.append("%s %s: CG iterations differ from the baseline in frames %s"
-                             % (case.name, name, ", ".join("%d (%d vs %d)" % d for d in diffs)
+                             % (case.name, runner, ", ".join("%d (%d vs %d)" % d for d in diffs)
                                 or "(frame counts differ)"))
-        note_energy_differences(case, name, data["energy"], base["energy"], notes)
+        note_energy_differences(case, runner, data["energy"], base["energy"], notes)
         rows.append(row)
     for row, positions in [(base_row, base_positions)] + others:
         if row is not base_row and base_row["ms"] > 0:
@@ -482,6 +490,10 @@ def main():
     p.add_argument("--compare-baseline", action="append", default=[], metavar="LABEL=DIR",
                    help="also run the baselines of another build folder DIR as rows LABEL "
                         "(e.g. an older version of the baselines; repeatable)")
+    p.add_argument("--compare-simit", action="append", default=[], metavar="LABEL=DIR",
+                   help="also run the executors of another build folder DIR's simit, as rows "
+                        "'EXECUTOR LABEL' beside this build's (e.g. the previous commit; "
+                        "repeatable)")
     p.add_argument("--baseline-cpu-clock", action="store_true",
                    help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
                         "busy machine inflates less than wall time; simit stays on wall time")
@@ -510,12 +522,20 @@ def main():
             p.error("--compare-baseline needs LABEL=DIR, got '%s'" % spec)
         compare.append((label, os.path.abspath(build)))
     args.compare_baseline = compare
+    others = []
+    for spec in args.compare_simit:
+        label, sep, build = spec.partition("=")
+        if not sep or not label or not build:
+            p.error("--compare-simit needs LABEL=DIR, got '%s'" % spec)
+        others.append((label, os.path.abspath(build)))
+    args.compare_simit = others
     for e in args.executors:
         if e not in EXECUTORS:
             p.error("unknown executor '%s' (known: %s)" % (e, ", ".join(EXECUTORS)))
-    missing = [f for f in [args.simit] + [os.path.join(build, "bench", x + "_baseline")
-                                          for build in [args.build] + [b for _, b in compare]
-                                          for x in ("fem", "springs", "cloth")]
+    simits = [args.simit] + [os.path.join(b, "tools", "simit") for _, b in args.compare_simit]
+    missing = [f for f in simits + [os.path.join(build, "bench", x + "_baseline")
+                                    for build in [args.build] + [b for _, b in compare]
+                                    for x in ("fem", "springs", "cloth")]
                if not os.access(f, os.X_OK)]
     if missing:
         sys.exit("missing: %s (build the targets simit and *_baseline in %s)"
