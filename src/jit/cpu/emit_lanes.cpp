@@ -1,10 +1,17 @@
 // Map kernels in SIMD lanes: every value for kLanes elements at once, then each element's
-// statements in order (jit/cpu/emitter.h, docs/jit.md "Four elements at once").
+// statements in order, reading those values back (jit/cpu/cpu_hooks.h, docs/jit.md "Four
+// elements at once").
 #include <functional>
+#include <unordered_map>
+#include <unordered_set>
 
-#include "jit/cpu/emitter.h"
+#include "jit/cpu/cpu_hooks.h"
+#include "jit/tunables.h"
 
 namespace simit::jit::cpu {
+
+using llvm::IRBuilder;
+using llvm::Value;
 
 // Whether a map kernel can compute kLanes elements at once: every value is then an SSA local
 // or an expression of them, evaluated for all lanes with the same IEEE operations lane by
@@ -44,21 +51,55 @@ llvm::Type* root_type(IRBuilder<>& b, Ty t) {
   return t == Ty::F64 ? b.getDoubleTy() : t == Ty::I32 ? b.getInt32Ty() : b.getInt8Ty();
 }
 
-}  // namespace
+// Runs the lanes of one group of elements (run_lanes) and, while their statements are
+// emitted one element at a time, hands them the values computed for all lanes.
+class Lanes : public codegen::Precomputed {
+ public:
+  explicit Lanes(codegen::MapEmitter& k) : k_(k), b_(k.builder()), t_(k.trace()) {}
+  void run(Value* first, Value* end);
 
-void Emitter::visit(Value* e) {
-  element_ = e;
-  endpoints_.clear();
-  if (t_->arity == 0) return;
-  Value* base = b_.CreateMul(b_.CreateSExt(e, b_.getInt64Ty()), b_.getInt64(t_->arity));
-  for (int k = 0; k < t_->arity; ++k)
-    endpoints_.push_back(
-        b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), endpoint_table_,
-                                                            b_.CreateAdd(base, b_.getInt64(k)))));
-}
+  Value* value(const Expr& e) override {
+    auto root = roots_.find(&e);
+    return root == roots_.end() ? nullptr : load_root(e.ty, root->second);
+  }
+  int side_by_side(const std::vector<Stmt>& body, size_t i) override;
+  Value* side_by_side_values(const Stmt& s, int width) override {
+    auto* ty = llvm::FixedVectorType::get(b_.getDoubleTy(), static_cast<unsigned>(width));
+    return b_.CreateAlignedLoad(ty, root_address(roots_.at(s.value.get())), llvm::Align(8));
+  }
+
+ private:
+  void allocate_roots();
+  void count_roots(const std::vector<Stmt>& body);
+  Value* lanes(const Expr& e);
+  Value* lanes_uncached(const Expr& e);
+  void lanes_block(const std::vector<Stmt>& body);
+  void spill(const Expr& e);
+  void flush_pending(int first);
+  Value* root_address(int row);
+  Value* load_root(Ty t, int row);
+
+  codegen::MapEmitter& k_;
+  IRBuilder<>& b_;
+  const Trace& t_;
+  // Each expression's value for every lane (memoised by node: traces share nodes), the
+  // locals', and each lane's element and endpoints.
+  std::unordered_map<const Expr*, Value*> vmemo_;
+  std::vector<Value*> vlocal_, element_lane_;
+  std::vector<std::vector<Value*>> endpoint_lane_;
+  // The values the element-by-element statements read (conditions, written values), stored
+  // per lane in one buffer per type: root -> its row.
+  std::unordered_map<const Expr*, int> roots_;
+  std::unordered_set<const Expr*> spilled_;
+  int root_rows_[3] = {0, 0, 0};
+  Value* root_buffer_[3] = {nullptr, nullptr, nullptr};
+  Value* lane_ = nullptr;        // the lane whose statements are being emitted (i64), or null
+  uint64_t root_stride_ = 0;     // float rows per lane in the buffer (a multiple of 4)
+  std::vector<Value*> pending_;  // float roots computed, not yet stored
+};
 
 // The statements' roots, each given its row in its type's buffer.
-void Emitter::count_roots(const std::vector<Stmt>& body) {
+void Lanes::count_roots(const std::vector<Stmt>& body) {
   auto root = [&](const ExprRef& e) {
     if (!e || trivial(*e) || roots_.count(e.get())) return;
     roots_[e.get()] = root_rows_[ty_index(e->ty)]++;
@@ -79,9 +120,9 @@ void Emitter::count_roots(const std::vector<Stmt>& body) {
 
 // The roots' rows and their buffers, in the function's entry block (float rows padded to a
 // multiple of four for the transposed stores).
-void Emitter::allocate_roots() {
-  count_roots(t_->body);
-  llvm::BasicBlock& entry = fn_->getEntryBlock();
+void Lanes::allocate_roots() {
+  count_roots(t_.body);
+  llvm::BasicBlock& entry = k_.function()->getEntryBlock();
   llvm::IRBuilder<> at_entry(&entry, entry.begin());
   root_stride_ = static_cast<uint64_t>((root_rows_[0] + 3) / 4 * 4);
   for (Ty ty : {Ty::F64, Ty::I32, Ty::Bool}) {
@@ -97,36 +138,63 @@ void Emitter::allocate_roots() {
 
 // Elements first .. first + kLanes - 1 (those past `end` compute element end - 1 again, and
 // their statements do not run): every value for all lanes, then the statements lane by lane.
-void Emitter::run_lanes(Value* first, Value* end) {
+void Lanes::run(Value* first, Value* end) {
+  allocate_roots();
   llvm::Type* i32 = b_.getInt32Ty();
   Value* last = b_.CreateSub(end, b_.getInt32(1));
   element_lane_.clear();
-  endpoint_lane_.assign(static_cast<size_t>(t_->arity), {});
+  endpoint_lane_.assign(static_cast<size_t>(t_.arity), {});
   for (int l = 0; l < kLanes; ++l) {
     Value* e = b_.CreateAdd(first, b_.getInt32(static_cast<uint32_t>(l)));
     if (l > 0) e = b_.CreateSelect(b_.CreateICmpSLT(e, end), e, last);
-    visit(e);
+    k_.visit(e);
     element_lane_.push_back(e);
-    for (int k = 0; k < t_->arity; ++k)
-      endpoint_lane_[static_cast<size_t>(k)].push_back(endpoints_[k]);
+    for (int k = 0; k < t_.arity; ++k)
+      endpoint_lane_[static_cast<size_t>(k)].push_back(k_.endpoints()[k]);
   }
   vmemo_.clear();
   spilled_.clear();
-  vlocal_.assign(local_types_.size(), nullptr);
-  lanes_block(t_->body);
+  vlocal_.assign(t_.locals.size(), nullptr);
+  lanes_block(t_.body);
   if (!pending_.empty()) flush_pending(root_rows_[0] - static_cast<int>(pending_.size()));
   Value* left = b_.CreateSub(end, first);
   Value* count =
       b_.CreateSelect(b_.CreateICmpSLT(left, b_.getInt32(kLanes)), left, b_.getInt32(kLanes));
-  loop(llvm::ConstantInt::get(i32, 0), count, [&](Value* l) {
+  k_.loop(llvm::ConstantInt::get(i32, 0), count, [&](Value* l) {
     lane_ = b_.CreateSExt(l, b_.getInt64Ty());
-    visit(b_.CreateAdd(first, l));
-    block(t_->body);
+    k_.set_precomputed(this);
+    k_.visit(b_.CreateAdd(first, l));
+    k_.block(t_.body);
+    k_.set_precomputed(nullptr);
     lane_ = nullptr;
   });
 }
 
-void Emitter::lanes_block(const std::vector<Stmt>& body) {
+// How many statements from body[i] on add neighbouring components of one block from
+// neighbouring rows of the lanes' buffer.
+int Lanes::side_by_side(const std::vector<Stmt>& body, size_t i) {
+  const Stmt& first = body[i];
+  if (first.value->ty != Ty::F64 || !roots_.count(first.value.get())) return 1;
+  const int row = roots_.at(first.value.get());
+  auto same_place = [&](const Stmt& s) {
+    if (s.kind != StmtKind::Assemble || s.slot != first.slot || s.pair != first.pair) return false;
+    if (s.pair >= 0) return true;
+    const Expr &a = *s.index, &b = *first.index;
+    return &a == &b || ((a.kind == ExprKind::Endpoint || a.kind == ExprKind::Element) &&
+                        a.kind == b.kind && a.slot == b.slot);
+  };
+  int n = 1;
+  while (i + static_cast<size_t>(n) < body.size()) {
+    const Stmt& s = body[i + static_cast<size_t>(n)];
+    if (!same_place(s) || s.comp != first.comp + n || s.value->ty != Ty::F64) break;
+    auto r = roots_.find(s.value.get());
+    if (r == roots_.end() || r->second != row + n) break;
+    ++n;
+  }
+  return n;
+}
+
+void Lanes::lanes_block(const std::vector<Stmt>& body) {
   for (const Stmt& s : body) {
     switch (s.kind) {
       case StmtKind::SetLocal: vlocal_[s.slot] = lanes(*s.value); break;
@@ -149,7 +217,7 @@ void Emitter::lanes_block(const std::vector<Stmt>& body) {
 // row (row * kLanes + lane); floats lie lane by lane (lane * stride + row), so that one
 // element's block is contiguous and its additions take four components at a time: each four
 // rows are transposed in registers before they are stored.
-void Emitter::spill(const Expr& e) {
+void Lanes::spill(const Expr& e) {
   if (trivial(e) || !spilled_.insert(&e).second) return;
   Value* v = lanes(e);
   const int t = ty_index(e.ty);
@@ -167,7 +235,7 @@ void Emitter::spill(const Expr& e) {
 
 // Stores the pending float rows first, first + 1, ...: four of them transposed (one vector
 // per lane), fewer component by component.
-void Emitter::flush_pending(int first) {
+void Lanes::flush_pending(int first) {
   llvm::Type* f64 = b_.getDoubleTy();
   auto at = [&](int lane, int row) {
     return b_.CreateConstInBoundsGEP1_64(
@@ -193,13 +261,13 @@ void Emitter::flush_pending(int first) {
   pending_.clear();
 }
 
-Value* Emitter::root_address(int row) {
+Value* Lanes::root_address(int row) {
   return b_.CreateInBoundsGEP(b_.getDoubleTy(), root_buffer_[0],
                               b_.CreateAdd(b_.CreateMul(lane_, b_.getInt64(root_stride_)),
                                            b_.getInt64(static_cast<uint64_t>(row))));
 }
 
-Value* Emitter::load_root(Ty t, int row) {
+Value* Lanes::load_root(Ty t, int row) {
   if (t == Ty::F64) return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
   llvm::Type* elem = root_type(b_, t);
   Value* at =
@@ -209,7 +277,7 @@ Value* Emitter::load_root(Ty t, int row) {
   return t == Ty::Bool ? b_.CreateICmpNE(v, b_.getInt8(0)) : v;
 }
 
-Value* Emitter::lanes(const Expr& e) {
+Value* Lanes::lanes(const Expr& e) {
   auto it = vmemo_.find(&e);
   if (it != vmemo_.end()) return it->second;
   Value* v = lanes_uncached(e);
@@ -217,7 +285,7 @@ Value* Emitter::lanes(const Expr& e) {
   return v;
 }
 
-Value* Emitter::lanes_uncached(const Expr& e) {
+Value* Lanes::lanes_uncached(const Expr& e) {
   auto gather = [&](const std::vector<Value*>& per_lane) {
     Value* v = llvm::PoisonValue::get(llvm::FixedVectorType::get(per_lane[0]->getType(), kLanes));
     for (int l = 0; l < kLanes; ++l)
@@ -226,7 +294,7 @@ Value* Emitter::lanes_uncached(const Expr& e) {
   };
   switch (e.kind) {
     case ExprKind::Const:
-    case ExprKind::Scalar: return b_.CreateVectorSplat(kLanes, expr(e));
+    case ExprKind::Scalar: return b_.CreateVectorSplat(kLanes, k_.expr(e));
     case ExprKind::Element: return gather(element_lane_);
     case ExprKind::Endpoint: return gather(endpoint_lane_[static_cast<size_t>(e.slot)]);
     case ExprKind::Load: {
@@ -240,16 +308,20 @@ Value* Emitter::lanes_uncached(const Expr& e) {
         Value* v = lanes(at);
         for (int l = 0; l < kLanes; ++l) index.push_back(b_.CreateExtractElement(v, l));
       }
-      for (Value* i : index) values.push_back(load(e, i));
+      for (Value* i : index) values.push_back(k_.load(e, i));
       return gather(values);
     }
     case ExprKind::Local: return vlocal_[static_cast<size_t>(e.slot)];
     default: {
       std::vector<Value*> args;
       for (const ExprRef& o : e.ops) args.push_back(lanes(*o));
-      return combine(e, args);
+      return k_.combine(e, args);
     }
   }
 }
+
+}  // namespace
+
+void run_lanes(codegen::MapEmitter& k, Value* first, Value* end) { Lanes(k).run(first, end); }
 
 }  // namespace simit::jit::cpu

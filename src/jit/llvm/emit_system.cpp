@@ -1,33 +1,20 @@
 // Solver loops: a system trace's vector operations as loops, the sparse products over the
-// solver's column copy, and the passes with sums by runs (jit/cpu/emitter.h).
+// solver's column copy, and the passes with sums by runs (jit/llvm/emitter.h).
 #include <algorithm>
 #include <bit>
 #include <functional>
 
-#include "jit/cpu/emitter.h"
+#include <llvm/IR/MDBuilder.h>
 
-namespace simit::jit::cpu {
+#include "jit/llvm/emitter.h"
+#include "jit/target.h"
+#include "jit/tunables.h"
 
-void Emitter::loop(Value* begin, Value* end, const std::function<void(Value*)>& body) {
-  llvm::BasicBlock* pre = b_.GetInsertBlock();
-  auto* head = llvm::BasicBlock::Create(ctx_, "loop", fn_);
-  auto* inside = llvm::BasicBlock::Create(ctx_, "loop.body", fn_);
-  auto* done = llvm::BasicBlock::Create(ctx_, "loop.done", fn_);
-  b_.CreateBr(head);
-  b_.SetInsertPoint(head);
-  llvm::PHINode* i = b_.CreatePHI(begin->getType(), 2);
-  i->addIncoming(begin, pre);
-  b_.CreateCondBr(b_.CreateICmpSLT(i, end), inside, done);
-  b_.SetInsertPoint(inside);
-  body(i);
-  i->addIncoming(b_.CreateAdd(i, llvm::ConstantInt::get(begin->getType(), 1)), b_.GetInsertBlock());
-  b_.CreateBr(head);
-  b_.SetInsertPoint(done);
-}
+namespace simit::jit::codegen {
 
 // One op of a system trace. A product runs row block by row block: each component's sum
 // over the row's blocks in pattern order, then the fused body for each component of the row.
-void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
+void SystemEmitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   switch (op.kind) {
     case VectorOp::Kind::Scalar: return block(op.body);
     case VectorOp::Kind::Pass:
@@ -50,87 +37,88 @@ void Emitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
         element_ = k;
         block(op.body);
       });
-    case VectorOp::Kind::SpMV: {
-      const int bs = op.block;
-      llvm::Type* i64 = b_.getInt64Ty();
-      llvm::Type* f64 = b_.getDoubleTy();
-      // The row's bs sums are the lanes of one vector: block column j (stored contiguously,
-      // the controller transposes the blocks) times x_j, summed over j lane by lane, is the
-      // block's part, added to the row's sums (docs/arithmetic.md). The part needs no +0.0
-      // start: a row sum starts at +0.0 and so is never -0.0, and a part that differs only
-      // in the sign of a zero then adds the same.
-      // Each column is read as one vector of `width` lanes (a power of two): a 3 x 3 block's
-      // column j is loaded with the next block's first value (or the copy's padding, see
-      // PrunedMatrix) in lane 3, which is computed and never read, so a load is one
-      // instruction rather than three.
-      const unsigned width = std::bit_ceil(static_cast<unsigned>(bs));
-      auto* vec = llvm::FixedVectorType::get(f64, width);
-      Value* sums;
-      {
-        llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
-        sums = entry.CreateAlloca(vec);
-      }
-      loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
-        b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
-        Value* lo = b_.CreateSExt(
-            b_.CreateLoad(b_.getInt32Ty(),
-                          b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
-            i64);
-        Value* hi =
-            b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
-                                        b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
-                                                             b_.CreateAdd(r, b_.getInt64(1)))),
-                          i64);
-        loop(lo, hi, [&](Value* k) {
-          Value* col = b_.CreateSExt(
-              b_.CreateLoad(b_.getInt32Ty(),
-                            b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
-              i64);
-          Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
-          Value* xc = b_.CreateMul(col, b_.getInt64(bs));
-          Value* part = nullptr;
-          for (int j = 0; j < bs; ++j) {
-            Value* a;
-            if (st_->matrices_in_place) {
-              // The matrix's own blocks are row-major: column j is every bs-th value, and the
-              // lanes past bs stay zero (their sums are never read).
-              a = llvm::ConstantFP::get(vec, 0.0);
-              for (int i = 0; i < bs; ++i)
-                a = b_.CreateInsertElement(
-                    a,
-                    b_.CreateLoad(f64,
-                                  b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                       b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
-                    static_cast<uint64_t>(i));
-            } else {
-              llvm::LoadInst* column =
-                  b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                          b_.CreateAdd(blk, b_.getInt64(j * bs))));
-              column->setAlignment(llvm::Align(8));
-              a = column;
-            }
-            Value* x = b_.CreateLoad(
-                f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
-            Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
-            part = part ? b_.CreateFAdd(part, term) : term;
-          }
-          b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
-        });
-        Value* row = b_.CreateMul(r, b_.getInt64(bs));
-        Value* total = b_.CreateLoad(vec, sums);
-        for (int i = 0; i < bs; ++i)
-          b_.CreateStore(
-              b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
-              b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
-        run_of(op, row, bs);
-      });
-      return;
-    }
+    case VectorOp::Kind::SpMV: return spmv(op, sizes);
   }
 }
 
+// arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
+// component of the row just computed.
+void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
+  const int bs = op.block;
+  llvm::Type* i64 = b_.getInt64Ty();
+  llvm::Type* f64 = b_.getDoubleTy();
+  // The row's bs sums are the lanes of one vector: block column j (stored contiguously,
+  // the controller transposes the blocks) times x_j, summed over j lane by lane, is the
+  // block's part, added to the row's sums (docs/arithmetic.md). The part needs no +0.0
+  // start: a row sum starts at +0.0 and so is never -0.0, and a part that differs only
+  // in the sign of a zero then adds the same.
+  // Each column is read as one vector of `width` lanes (a power of two): a 3 x 3 block's
+  // column j is loaded with the next block's first value (or the copy's padding, see
+  // PrunedMatrix) in lane 3, which is computed and never read, so a load is one
+  // instruction rather than three.
+  const unsigned width = std::bit_ceil(static_cast<unsigned>(bs));
+  auto* vec = llvm::FixedVectorType::get(f64, width);
+  Value* sums;
+  {
+    llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
+    sums = entry.CreateAlloca(vec);
+  }
+  loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
+    b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
+    Value* lo =
+        b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
+                                    b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+                      i64);
+    Value* hi = b_.CreateSExt(
+        b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
+                                                            b_.CreateAdd(r, b_.getInt64(1)))),
+        i64);
+    loop(lo, hi, [&](Value* k) {
+      Value* col =
+          b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
+                                      b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
+                        i64);
+      Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
+      Value* xc = b_.CreateMul(col, b_.getInt64(bs));
+      Value* part = nullptr;
+      for (int j = 0; j < bs; ++j) {
+        Value* a;
+        if (st_.matrices_in_place) {
+          // The matrix's own blocks are row-major: column j is every bs-th value, and the
+          // lanes past bs stay zero (their sums are never read).
+          a = llvm::ConstantFP::get(vec, 0.0);
+          for (int i = 0; i < bs; ++i)
+            a = b_.CreateInsertElement(
+                a,
+                b_.CreateLoad(f64,
+                              b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                   b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
+                static_cast<uint64_t>(i));
+        } else {
+          llvm::LoadInst* column =
+              b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                      b_.CreateAdd(blk, b_.getInt64(j * bs))));
+          column->setAlignment(llvm::Align(8));
+          a = column;
+        }
+        Value* x = b_.CreateLoad(
+            f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
+        Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
+        part = part ? b_.CreateFAdd(part, term) : term;
+      }
+      b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
+    });
+    Value* row = b_.CreateMul(r, b_.getInt64(bs));
+    Value* total = b_.CreateLoad(vec, sums);
+    for (int i = 0; i < bs; ++i)
+      b_.CreateStore(b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
+                     b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
+    run_of(op, row, bs);
+  });
+}
+
 // An op in a branch of an `if` runs when its guard holds.
-void Emitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
+void SystemEmitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   if (op.guard < 0) return vector_op(op, sizes);
   auto* run = llvm::BasicBlock::Create(ctx_, "guarded", fn_);
   auto* join = llvm::BasicBlock::Create(ctx_, "guarded.done", fn_);
@@ -144,7 +132,7 @@ void Emitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
 // Whether a pass with sums by runs can take four runs at a time in vectors: its statements
 // store components of vectors at the visited component, or add a term to one of its sums, and
 // read only components at the visited component, constants and other scalars.
-bool Emitter::pass_in_lanes(const VectorOp& op) const {
+bool SystemEmitter::pass_in_lanes(const VectorOp& op) const {
   if (kLanes != 4) return false;
   auto is_sum = [&](int slot) {
     return std::find(op.sums.begin(), op.sums.end(), slot) != op.sums.end();
@@ -186,7 +174,7 @@ bool Emitter::pass_in_lanes(const VectorOp& op) const {
 }
 
 // A lane-wise expression over the components first .. first + 3 (pass_in_lanes).
-Value* Emitter::pass_lanes(const Expr& e, Value* first) {
+Value* SystemEmitter::pass_lanes(const Expr& e, Value* first) {
   llvm::Type* f64 = b_.getDoubleTy();
   auto* vec = llvm::FixedVectorType::get(f64, kLanes);
   switch (e.kind) {
@@ -209,7 +197,7 @@ Value* Emitter::pass_lanes(const Expr& e, Value* first) {
 // Four runs of op.group components from component `first` (an i64): each statement for four
 // components at a time, in the statements' order; then each run's part of each sum, its terms
 // added in order, and the parts added to the sum run by run: the order run_of adds them in.
-void Emitter::runs_in_lanes(const VectorOp& op, Value* first) {
+void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first) {
   const int g = op.group;
   std::vector<std::vector<Value*>> terms(op.sums.size());
   for (int v = 0; v < g; ++v) {
@@ -247,7 +235,7 @@ void Emitter::runs_in_lanes(const VectorOp& op, Value* first) {
 }
 
 // A sum's run part needs no +0.0 start either: its total starts at +0.0 (see the product).
-void Emitter::run_of(const VectorOp& op, Value* first, int group) {
+void SystemEmitter::run_of(const VectorOp& op, Value* first, int group) {
   std::vector<Value*> totals;
   const bool runs = group > 1 && !op.sums.empty();
   if (runs) {
@@ -270,10 +258,51 @@ void Emitter::run_of(const VectorOp& op, Value* first, int group) {
   }
 }
 
-// int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes, const void* interrupt)
-// (SystemFn): the program's scalars in and out through `scalars`, the ops before the loop, the
-// while loop and the ops after it in between.
-llvm::Function* Emitter::run_system(const std::string& name) {
+// The program's scalars back into `scalars` (doubles; ints and booleans converted exactly).
+void SystemEmitter::write_scalars(Value* scalars) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  for (int i = 0; i < st_.scalars; ++i) {
+    const Ty t = local_types_[i];
+    Value* v = b_.CreateLoad(type(t), locals_[i]);
+    Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
+    b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
+  }
+}
+
+// The while loop: its condition, then its ops, as long as the condition holds and no
+// interrupt is pending.
+void SystemEmitter::while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt) {
+  auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
+  auto* test = llvm::BasicBlock::Create(ctx_, "while.test", fn_);
+  auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
+  auto* stop = llvm::BasicBlock::Create(ctx_, "while.interrupted", fn_);
+  auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(head);
+  // Ctrl-C: a loop whose only exit is its condition (a solver that does not converge) must
+  // stop when asked. The flag is read at the top of every iteration, where the vectors and
+  // scalars are what a whole number of iterations leaves; the kernel hands them back there.
+  // A relaxed atomic load: the handler (or another thread) sets it while the loop runs, and
+  // it must be read again on each iteration, not hoisted out of the loop.
+  llvm::LoadInst* flag = b_.CreateLoad(b_.getInt8Ty(), interrupt, "interrupt");
+  flag->setAtomic(llvm::AtomicOrdering::Monotonic);
+  flag->setAlignment(llvm::Align(1));
+  b_.CreateCondBr(b_.CreateICmpEQ(flag, b_.getInt8(0)), test, stop,
+                  llvm::MDBuilder(ctx_).createLikelyBranchWeights());
+  b_.SetInsertPoint(stop);
+  write_scalars(scalars);
+  b_.CreateRet(b_.getInt32(kSystemInterrupted));
+  b_.SetInsertPoint(test);
+  b_.CreateCondBr(expr(*st_.condition), body, done);
+  b_.SetInsertPoint(body);
+  for (const VectorOp& op : st_.body) guarded_op(op, sizes);
+  b_.CreateBr(head);
+  b_.SetInsertPoint(done);
+}
+
+// The program's scalars in and out through `scalars`, the ops before the loop, the while loop
+// and the ops after it in between.
+llvm::Function* SystemEmitter::run(const std::string& name) {
   llvm::Type* ptr = b_.getPtrTy();
   auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
   fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
@@ -284,7 +313,7 @@ llvm::Function* Emitter::run_system(const std::string& name) {
   load_arrays(arrays);
   for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
   llvm::Type* f64 = b_.getDoubleTy();
-  for (int i = 0; i < st_->scalars; ++i) {
+  for (int i = 0; i < st_.scalars; ++i) {
     Value* d = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
     const Ty t = local_types_[i];
     Value* v = t == Ty::F64   ? d
@@ -293,52 +322,15 @@ llvm::Function* Emitter::run_system(const std::string& name) {
     b_.CreateStore(v, locals_[i]);
   }
   std::vector<Value*> sizes;
-  for (size_t i = 0; i < st_->sizes.size(); ++i)
+  for (size_t i = 0; i < st_.sizes.size(); ++i)
     sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
                                   b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
-  auto write_scalars = [&] {
-    for (int i = 0; i < st_->scalars; ++i) {
-      const Ty t = local_types_[i];
-      Value* v = b_.CreateLoad(type(t), locals_[i]);
-      Value* d = t == Ty::F64   ? v
-                 : t == Ty::I32 ? b_.CreateSIToFP(v, f64)
-                                : b_.CreateUIToFP(v, f64);
-      b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
-    }
-  };
-  for (const VectorOp& op : st_->before) guarded_op(op, sizes);
-  if (st_->condition) {
-    auto* head = llvm::BasicBlock::Create(ctx_, "while", fn_);
-    auto* test = llvm::BasicBlock::Create(ctx_, "while.test", fn_);
-    auto* body = llvm::BasicBlock::Create(ctx_, "while.body", fn_);
-    auto* stop = llvm::BasicBlock::Create(ctx_, "while.interrupted", fn_);
-    auto* done = llvm::BasicBlock::Create(ctx_, "while.done", fn_);
-    b_.CreateBr(head);
-    b_.SetInsertPoint(head);
-    // Ctrl-C: a loop whose only exit is its condition (a solver that does not converge) must
-    // stop when asked. The flag is read at the top of every iteration, where the vectors and
-    // scalars are what a whole number of iterations leaves; the kernel hands them back there.
-    // A relaxed atomic load: the handler (or another thread) sets it while the loop runs, and
-    // it must be read again on each iteration, not hoisted out of the loop.
-    llvm::LoadInst* flag = b_.CreateLoad(b_.getInt8Ty(), interrupt, "interrupt");
-    flag->setAtomic(llvm::AtomicOrdering::Monotonic);
-    flag->setAlignment(llvm::Align(1));
-    b_.CreateCondBr(b_.CreateICmpEQ(flag, b_.getInt8(0)), test, stop,
-                    llvm::MDBuilder(ctx_).createLikelyBranchWeights());
-    b_.SetInsertPoint(stop);
-    write_scalars();
-    b_.CreateRet(b_.getInt32(kSystemInterrupted));
-    b_.SetInsertPoint(test);
-    b_.CreateCondBr(expr(*st_->condition), body, done);
-    b_.SetInsertPoint(body);
-    for (const VectorOp& op : st_->body) guarded_op(op, sizes);
-    b_.CreateBr(head);
-    b_.SetInsertPoint(done);
-  }
-  for (const VectorOp& op : st_->after) guarded_op(op, sizes);
-  write_scalars();
+  for (const VectorOp& op : st_.before) guarded_op(op, sizes);
+  if (st_.condition) while_loop(sizes, scalars, interrupt);
+  for (const VectorOp& op : st_.after) guarded_op(op, sizes);
+  write_scalars(scalars);
   b_.CreateRet(b_.getInt32(0));
   return fn_;
 }
 
-}  // namespace simit::jit::cpu
+}  // namespace simit::jit::codegen
