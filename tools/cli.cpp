@@ -214,7 +214,7 @@ void add_run(CLI::App& app, Commands& c) {
               if (!parse_dump_kind(k, o.executor, error))
                 throw CLI::ValidationError("--dump", error);
           },
-          "jit: print each compiled trace: loop-ir, llvm (or both)")
+          "jit: print each compiled trace: loop-ir (as compiled), passes (as traced and after each lowering pass), llvm")
       ->type_name("KIND")
       ->delimiter(',');
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")

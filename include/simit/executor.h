@@ -23,8 +23,10 @@ struct ExecutorChoice {
   // jit (`--check-jit`): every compiled call also runs interpreted on the same inputs, and the
   // first result, field or variable that differs stops the run, naming it.
   bool check = false;
-  // jit (`--dump=loop-ir,llvm`): print each compiled trace's loop IR and/or LLVM IR.
+  // jit (`--dump=loop-ir,passes,llvm`): print each compiled trace's loop IR, its loop IR as
+  // traced and after each pass of the lowering, and/or its optimised LLVM IR.
   bool dump_loop_ir = false;
+  bool dump_passes = false;
   bool dump_llvm = false;
   // jit: where compiled kernels are cached between runs: "" the user's cache folder
   // ($XDG_CACHE_HOME/simit/kernels, else $HOME/.cache/simit/kernels), "off" none, or a folder.
@@ -41,7 +43,7 @@ const char* executor_name(ExecutorKind kind);
 // bad value and listing the valid ones, e.g. "unknown executor 'jti': valid executors are
 // interpreter, jit".
 std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error);
-// One dump kind, "loop-ir" or "llvm", switched on in `choice`.
+// One dump kind, "loop-ir", "passes" or "llvm", switched on in `choice`.
 bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string& error);
 // A whole number of executions from 0.
 std::optional<long> parse_jit_threshold(std::string_view text, std::string& error);

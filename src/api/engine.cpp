@@ -63,8 +63,13 @@ void Engine::install_jit() {
   j.dump = options_.dump;
   j.dump_loop_ir = x.dump_loop_ir;
   j.dump_llvm = x.dump_llvm;
+  j.dump_passes = x.dump_passes;
   j.check = x.check;
   j.corrupt_for_test = options_.corrupt_for_test;
+  j.shuffle_seed = options_.shuffle_seed_for_test;
+  // The corpus and the examples reach the shuffled executor through `simit` itself.
+  if (const char* seed = std::getenv("SIMIT_TEST_SHUFFLE_SEED"); seed && !j.shuffle_seed)
+    j.shuffle_seed = std::strtoull(seed, nullptr, 10);
   jit_ = std::make_unique<jit::TraceController>(j);
   executor_->set_site_hook(jit_.get());
 #else

@@ -56,6 +56,10 @@ struct EngineOptions {
   std::ostream* dump = nullptr;
   // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value.
   bool corrupt_for_test = false;
+  // Tests of the executor seam: nonzero runs compiled maps through the test-only shuffled
+  // executor (jit/executor.h) with this seed; the environment variable SIMIT_TEST_SHUFFLE_SEED
+  // sets it for a whole `simit` process (the corpus, the examples).
+  uint64_t shuffle_seed_for_test = 0;
 };
 
 // Runs the functions of one compiled program. Bindings and globals persist between calls,

@@ -22,8 +22,11 @@ bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string&
     choice.dump_loop_ir = true;
   } else if (text == "llvm") {
     choice.dump_llvm = true;
+  } else if (text == "passes") {
+    choice.dump_passes = true;
   } else {
-    error = "unknown dump kind '" + std::string(text) + "': valid dump kinds are loop-ir, llvm";
+    error = "unknown dump kind '" + std::string(text) +
+            "': valid dump kinds are loop-ir, passes, llvm";
     return false;
   }
   return true;

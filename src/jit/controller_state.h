@@ -74,6 +74,7 @@ struct TraceController::LoopEntry {
 struct TraceController::LoopState {
   size_t length = 0;  // a run: how many of its statements are traced (a prefix, after a failure)
   long runs = 0;
+  bool has_loop = false;  // a run: one of its statements is a while loop
   int failures = 0;
   std::string gave_up;
   std::vector<std::unique_ptr<LoopEntry>> entries;

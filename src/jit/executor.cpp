@@ -31,11 +31,12 @@ class SerialExecutor : public Executor {
 
 class ShuffledExecutor : public Executor {
  public:
-  explicit ShuffledExecutor(uint64_t seed) : rng_(seed) {}
+  ShuffledExecutor(uint64_t seed, int32_t chunk) : rng_(seed), chunk_(chunk > 0 ? chunk : 1) {}
   const char* name() const override { return "shuffled"; }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
     if (writes == MapWrites::Shared) return serial_.run_map(kernel, args, n, chunk, writes, interrupt);
+    chunk = chunk_;
     const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;
     std::vector<int32_t> order(static_cast<size_t>(chunks));
     std::iota(order.begin(), order.end(), 0);
@@ -61,6 +62,7 @@ class ShuffledExecutor : public Executor {
 
  private:
   std::mt19937_64 rng_;
+  int32_t chunk_;
   SerialExecutor serial_;
 };
 
@@ -83,8 +85,8 @@ MapWrites writes_of(const Trace& trace) {
 
 std::unique_ptr<Executor> make_serial_executor() { return std::make_unique<SerialExecutor>(); }
 
-std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed) {
-  return std::make_unique<ShuffledExecutor>(seed);
+std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk) {
+  return std::make_unique<ShuffledExecutor>(seed, chunk);
 }
 
 }  // namespace simit::jit

@@ -47,10 +47,10 @@ MapWrites writes_of(const Trace& trace);
 
 // The chunks in element order on the calling thread.
 std::unique_ptr<Executor> make_serial_executor();
-// For the tests of the seam: a map whose writes are disjoint runs its chunks in an order
-// shuffled by `seed` (a map that adds into shared blocks runs them in element order, which
-// its bits depend on); a failure is the one of the lowest element, as the serial executor
-// reports it.
-std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed);
+// For the tests of the seam: a map whose writes are disjoint runs in chunks of `chunk`
+// elements (small, so that the corpus's small sets have several) in an order shuffled by
+// `seed`; a map that adds into shared blocks runs its chunks in element order, which its bits
+// depend on. A failure is the one of the lowest element, as the serial executor reports it.
+std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk);
 
 }  // namespace simit::jit

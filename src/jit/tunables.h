@@ -9,6 +9,10 @@ namespace simit::jit {
 // Executions of a site before it is compiled (0: compile on its first execution). The
 // engine's option overrides it.
 inline constexpr long kHotThreshold = 2;
+// A production run (JitOptions::eager) compiles a map over a set of at least this many
+// elements at its first execution, whatever the threshold (a kernel compiles in 5-80 ms;
+// interpreting a map costs about 1-25 us an element).
+inline constexpr long kEagerElements = 4096;
 // Compilations of one site that may fail before it stays interpreted for good.
 inline constexpr int kMaxFailures = 3;
 // Statements a trace may hold after inlining and unrolling.
@@ -33,6 +37,9 @@ inline constexpr size_t kTileAbove = 144;
 inline constexpr int kMaxInlineDepth = 256;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
+// The test-only shuffled executor's chunks (jit/executor.h): a few elements, so that the
+// corpus's small sets run in several chunks.
+inline constexpr int kShuffledChunk = 3;
 // LLVM's optimisation level for kernels (2 or 3), and for traces of more loop-IR nodes than
 // kLargeTrace (fully unrolled element matrices), whose O2 compile exceeds 100 ms.
 inline constexpr int kOptLevel = 2;

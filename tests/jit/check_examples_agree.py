@@ -3,7 +3,10 @@
 frames must write byte-identical final positions and the same per-frame statistics (every
 column but the timings), and the JIT must have compiled some of its sites.
 
-usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES
+usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES [SHUFFLE_SEED]
+
+With SHUFFLE_SEED the JIT runs its maps through the test-only shuffled executor (chunks of a
+few elements in a shuffled order: jit/executor.h), which must give the same bits.
 """
 import csv
 import os
@@ -14,16 +17,16 @@ import sys
 TIMING_COLUMNS = {"ms", "assembly_ms", "solve_ms"}
 
 
-def run(simit, scene, out, frames, backend):
+def run(simit, scene, out, frames, backend, env=None):
     if os.path.exists(out):
         shutil.rmtree(out)
     os.makedirs(out)
     final = os.path.join(out, "final.csv")
     cmd = [simit, "run", scene, "--frames", str(frames), "--output", out, "--final-csv", final,
-           "--backend", backend]
+           "--executor", backend]
     if backend == "jit":
-        cmd.append("--jit-stats")
-    p = subprocess.run(cmd, capture_output=True, text=True)
+        cmd += ["--jit-stats", "--jit-cache", "off"]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
         sys.exit(f"{backend}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
     stats = [f for f in os.listdir(out) if f.endswith(".csv") and f != "final.csv"]
@@ -38,7 +41,10 @@ def run(simit, scene, out, frames, backend):
 def main():
     simit, scene, outdir, frames = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
     a_final, a_rows, _ = run(simit, scene, os.path.join(outdir, "interpreter"), frames, "interpreter")
-    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, "jit"), frames, "jit")
+    env = dict(os.environ)
+    if len(sys.argv) > 5:
+        env["SIMIT_TEST_SHUFFLE_SEED"] = sys.argv[5]
+    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, "jit"), frames, "jit", env)
     compiled = b_out.count(" compiled\n")
     print(b_out[b_out.find("jit traces:"):])
     if compiled == 0:

@@ -92,7 +92,7 @@ TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
        "--jit-threshold: bad JIT threshold '-1': expected a whole number of executions from 0 "
        "(0: compile at once)"},
       {{"--dump", "loop-ir,asm"},
-       "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, llvm"},
+       "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm"},
       {{"--jit-cache", ""}, "--jit-cache: empty JIT cache: expected 'off' or a folder"},
   };
   for (const auto& [option, message] : cases) {
