@@ -66,7 +66,7 @@ class Trap {
   bool interrupt_pending() const { return interrupt_.load(std::memory_order_relaxed); }
   // The flag request_interrupt() sets, for compiled code that cannot call back: a byte,
   // nonzero while an interrupt is pending (a compiled while loop reads it once per
-  // iteration; jit/backend.h).
+  // iteration; jit/target.h).
   const std::atomic<bool>* interrupt_flag() const { return &interrupt_; }
   // Clears a pending interrupt; true when there was one.
   bool take_interrupt() {
