@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "jit/ir_build.h"
+#include "jit/trace/abort_reasons.h"
 
 namespace simit::jit {
 
@@ -87,7 +88,7 @@ void ZeroFold::propagate(Expr& e) const {
     case ExprKind::Binary:
       if (e.ty != Ty::F64) break;
       if (static_cast<BinOp>(e.op) == BinOp::Div && e.ops[1]->loose)
-        throw FoldConflict{"a division by a value whose zero sign folding may change"};
+        throw FoldConflict{abort_message(AbortReason::FoldDivisionByLoose)};
       e.loose = any_loose();
       break;
     case ExprKind::Select: e.loose = e.ty == Ty::F64 && (e.ops[1]->loose || e.ops[2]->loose); break;
@@ -95,7 +96,7 @@ void ZeroFold::propagate(Expr& e) const {
       switch (static_cast<MathFn>(e.op)) {
         case MathFn::Atan2:
         case MathFn::Pow:
-          if (any_loose()) throw FoldConflict{"atan2 or pow of a value whose zero sign may change"};
+          if (any_loose()) throw FoldConflict{abort_message(AbortReason::FoldLooseAtan2OrPow)};
           break;
         case MathFn::Abs:  // these give the same value for +0 and -0
         case MathFn::Cos:
@@ -112,7 +113,7 @@ void ZeroFold::propagate(Expr& e) const {
 
 void ZeroFold::require_exact(const std::vector<ExprRef>& values, const std::string& what) {
   for (const ExprRef& v : values)
-    if (v->loose) throw FoldConflict{what + " of a value whose zero sign folding may change"};
+    if (v->loose) throw FoldConflict{abort_message(AbortReason::FoldLooseOperand, what)};
 }
 
 void ZeroFold::open() { lists_.emplace_back(); }
