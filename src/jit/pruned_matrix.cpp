@@ -17,18 +17,42 @@ bool all_zero(const double* b) {
   return (m << 1) == 0;
 }
 
-// Rows with N x N blocks; n is the run-time size when N is 0. One pass: each block is
-// copied (by columns: a compiled product reads block column j as one vector) to the next free
-// place, which moves on only when the block holds a non-zero.
+// Whether block `blk` (bs components) is all zero; n is the run-time size when N is 0.
+template <int N>
+bool zero_block(const double* blk, int bs) {
+  if constexpr (N != 0) {
+    return all_zero<N * N>(blk);
+  } else {
+    bool zero = true;
+    for (int i = 0; i < bs && zero; ++i) zero = blk[i] == 0.0;
+    return zero;
+  }
+}
+
+// Sizes `v` to exactly n elements, giving its storage back first when it holds far more (a
+// matrix on its full pattern the first call, on a specialised one after: jit/specialise.h).
+template <class T>
+void fit(std::vector<T>& v, size_t n) {
+  if (v.capacity() > n + n / 4) std::vector<T>().swap(v);
+  v.resize(n);
+}
+
+// Rows with N x N blocks; n is the run-time size when N is 0. Two passes: the first counts
+// the non-zero blocks, so that the arrays hold only those (on a first call, when the matrix
+// is still on its full pattern, more than half of its blocks may be zero); the second copies
+// each of them (by columns: a compiled product reads block column j as one vector).
 template <int N>
 void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v, size_t rows,
            int n) {
   const int m = N ? N : n;
   const int bs = m * m;
   const size_t blocks = static_cast<size_t>(rp[rows]);
-  p.cols.resize(blocks);
-  p.values.resize(blocks * bs +
-                  (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
+  size_t nonzero = 0;
+  for (size_t k = 0; k < blocks; ++k)
+    nonzero += zero_block<N>(v + k * static_cast<size_t>(bs), bs) ? 0 : 1;
+  fit(p.cols, nonzero);
+  fit(p.values, nonzero * static_cast<size_t>(bs) +
+                    (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
   double* out = p.values.data();
   int32_t at = 0;
@@ -36,18 +60,11 @@ void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* 
   for (size_t r = 0; r < rows; ++r) {
     for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
       const double* blk = v + static_cast<size_t>(k) * bs;
+      if (zero_block<N>(blk, bs)) continue;
       double* o = out + static_cast<size_t>(at) * bs;
       for (int j = 0; j < m; ++j)
         for (int i = 0; i < m; ++i) o[j * m + i] = blk[i * m + j];
-      cols[at] = ci[k];
-      bool zero;
-      if constexpr (N != 0) {
-        zero = all_zero<N * N>(blk);
-      } else {
-        zero = true;
-        for (int i = 0; i < bs && zero; ++i) zero = blk[i] == 0.0;
-      }
-      at += zero ? 0 : 1;
+      cols[at++] = ci[k];
     }
     p.row_ptr[r + 1] = at;
   }

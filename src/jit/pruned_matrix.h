@@ -13,14 +13,14 @@ namespace simit::jit {
 
 struct PrunedMatrix {
   std::vector<int32_t> row_ptr, cols;
-  // Each block column-major (square blocks only); the arrays are sized for every block of the
-  // full pattern and hold `kept` of them. The values have bit_ceil(n) - n more at the end: a
-  // compiled product reads each n-component column as a vector of bit_ceil(n) lanes, the
-  // last column of the last block reaching into them.
+  // Each block column-major (square blocks only); the arrays hold the `kept` non-zero blocks
+  // and no more (their storage is reused across calls). The values have bit_ceil(n) - n more
+  // at the end: a compiled product reads each n-component column as a vector of bit_ceil(n)
+  // lanes, the last column of the last block reaching into them.
   std::vector<double> values;
   int64_t kept = 0, total = 0;  // blocks
 
-  // Rebuilds the arrays from `m` (float components), reusing their storage.
+  // Rebuilds the arrays from `m` (float components), reusing their storage while it fits.
   void assign(const runtime::SystemMatrix& m);
 };
 
