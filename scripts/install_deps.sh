@@ -2,8 +2,8 @@
 # Installs every build and test dependency of Simit from Debian packages (run as root; idempotent).
 # With --tests also the packages only the tests use (scripts/test.sh passes it); with --llvm
 # also LLVM 19, which the JIT needs (a build configured with -DSIMIT_WITH_LLVM=ON; setup.sh and
-# test.sh pass it); with --bench also matplotlib, which bench/accuracy.py draws its plots with
-# (Debian's python3-matplotlib, for /usr/bin/python3).
+# test.sh pass it) and zstd, which LLVM's static libraries link; with --bench also matplotlib,
+# which bench/accuracy.py draws its plots with (Debian's python3-matplotlib, for /usr/bin/python3).
 set -euo pipefail
 
 packages=(
@@ -20,7 +20,7 @@ bench_packages=(python3-matplotlib)
 for arg in "$@"; do
   case "$arg" in
     --tests) packages+=("${test_packages[@]}") ;;
-    --llvm) packages+=(llvm-19-dev) ;;
+    --llvm) packages+=(llvm-19-dev libzstd-dev) ;;  # zstd: LLVM's static libraries need it
     --bench) packages+=("${bench_packages[@]}") ;;
     *) echo "install_deps: unknown option $arg (expected --tests, --llvm or --bench)" >&2; exit 2 ;;
   esac
