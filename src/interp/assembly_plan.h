@@ -56,6 +56,7 @@ struct AssemblyPlan {
 };
 
 class Interpreter;
+class ExecState;
 
 // What a compiled executor is handed for one execution of a planned site.
 struct SiteCall {
@@ -63,7 +64,7 @@ struct SiteCall {
   const std::vector<Value>& partial_args;  // the values of `map f(a, b) to S`'s a, b
   std::deque<Value>& results;              // zeroed results to accumulate into
   runtime::Set& target;                    // plan.target, writable (apply writes its fields)
-  const Interpreter& interpreter;          // globals, options, the trap (Ctrl-C)
+  const ExecState& interpreter;            // globals, the trap (Ctrl-C)
   const frontend::SourceSpan& at;          // the map expression or apply statement
 };
 
@@ -75,7 +76,7 @@ class SiteHook {
   virtual bool run_site(SiteCall& call) = 0;
   // Runs a system-level statement (Stmt::system_level) and returns true, or returns false
   // to let the interpreter run it.
-  virtual bool run_statement(const frontend::ast::Stmt& stmt, Interpreter& in) {
+  virtual bool run_statement(const frontend::ast::Stmt& stmt, ExecState& in) {
     (void)stmt, (void)in;
     return false;
   }
@@ -85,14 +86,14 @@ class SiteHook {
   // system-level; when the hook returns 0 it runs block[first] and offers the rest of the
   // run (while it is still one), and the statements it runs are offered one by one.
   virtual size_t run_statements(const frontend::ast::Block& block, size_t first, size_t count,
-                                Interpreter& in) {
+                                ExecState& in) {
     (void)block, (void)first, (void)count, (void)in;
     return 0;
   }
   // The interpreter ran a site (or a statement) that run_site (run_statement) declined: a
   // differential check compares its results with what the compiled code computed.
   virtual void site_done(SiteCall& call) { (void)call; }
-  virtual void statement_done(const frontend::ast::Stmt& stmt, Interpreter& in) {
+  virtual void statement_done(const frontend::ast::Stmt& stmt, ExecState& in) {
     (void)stmt, (void)in;
   }
 };

@@ -11,6 +11,7 @@
 
 #include "frontend/ast.h"
 #include "interp/assembly_plan.h"
+#include "interp/exec_state.h"
 #include "interp/hook.h"
 #include "interp/inspect.h"
 #include "interp/options.h"
@@ -38,7 +39,7 @@ struct Place {
   bool accumulate = false;  // `reduce +`: the write adds
 };
 
-class Interpreter {
+class Interpreter final : public ExecState {
  public:
   // `program` must have checked without diagnostics and must outlive the interpreter.
   // Global constants are evaluated here; externs start unbound.
@@ -59,8 +60,8 @@ class Interpreter {
   void set_global(const frontend::ast::Variable& var, Value value);
   // Binds a set to an extern set declaration (checks fields and endpoint sets).
   void bind_set(const frontend::ast::Variable& var, runtime::Set& set);
-  runtime::PatternRegistry& patterns() { return patterns_; }
-  const Value& global(const frontend::ast::Variable& var) const;
+  runtime::PatternRegistry& patterns() override { return patterns_; }
+  const Value& global(const frontend::ast::Variable& var) const override;
   // The value of a parameter, result or local of the innermost active call (for hooks);
   // null when `var` has no value there.
   const Value* local(const frontend::ast::Variable& var) const;
@@ -68,20 +69,20 @@ class Interpreter {
   const Options& options() const { return options_; }
   // The trap point's switch (the host's, or the interpreter's own): a compiled executor
   // looks at it between chunks of elements for a pending interrupt.
-  Trap& trap() const { return *trap_; }
+  Trap& trap() const override { return *trap_; }
   // Installs (or with null removes) the executor seam's hook between runs: switching the
   // executor copies nothing, the sets and values stay where they are.
   void set_site_hook(SiteHook* sites) { options_.sites = sites; }
   // The storage of a variable of the running function (or a global), for a SiteHook that
   // runs a statement: reads and writes go straight to the interpreter's own values.
-  Value& variable(const frontend::ast::Variable& var);
+  Value& variable(const frontend::ast::Variable& var) override;
   // Runs a statement of the running function without offering it to the SiteHook (what it
   // holds is offered as usual): for a hook whose compiled run of statements hands them back.
-  void exec_interpreted(const frontend::ast::Stmt& s);
+  void exec_interpreted(const frontend::ast::Stmt& s) override;
 
   // ---- Inspection of a paused run, for hooks (the step debugger). Level 0 is the innermost
   // active call (gdb's numbering); frame_count() is 0 when nothing runs. See interp/inspect.h.
-  const frontend::ast::Program& program() const { return program_; }
+  const frontend::ast::Program& program() const override { return program_; }
   int frame_count() const { return depth_; }
   FrameView frame_view(int level) const;
   // The value of `var` in frame `level`: a parameter, result or local of that frame's
@@ -91,7 +92,7 @@ class Interpreter {
   // without disturbing the paused run: it runs no statement and writes nothing, and the
   // check-finite option is off (a NaN is a value to look at). Calls of user functions and
   // maps are refused. Throws RuntimeError.
-  Value evaluate(const frontend::ast::Expr& expr, int level) const;
+  Value evaluate(const frontend::ast::Expr& expr, int level) const override;
 
   // Wall time spent in outermost `map`/`apply` assemblies (entry to exit, so including the
   // mapped functions and the pattern lookups; nested maps count once, in their outer one).

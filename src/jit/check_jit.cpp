@@ -6,7 +6,7 @@
 #include <functional>
 #include <sstream>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"
@@ -191,7 +191,7 @@ void TraceController::site_done(interp::SiteCall& call) {
 // back as they were and let the interpreter run the statements; statement_done compares
 // after the last one. Nothing is offered meanwhile (a run's loop would check itself).
 // False when the kernel reached an error statement (and put the variables back).
-bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
+bool TraceController::check_system(LoopEntry& e, interp::ExecState& in) {
   const SystemBinding& b = e.traced.binding;
   const SystemTrace& t = *e.traced.trace;
   Saved before = save_loop_variables(b, t, e.writes_scalar, in);
@@ -224,7 +224,7 @@ bool TraceController::check_system(LoopEntry& e, interp::Interpreter& in) {
   return true;
 }
 
-void TraceController::statement_done(const ast::Stmt& stmt, interp::Interpreter& in) {
+void TraceController::statement_done(const ast::Stmt& stmt, interp::ExecState& in) {
   if (!pending_ || pending_->at != &stmt) return;
   checking_run_ = nullptr;
   const std::unique_ptr<Pending> p = std::move(pending_);

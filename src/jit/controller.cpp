@@ -6,7 +6,7 @@
 #include <functional>
 #include <sstream>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"
@@ -99,7 +99,7 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
     for (const auto& r : call.plan.results)
       shape.patterns.push_back(r.is_matrix ? r.pattern.get() : nullptr);
     shape.partial_args = &call.partial_args;
-    const interp::Interpreter& in = call.interpreter;
+    const interp::ExecState& in = call.interpreter;
     shape.global = [&in](const ast::Variable& v) -> const Value* { return &in.global(v); };
     e->traced = trace_site(shape);
     if (!e->traced.trace) {
@@ -152,7 +152,7 @@ bool TraceController::run_site(interp::SiteCall& call) {
 // traced again without it and the statements after it (s.length shrinks).
 TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
                                                               std::vector<const ast::Stmt*> run,
-                                                              interp::Interpreter& in) {
+                                                              interp::ExecState& in) {
   for (auto& e : s.entries)
     if (e->kernel && current_sizes(e->traced.binding, in) == e->sizes) return e.get();
   if (!s.gave_up.empty()) return nullptr;
@@ -213,7 +213,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
   return out && out->kernel ? out : nullptr;
 }
 
-bool TraceController::run_statement(const ast::Stmt& stmt, interp::Interpreter& in) {
+bool TraceController::run_statement(const ast::Stmt& stmt, interp::ExecState& in) {
   if (const auto sum = fused_sums(in).at.find(&stmt); sum != fused_sums(in).at.end())
     return run_fused_sum(stmt, sum->second, in);
   const auto* loop = stmt.as<ast::While>();
@@ -264,7 +264,7 @@ void TraceController::note_loop(const ast::While& loop) {
 // A system statement that is no part of a run (`verts.x = verts.x + h * verts.v`): a run of
 // one, unless it lies in a loop that may itself still compile. One that does not compile is
 // left out of the stats (the interpreter runs most system statements, matrix sums among them).
-bool TraceController::run_alone(const ast::Stmt& stmt, interp::Interpreter& in) {
+bool TraceController::run_alone(const ast::Stmt& stmt, interp::ExecState& in) {
   if (!target_ || options_.check_finite || checking_run_) return false;
   if (auto loop = loop_of_stmt_.find(&stmt);
       loop != loop_of_stmt_.end() && may_compile(*loop->second))
@@ -285,7 +285,7 @@ bool TraceController::run_alone(const ast::Stmt& stmt, interp::Interpreter& in) 
 }
 
 size_t TraceController::run_statements(const ast::Block& block, size_t first, size_t count,
-                                       interp::Interpreter& in) {
+                                       interp::ExecState& in) {
   // Where no system statement compiles, the loops alone say why (a run would say it again
   // for each of its statements).
   if (!target_ || options_.check_finite) return 0;

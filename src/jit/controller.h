@@ -67,13 +67,13 @@ class TraceController : public interp::SiteHook {
 
   bool run_site(interp::SiteCall& call) override;
   // A while loop of system-level statements (a CG loop) outside any compiled run, as a whole.
-  bool run_statement(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
+  bool run_statement(const frontend::ast::Stmt& stmt, interp::ExecState& in) override;
   // A run of system-level statements (a CG function's set-up, loop and residual), compiled
   // as one trace; when a statement of it cannot be compiled, the statements before it.
   size_t run_statements(const frontend::ast::Block& block, size_t first, size_t count,
-                        interp::Interpreter& in) override;
+                        interp::ExecState& in) override;
   void site_done(interp::SiteCall& call) override;
-  void statement_done(const frontend::ast::Stmt& stmt, interp::Interpreter& in) override;
+  void statement_done(const frontend::ast::Stmt& stmt, interp::ExecState& in) override;
 
   std::vector<TraceStats> stats() const;
   // A table of stats(), one line per trace.
@@ -88,7 +88,7 @@ class TraceController : public interp::SiteHook {
   struct LoopEntry;
   struct LoopState;
   LoopEntry* system_entry_for(LoopState& s, std::vector<const frontend::ast::Stmt*> run,
-                              interp::Interpreter& in);
+                              interp::ExecState& in);
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
   std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call);
@@ -98,8 +98,8 @@ class TraceController : public interp::SiteHook {
 
   struct Pending;  // a compiled call's results, awaiting the interpreter's for --check-jit
   bool check_site(Entry& e, interp::SiteCall& call);
-  bool check_system(LoopEntry& e, interp::Interpreter& in);
-  bool run_loop_kernel(LoopEntry& e, interp::Interpreter& in);
+  bool check_system(LoopEntry& e, interp::ExecState& in);
+  bool run_loop_kernel(LoopEntry& e, interp::ExecState& in);
 
   JitOptions options_;
   std::unique_ptr<Pending> pending_;
@@ -119,16 +119,16 @@ class TraceController : public interp::SiteHook {
   // there while the loop may be.
   std::map<const frontend::ast::Stmt*, const frontend::ast::While*> loop_of_stmt_;
   void note_loop(const frontend::ast::While& loop);
-  bool run_alone(const frontend::ast::Stmt& stmt, interp::Interpreter& in);
+  bool run_alone(const frontend::ast::Stmt& stmt, interp::ExecState& in);
   // The program's fused matrix sums (jit/matrix_sum.h), found on first use.
   std::optional<FusedSums> fused_;
-  const FusedSums& fused_sums(const interp::Interpreter& in);
+  const FusedSums& fused_sums(const interp::ExecState& in);
   struct SumState {
     long runs = 0;
     TraceStats stats;
   };
   std::map<const frontend::ast::Stmt*, SumState> sums_;
-  bool run_fused_sum(const frontend::ast::Stmt& stmt, const FusedSum& sum, interp::Interpreter& in);
+  bool run_fused_sum(const frontend::ast::Stmt& stmt, const FusedSum& sum, interp::ExecState& in);
   // While a checked run's statements run interpreted, up to this one, nothing is offered.
   const frontend::ast::Stmt* checking_run_ = nullptr;
 };

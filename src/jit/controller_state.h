@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "jit/controller.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
@@ -105,7 +105,7 @@ double thread_cpu_ms();
 
 // The lengths a system trace's sizes name, as the interpreter's values hold them now (-1
 // where a value is missing or of another kind).
-std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& in);
+std::vector<int64_t> current_sizes(const SystemBinding& b, interp::ExecState& in);
 
 // Marks the program scalars (locals below `scalars`) a block sets, in branches too.
 void note_scalar_writes(const std::vector<Stmt>& body, int scalars, std::vector<bool>& writes);
@@ -120,7 +120,7 @@ bool same_bits(double a, double b);
 std::string number(double v);
 
 // The field a Field array of a system trace names (its set is bound: the sizes matched).
-runtime::Field& bound_field(const SystemBinding::Array& a, interp::Interpreter& in);
+runtime::Field& bound_field(const SystemBinding::Array& a, interp::ExecState& in);
 
 // The first n components of a float field as binary64 (binary32 storage widens exactly),
 // and back (binary32 storage takes values that came from it, exactly).
@@ -132,6 +132,6 @@ void set_field_values(runtime::Field& f, const std::vector<double>& values);
 // its first write (copy on write), so keeping the old value costs one copy of each written
 // vector per call, and only for loops that may stop.
 Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
-                          const std::vector<bool>& writes_scalar, interp::Interpreter& in);
+                          const std::vector<bool>& writes_scalar, interp::ExecState& in);
 
 }  // namespace simit::jit

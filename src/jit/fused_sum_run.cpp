@@ -5,7 +5,7 @@
 #include <functional>
 #include <sstream>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"
@@ -20,7 +20,7 @@ namespace simit::jit {
 namespace ast = frontend::ast;
 using interp::Value;
 
-const FusedSums& TraceController::fused_sums(const interp::Interpreter& in) {
+const FusedSums& TraceController::fused_sums(const interp::ExecState& in) {
   if (!fused_) fused_ = find_fused_sums(in.program());
   return *fused_;
 }
@@ -28,7 +28,7 @@ const FusedSums& TraceController::fused_sums(const interp::Interpreter& in) {
 // `A = M - s * K` in K's storage (jit/matrix_sum.h). Declined under float32 and check-finite,
 // where the interpreter looks at s * K on its own, and when M has a block outside K's pattern.
 bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
-                                    interp::Interpreter& in) {
+                                    interp::ExecState& in) {
   if (!target_ || options_.float32 || options_.check_finite || checking_run_) return false;
   SumState& s = sums_[&stmt];
   if (s.stats.site.empty()) {

@@ -6,7 +6,7 @@
 #include <functional>
 #include <sstream>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"

@@ -6,7 +6,7 @@
 #include <functional>
 #include <sstream>
 
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"
@@ -45,7 +45,7 @@ const ast::Stmt& interrupted_at(const std::vector<const ast::Stmt*>& run) {
 
 // The lengths a system trace's sizes name, as the interpreter's values hold them now (-1
 // where a value is missing or of another kind).
-std::vector<int64_t> current_sizes(const SystemBinding& b, interp::Interpreter& in) {
+std::vector<int64_t> current_sizes(const SystemBinding& b, interp::ExecState& in) {
   std::vector<int64_t> out;
   for (const SystemBinding::Size& s : b.sizes) {
     const Value& v = in.variable(*s.var);
@@ -83,7 +83,7 @@ void note_scalar_writes(const std::vector<Stmt>& body, int scalars, std::vector<
 }
 
 // The field a Field array of a system trace names (its set is bound: the sizes matched).
-runtime::Field& bound_field(const SystemBinding::Array& a, interp::Interpreter& in) {
+runtime::Field& bound_field(const SystemBinding::Array& a, interp::ExecState& in) {
   const interp::SetBinding& b = *in.variable(*a.var).binding();
   return b.set->field(b.fields[a.field]);
 }
@@ -109,7 +109,7 @@ void set_field_values(runtime::Field& f, const std::vector<double>& values) {
 // its first write (copy on write), so keeping the old value costs one copy of each written
 // vector per call, and only for loops that may stop.
 Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
-                          const std::vector<bool>& writes_scalar, interp::Interpreter& in) {
+                          const std::vector<bool>& writes_scalar, interp::ExecState& in) {
   Saved out;
   for (size_t i = 0; i < b.arrays.size(); ++i)
     if (t.arrays[i].written && b.arrays[i].var &&
@@ -124,7 +124,7 @@ Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
 // statement is put back as it was and left to the interpreter (false), which runs it from
 // the start and stops with the error in its own words, at its line. A loop that an interrupt
 // (Ctrl-C) stops between two iterations keeps what they wrote and throws interp::Interrupted.
-bool TraceController::run_loop_kernel(LoopEntry& entry, interp::Interpreter& in) {
+bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   LoopEntry* e = &entry;
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();

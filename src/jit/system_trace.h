@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "frontend/ast.h"
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "jit/loop_ir.h"
 
 namespace simit::jit {
@@ -65,6 +65,6 @@ std::string run_lines(const std::vector<const frontend::ast::Stmt*>& run);
 // `float32` every operator, call and literal is rounded to binary32, as the interpreter's
 // float32 mode rounds them (docs/arithmetic.md).
 TracedSystem trace_system(const std::vector<const frontend::ast::Stmt*>& run,
-                          interp::Interpreter& in, bool float32 = false);
+                          interp::ExecState& in, bool float32 = false);
 
 }  // namespace simit::jit

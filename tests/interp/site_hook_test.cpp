@@ -60,7 +60,7 @@ class TakeOver : public SiteHook {
 class StatementTaker : public SiteHook {
  public:
   bool run_site(SiteCall&) override { return false; }
-  bool run_statement(const ast::Stmt& stmt, Interpreter& in) override {
+  bool run_statement(const ast::Stmt& stmt, ExecState& in) override {
     offered.push_back(&stmt);
     const auto& a = static_cast<const ast::Assign&>(stmt);
     const ast::Variable& y = *a.targets[0]->as<ast::VarRef>()->var;

@@ -282,7 +282,7 @@ std::string run_lines(const std::vector<const ast::Stmt*>& run) {
          std::to_string(b.file->locate(b.end > b.begin ? b.end - 1 : b.begin).line);
 }
 
-TracedSystem trace_system(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in,
+TracedSystem trace_system(const std::vector<const ast::Stmt*>& run, interp::ExecState& in,
                           bool float32) {
   return SystemTracer(run, in, float32).run();
 }

@@ -14,7 +14,7 @@
 
 #include "frontend/ast.h"
 #include "frontend/ast_walk.h"
-#include "interp/interpreter.h"
+#include "interp/exec_state.h"
 #include "jit/ir_build.h"
 #include "jit/loop_ir.h"
 #include "jit/system_trace.h"
@@ -49,7 +49,7 @@ inline bool is_row(const ast::Expr& e) { return e.type && is_vector(*e.type) && 
 // Lowers a run of system-level statements to a SystemTrace (jit/system_trace.h).
 class SystemTracer {
  public:
-  SystemTracer(const std::vector<const ast::Stmt*>& run, interp::Interpreter& in, bool float32)
+  SystemTracer(const std::vector<const ast::Stmt*>& run, interp::ExecState& in, bool float32)
       : run_(run), in_(in), float32_(float32) {}
 
   TracedSystem run();
@@ -113,7 +113,7 @@ class SystemTracer {
   void check(ExprRef ok, const char* message, const SourceSpan& at);
 
   const std::vector<const ast::Stmt*>& run_;
-  interp::Interpreter& in_;
+  interp::ExecState& in_;
   bool float32_ = false;
   size_t at_ = 0;                        // the statement of the run being collected or traced
   size_t first_field_write_ = SIZE_MAX;  // the first statement that writes a field
