@@ -62,7 +62,8 @@ function(simit_generic_twin target)
   endif()
   foreach(prop INCLUDE_DIRECTORIES COMPILE_DEFINITIONS COMPILE_OPTIONS COMPILE_FEATURES
                LINK_OPTIONS INTERFACE_INCLUDE_DIRECTORIES INTERFACE_COMPILE_DEFINITIONS
-               INTERFACE_COMPILE_OPTIONS INTERFACE_SYSTEM_INCLUDE_DIRECTORIES)
+               INTERFACE_COMPILE_OPTIONS INTERFACE_SYSTEM_INCLUDE_DIRECTORIES
+               INTERFACE_LINK_OPTIONS)
     get_target_property(value ${target} ${prop})
     if(value)
       set_property(TARGET ${target}_generic PROPERTY ${prop} "${value}")
