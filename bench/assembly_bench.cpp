@@ -51,7 +51,8 @@ class PhaseTimer : public simit::interp::StatementHook {
       // element's last statement and the map's per-element overhead.
       const bool boundary = &func == &element_ && !element_.body.empty() &&
                             &stmt == element_.body.front().get() && current_ != Driver;
-      seconds_[boundary ? Boundary : current_] += std::chrono::duration<double>(now - last_).count();
+      seconds_[boundary ? Boundary : current_] +=
+          std::chrono::duration<double>(now - last_).count();
       ++count_[boundary ? Boundary : current_];
     }
     current_ = next;
@@ -120,7 +121,8 @@ int main(int argc, char** argv) {
     if (v && v->name == "tets") tets_var = v;
   }
   if (!stiffness || !element || !verts_var || !tets_var) {
-    std::fprintf(stderr, "%s lacks stiffness, tet_stiffness, verts or tets\n", program_path.c_str());
+    std::fprintf(stderr, "%s lacks stiffness, tet_stiffness, verts or tets\n",
+                 program_path.c_str());
     return 1;
   }
 
@@ -158,7 +160,8 @@ int main(int argc, char** argv) {
   interp.bind_set(*tets_var, tets);
   auto first_start = Clock::now();
   std::vector<Value> r = interp.call(*stiffness, {});
-  const double first_ms = std::chrono::duration<double, std::milli>(Clock::now() - first_start).count();
+  const double first_ms =
+      std::chrono::duration<double, std::milli>(Clock::now() - first_start).count();
   const int builds_after_first = interp.patterns().builds();
   double checksum = 0.0;
   auto start = Clock::now();
@@ -176,11 +179,13 @@ int main(int argc, char** argv) {
               interp.patterns().builds(), repeats + 1);
   std::printf("matrix: %d x %d blocks of 3x3, %lld blocks\n", K.rows(), K.cols(),
               static_cast<long long>(K.pattern().nnz()));
-  std::printf("matrix values: %zu bytes (%.1f MiB)\n", K.value_bytes(), K.value_bytes() / 1048576.0);
-  std::printf("pattern: %zu bytes CSR index (row pointers + column indices, %.1f MiB) + %zu bytes "
-              "assembly index (%.1f MiB)\n",
-              K.pattern().index_bytes(), K.pattern().index_bytes() / 1048576.0,
-              K.pattern().assembly_bytes(), K.pattern().assembly_bytes() / 1048576.0);
+  std::printf("matrix values: %zu bytes (%.1f MiB)\n", K.value_bytes(),
+              K.value_bytes() / 1048576.0);
+  std::printf(
+      "pattern: %zu bytes CSR index (row pointers + column indices, %.1f MiB) + %zu bytes "
+      "assembly index (%.1f MiB)\n",
+      K.pattern().index_bytes(), K.pattern().index_bytes() / 1048576.0,
+      K.pattern().assembly_bytes(), K.pattern().assembly_bytes() / 1048576.0);
   std::printf("values + one int per block + one int per row: %zu bytes\n",
               K.value_bytes() + sizeof(int32_t) * (K.pattern().nnz() + K.rows()));
 
@@ -213,22 +218,26 @@ int main(int argc, char** argv) {
   const double scat = scat_raw - per_statement * (counts[1] + counts[2]);
   const double driver = driver_raw - per_statement * counts[3];
   const double raw_total = elem_raw + scat_raw + driver_raw, total = elem + scat + driver;
-  std::printf("hooked assembly: %.1f ms (a clock read before each of %ld statements; %.3f us hook "
-              "cost per statement inside the phases: their sum minus the plain time)\n",
-              hooked_ms, statements, 1e6 * per_statement);
+  std::printf(
+      "hooked assembly: %.1f ms (a clock read before each of %ld statements; %.3f us hook "
+      "cost per statement inside the phases: their sum minus the plain time)\n",
+      hooked_ms, statements, 1e6 * per_statement);
   std::printf("  phase              raw (hooked)        hook cost removed\n");
   std::printf("  element functions: %8.1f ms %5.1f%%   %8.1f ms %5.1f%%  (%ld statements)\n",
-              1e3 * elem_raw, 100.0 * elem_raw / raw_total, 1e3 * elem, 100.0 * elem / total, counts[0]);
+              1e3 * elem_raw, 100.0 * elem_raw / raw_total, 1e3 * elem, 100.0 * elem / total,
+              counts[0]);
   std::printf("  scatter:           %8.1f ms %5.1f%%   %8.1f ms %5.1f%%  (%ld block writes)\n",
               1e3 * scat_raw, 100.0 * scat_raw / raw_total, 1e3 * scat, 100.0 * scat / total,
               counts[1] + counts[2] + 1);
-  std::printf("  driver:            %8.1f ms %5.1f%%   %8.1f ms %5.1f%%  (pattern lookup, zeroing)\n",
-              1e3 * driver_raw, 100.0 * driver_raw / raw_total, 1e3 * driver, 100.0 * driver / total);
+  std::printf(
+      "  driver:            %8.1f ms %5.1f%%   %8.1f ms %5.1f%%  (pattern lookup, zeroing)\n",
+      1e3 * driver_raw, 100.0 * driver_raw / raw_total, 1e3 * driver, 100.0 * driver / total);
   if (counts[1] && counts[2])
-    std::printf("  (scatter intervals ending at an element's first statement, which also hold the "
-                "map's per-element overhead: %.3f us on average, other scatter statements %.3f us)\n",
-                1e6 * timer.seconds(PhaseTimer::Boundary) / counts[2],
-                1e6 * timer.seconds(PhaseTimer::Scatter) / counts[1]);
+    std::printf(
+        "  (scatter intervals ending at an element's first statement, which also hold the "
+        "map's per-element overhead: %.3f us on average, other scatter statements %.3f us)\n",
+        1e6 * timer.seconds(PhaseTimer::Boundary) / counts[2],
+        1e6 * timer.seconds(PhaseTimer::Scatter) / counts[1]);
   std::printf("checksum %.6e\n", checksum + hr[0].matrix()->values()[0]);
   return 0;
 }

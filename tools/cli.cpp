@@ -94,7 +94,8 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
         if (n) x.threshold = *n;
         return n.has_value();
       },
-      "jit: executions of a site before it is compiled (0: at once; default 2)")
+      "jit: executions of a site before it is compiled (0: at once; default 2); a map over "
+      "4096 elements or more and a while loop compile at their first execution regardless")
       ->type_name("N");
   t.cache = add_parsed(
                 sub, "--jit-cache",
@@ -214,7 +215,8 @@ void add_run(CLI::App& app, Commands& c) {
               if (!parse_dump_kind(k, o.executor, error))
                 throw CLI::ValidationError("--dump", error);
           },
-          "jit: print each compiled trace: loop-ir (as compiled), passes (as traced and after each lowering pass), llvm")
+          "jit: print each compiled trace: loop-ir (as compiled), passes (as traced and after each "
+          "lowering pass), llvm")
       ->type_name("KIND")
       ->delimiter(',');
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")

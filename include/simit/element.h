@@ -87,7 +87,9 @@ struct ComponentTraits<float_complex> {
 };
 
 template <class T>
-concept Component = requires { ComponentTraits<T>::kind; };
+concept Component = requires {
+  ComponentTraits<T>::kind;
+};
 
 // The field type of a host field `FieldRef<T, dims...>`.
 template <Component T, int... dims>
@@ -106,8 +108,8 @@ class TensorRef {
   explicit TensorRef(T* data) : data_(data) {}
 
   template <class... I>
-    requires(sizeof...(I) == order && (std::is_integral_v<I> && ...))
-  T& operator()(I... indices) const {
+  requires(sizeof...(I) == order && (std::is_integral_v<I> && ...)) T& operator()(
+      I... indices) const {
     return data_[offset({static_cast<int>(indices)...})];
   }
   // All components in row-major order; the list must have exactly `size` values.
@@ -119,17 +121,11 @@ class TensorRef {
     for (const T& v : values) data_[i++] = v;
     return *this;
   }
-  const TensorRef& operator=(const T& v) const
-    requires(order == 0)
-  {
+  const TensorRef& operator=(const T& v) const requires(order == 0) {
     *data_ = v;
     return *this;
   }
-  operator T() const
-    requires(order == 0)
-  {
-    return *data_;
-  }
+  operator T() const requires(order == 0) { return *data_; }
   T* data() const { return data_; }
   T* begin() const { return data_; }
   T* end() const { return data_ + size; }

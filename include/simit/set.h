@@ -49,7 +49,10 @@ class FieldRef {
   // All components of e, row-major.
   void set(ElementRef e, std::initializer_list<T> values) const { get(e) = values; }
   template <class Collection>
-    requires requires(const Collection& c) { std::begin(c); std::size(c); }
+  requires requires(const Collection& c) {
+    std::begin(c);
+    std::size(c);
+  }
   void set(ElementRef e, const Collection& values) const {
     if (std::size(values) != components)
       throw Error("field '" + name() + "' has " + std::to_string(components) +
@@ -58,11 +61,7 @@ class FieldRef {
     T* out = at(e);
     for (const auto& v : values) *out++ = static_cast<T>(v);
   }
-  void set(ElementRef e, const T& v) const
-    requires(sizeof...(dims) == 0)
-  {
-    *at(e) = v;
-  }
+  void set(ElementRef e, const T& v) const requires(sizeof...(dims) == 0) { *at(e) = v; }
 
   // The whole array: element 0's components, then element 1's, ... (moves when the set grows).
   T* data() const { return static_cast<T*>(detail::field_data(*set_, field_)); }
@@ -123,11 +122,12 @@ class Set {
   explicit Set(const char* name) : Set(std::string(name)) {}
   // An edge set whose elements have one endpoint in each of `endpoints`, in order.
   template <class... S>
-    requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...))
-  explicit Set(S&... endpoints) : Set(std::string(), std::vector<Set*>{&endpoints...}) {}
+  requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...)) explicit Set(S&... endpoints)
+      : Set(std::string(), std::vector<Set*>{&endpoints...}) {}
   template <class... S>
-    requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...))
-  Set(std::string name, S&... endpoints) : Set(std::move(name), std::vector<Set*>{&endpoints...}) {}
+  requires(sizeof...(S) >= 1 && (std::same_as<S, Set> && ...))
+      Set(std::string name, S&... endpoints)
+      : Set(std::move(name), std::vector<Set*>{&endpoints...}) {}
   Set(std::string name, std::vector<Set*> endpoints);
   // A periodic grid over the empty vertex set `points` (fills it; coordinate 0 fastest).
   Set(Set& points, std::vector<int> extents) : Set(std::string(), points, std::move(extents)) {}
@@ -145,8 +145,8 @@ class Set {
   // --- elements ------------------------------------------------------------------------
   ElementRef add();  // vertex sets
   template <class... E>
-    requires(sizeof...(E) >= 1 && (std::same_as<E, ElementRef> && ...))
-  ElementRef add(E... endpoints) {
+  requires(sizeof...(E) >= 1 && (std::same_as<E, ElementRef> && ...)) ElementRef
+      add(E... endpoints) {
     const ElementRef ends[] = {endpoints...};
     return add(std::span<const ElementRef>(ends));
   }

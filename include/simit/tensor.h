@@ -32,33 +32,22 @@ class Tensor {
 
   Tensor() { values_.fill(T{}); }
   Tensor(std::initializer_list<T> values) : Tensor() { view() = values; }
-  Tensor(const T& v)
-    requires(order == 0)
-  {
-    values_[0] = v;
-  }
+  Tensor(const T& v) requires(order == 0) { values_[0] = v; }
 
   template <class... I>
-    requires(sizeof...(I) == order && (std::is_integral_v<I> && ...))
-  T& operator()(I... indices) {
+  requires(sizeof...(I) == order && (std::is_integral_v<I> && ...)) T& operator()(I... indices) {
     return view()(indices...);
   }
   template <class... I>
-    requires(sizeof...(I) == order && (std::is_integral_v<I> && ...))
-  const T& operator()(I... indices) const {
+  requires(sizeof...(I) == order && (std::is_integral_v<I> && ...)) const T& operator()(
+      I... indices) const {
     return const_cast<Tensor*>(this)->view()(indices...);
   }
-  Tensor& operator=(const T& v)
-    requires(order == 0)
-  {
+  Tensor& operator=(const T& v) requires(order == 0) {
     values_[0] = v;
     return *this;
   }
-  operator T() const
-    requires(order == 0)
-  {
-    return values_[0];
-  }
+  operator T() const requires(order == 0) { return values_[0]; }
 
   TensorRef<T, dims...> view() { return TensorRef<T, dims...>(values_.data()); }
   T* data() { return values_.data(); }
@@ -70,8 +59,8 @@ class Tensor {
   bool operator==(const Tensor&) const = default;
 
   TensorSlot slot() {
-    return TensorSlot{ComponentTraits<T>::kind, ComponentTraits<T>::single, {dims...},
-                      values_.data()};
+    return TensorSlot{
+        ComponentTraits<T>::kind, ComponentTraits<T>::single, {dims...}, values_.data()};
   }
 
  private:

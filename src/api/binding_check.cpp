@@ -70,8 +70,8 @@ void check_kind(const std::string& who, const Type& t, const runtime::Set& s,
   }
   const size_t arity = t.endpoints.size();
   if (s.is_grid() || static_cast<size_t>(s.arity()) != arity) {
-    std::string want = arity == 0 ? "a vertex set"
-                                  : "an edge set with " + plural(arity, "endpoint");
+    std::string want =
+        arity == 0 ? "a vertex set" : "an edge set with " + plural(arity, "endpoint");
     problems.push_back(who + "is " + want + " in the program but " + s.describe() + " " +
                        set_shape(s));
   }
@@ -118,8 +118,8 @@ std::optional<runtime::FieldType> field_type_for(const Type& type, int float_siz
   auto kind = field_component_of(t->scalar);
   if (!kind) return std::nullopt;
   out.kind = *kind;
-  out.single = float_size == 4 && (out.kind == ComponentKind::Float ||
-                                   out.kind == ComponentKind::Complex);
+  out.single =
+      float_size == 4 && (out.kind == ComponentKind::Float || out.kind == ComponentKind::Complex);
   return out;
 }
 
@@ -148,8 +148,8 @@ std::vector<std::string> check_endpoints(
     if (&got != want)
       problems.push_back("extern '" + var.name + "': endpoint " + std::to_string(k) +
                          " must come from the set bound to '" + d.var->name + "' (" +
-                         want->describe() + "), but the bound set's endpoint " +
-                         std::to_string(k) + " is " + got.describe());
+                         want->describe() + "), but the bound set's endpoint " + std::to_string(k) +
+                         " is " + got.describe());
   }
   return problems;
 }

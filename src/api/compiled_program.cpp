@@ -10,7 +10,7 @@ std::shared_ptr<const CompiledProgram> CompiledProgram::from_file(const std::str
 }
 
 std::shared_ptr<const CompiledProgram> CompiledProgram::from_source(std::string name,
-                                                                   std::string text) {
+                                                                    std::string text) {
   return adopt(frontend::compile_source(std::move(name), std::move(text)));
 }
 

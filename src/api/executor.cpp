@@ -25,8 +25,8 @@ bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string&
   } else if (text == "passes") {
     choice.dump_passes = true;
   } else {
-    error = "unknown dump kind '" + std::string(text) +
-            "': valid dump kinds are loop-ir, passes, llvm";
+    error =
+        "unknown dump kind '" + std::string(text) + "': valid dump kinds are loop-ir, passes, llvm";
     return false;
   }
   return true;

@@ -167,9 +167,7 @@ std::vector<int> Set::grid_point_coords(ElementRef point) const {
 }
 
 ElementRef Set::grid_edge(std::span<const int> coords, int axis) const {
-  return guarded([&] {
-    return ElementRef(impl_->grid_link(impl_->grid_point(coords), axis));
-  });
+  return guarded([&] { return ElementRef(impl_->grid_link(impl_->grid_point(coords), axis)); });
 }
 
 std::ostream& operator<<(std::ostream& os, const Set& set) {

@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "testing/files.h"
 #include "frontend/frontend.h"
 #include "frontend/printer.h"
+#include "testing/files.h"
 
 namespace simit::tools {
 namespace {

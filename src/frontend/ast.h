@@ -14,6 +14,8 @@
 namespace simit::frontend::ast {
 
 // One list of node kinds; the enum, the visitor dispatch and the printers derive from it.
+// The entry lists are laid out by hand.
+// clang-format off
 #define SIMIT_EXPR_NODES(X)                                                       \
   X(IntLit) X(FloatLit) X(BoolLit) X(StringLit) X(ComplexLit) X(DenseLit)         \
   X(VarRef) X(Call) X(TensorRead) X(TupleRead) X(FieldRead) X(SetRead) X(Unary)   \
@@ -27,6 +29,7 @@ namespace simit::frontend::ast {
 #define SIMIT_DECL_NODES(X) X(ElementDecl) X(ExternDecl) X(ConstDecl) X(FuncDecl) X(TestDecl)
 #define SIMIT_AST_NODES(X) \
   SIMIT_EXPR_NODES(X) SIMIT_STMT_NODES(X) SIMIT_TYPE_NODES(X) SIMIT_DECL_NODES(X)
+// clang-format on
 
 enum class NodeKind {
 #define SIMIT_NODE_ENUM(n) n,
@@ -44,9 +47,16 @@ struct Node {
   const NodeKind kind;
   SourceSpan span;
 
-  template <class T> bool is() const { return kind == T::kKind; }
-  template <class T> T* as() { return kind == T::kKind ? static_cast<T*>(this) : nullptr; }
-  template <class T> const T* as() const {
+  template <class T>
+  bool is() const {
+    return kind == T::kKind;
+  }
+  template <class T>
+  T* as() {
+    return kind == T::kKind ? static_cast<T*>(this) : nullptr;
+  }
+  template <class T>
+  const T* as() const {
     return kind == T::kKind ? static_cast<const T*>(this) : nullptr;
   }
 };
@@ -60,14 +70,24 @@ struct FuncDecl;
 
 // Everything a name can denote as a value (LANGUAGE.md §4.1's value namespace).
 struct Variable {
-  enum class Kind { Extern, GlobalConst, Param, Result, Local, Implicit, LoopVar, IndexVar, Generic };
+  enum class Kind {
+    Extern,
+    GlobalConst,
+    Param,
+    Result,
+    Local,
+    Implicit,
+    LoopVar,
+    IndexVar,
+    Generic
+  };
   Kind kind = Kind::Local;
   std::string name;
-  SourceSpan span;          // where it is declared
-  TypeRef type;             // sets and generic parameters have set / no type
-  bool writable = false;    // access mode of §4.6.2
-  bool inout = false;       // Param only
-  bool ranged = false;      // Generic only: declared `0:N`
+  SourceSpan span;                 // where it is declared
+  TypeRef type;                    // sets and generic parameters have set / no type
+  bool writable = false;           // access mode of §4.6.2
+  bool inout = false;              // Param only
+  bool ranged = false;             // Generic only: declared `0:N`
   const FuncDecl* func = nullptr;  // owning function (null for globals)
   // Interpreter storage: index into the owning function's frame, or into the program's
   // globals for Extern/GlobalConst.
@@ -246,9 +266,9 @@ struct TensorRead : Expr {
 struct TupleRead : Expr {
   SIMIT_NODE_KIND(TupleRead)
   explicit TupleRead(SourceSpan s) : Expr(kKind, s) {}
-  ExprPtr base;         // a VarRef to a tuple parameter
-  ExprPtr index;        // unnamed form
-  std::string member;   // named form (index is null)
+  ExprPtr base;           // a VarRef to a tuple parameter
+  ExprPtr index;          // unnamed form
+  std::string member;     // named form (index is null)
   int member_index = -1;  // named form, by the checker
 };
 
@@ -353,8 +373,8 @@ struct VarDecl : Stmt {
   bool is_const = false;
   std::string name;
   SourceSpan name_span;
-  TypeExprPtr declared;  // may be null
-  ExprPtr init;          // may be null (var only)
+  TypeExprPtr declared;     // may be null
+  ExprPtr init;             // may be null (var only)
   Variable* var = nullptr;  // by the checker
 };
 
@@ -546,30 +566,30 @@ struct Program {
 
 // The children of each expression kind that has any, in evaluation order (`n` is the node);
 // frontend/ast_walk.h generates the child walk from it.
-#define SIMIT_EXPR_CHILDREN(X)            \
-  X(Unary, n.operand)                     \
-  X(Transpose, n.operand)                 \
-  X(Binary, n.lhs, n.rhs)                 \
-  X(Compare, n.operands)                  \
-  X(Call, n.args)                         \
-  X(TensorRead, n.base, n.indices)        \
-  X(FieldRead, n.base)                    \
-  X(TupleRead, n.base, n.index)           \
-  X(SetRead, n.base, n.first, n.second)   \
+#define SIMIT_EXPR_CHILDREN(X)          \
+  X(Unary, n.operand)                   \
+  X(Transpose, n.operand)               \
+  X(Binary, n.lhs, n.rhs)               \
+  X(Compare, n.operands)                \
+  X(Call, n.args)                       \
+  X(TensorRead, n.base, n.indices)      \
+  X(FieldRead, n.base)                  \
+  X(TupleRead, n.base, n.index)         \
+  X(SetRead, n.base, n.first, n.second) \
   X(Map, n.assembly.args)
 
 // The root expressions and the nested blocks of each statement kind that has any (`n` is the
 // statement); frontend/ast_walk.h generates the statement walk from it.
-#define SIMIT_STMT_PARTS(X)                                 \
-  X(VarDecl, (n.init), ())                                  \
-  X(Assign, (n.value, n.targets), ())                       \
-  X(ExprStmt, (n.expr), ())                                 \
-  X(If, (n.conditions), (n.branches, n.else_branch))        \
-  X(While, (n.condition), (n.body))                         \
-  X(DoWhile, (n.condition), (n.body))                       \
-  X(ForRange, (n.lo, n.hi), (n.body))                       \
-  X(ForSet, (), (n.body))                                   \
-  X(Print, (n.args), ())                                    \
+#define SIMIT_STMT_PARTS(X)                          \
+  X(VarDecl, (n.init), ())                           \
+  X(Assign, (n.value, n.targets), ())                \
+  X(ExprStmt, (n.expr), ())                          \
+  X(If, (n.conditions), (n.branches, n.else_branch)) \
+  X(While, (n.condition), (n.body))                  \
+  X(DoWhile, (n.condition), (n.body))                \
+  X(ForRange, (n.lo, n.hi), (n.body))                \
+  X(ForSet, (), (n.body))                            \
+  X(Print, (n.args), ())                             \
   X(Apply, (n.assembly.args), ())
 
 }  // namespace simit::frontend::ast

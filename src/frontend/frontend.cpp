@@ -9,9 +9,9 @@
 #include "frontend/extern_uses.h"
 #include "frontend/hoisting.h"
 #include "frontend/index_ranges.h"
-#include "frontend/system_statements.h"
 #include "frontend/lexer.h"
 #include "frontend/parser.h"
+#include "frontend/system_statements.h"
 
 namespace simit::frontend {
 
@@ -34,8 +34,7 @@ std::unique_ptr<Compilation> compile_source(std::string name, std::string text,
   return c;
 }
 
-std::unique_ptr<Compilation> compile_file(const std::string& path,
-                                          const CompileOptions& options) {
+std::unique_ptr<Compilation> compile_file(const std::string& path, const CompileOptions& options) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     auto c = std::make_unique<Compilation>();

@@ -9,6 +9,8 @@
 namespace simit::frontend {
 
 // X(name, spelling): keywords, then punctuation; the others have no fixed spelling.
+// The entry lists are laid out by hand.
+// clang-format off
 #define SIMIT_KEYWORD_TOKENS(X)                                                       \
   X(KwInt, "int") X(KwFloat, "float") X(KwBool, "bool") X(KwComplex, "complex")       \
   X(KwString, "string") X(KwTensor, "tensor") X(KwMatrix, "matrix")                   \
@@ -35,6 +37,7 @@ namespace simit::frontend {
   X(Ident, "identifier") X(IntLiteral, "integer literal")                             \
   X(FloatLiteral, "float literal") X(StringLiteral, "string literal")                 \
   X(EndOfFile, "end of file")
+// clang-format on
 
 enum class TokenKind {
 #define SIMIT_TOKEN_ENUM(name, spelling) name,

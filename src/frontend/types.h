@@ -22,9 +22,9 @@ enum class ScalarKind { Int, Float, Bool, Complex, String };
 struct IndexSet {
   enum class Kind { Fixed, Set, Generic };
   Kind kind = Kind::Fixed;
-  int size = 0;                          // Fixed
-  const ast::Variable* var = nullptr;    // Set: the extern or parameter naming the set;
-                                         // Generic: the generic parameter
+  int size = 0;                        // Fixed
+  const ast::Variable* var = nullptr;  // Set: the extern or parameter naming the set;
+                                       // Generic: the generic parameter
   static IndexSet fixed(int n) { return {Kind::Fixed, n, nullptr}; }
   static IndexSet set(const ast::Variable* v) { return {Kind::Set, 0, v}; }
   static IndexSet generic(const ast::Variable* v) { return {Kind::Generic, 0, v}; }
@@ -34,14 +34,14 @@ struct IndexSet {
 
 struct Type {
   enum class Kind {
-    Void,     // the value of a call with no results
+    Void,  // the value of a call with no results
     Scalar,
-    Tensor,   // order >= 1
+    Tensor,  // order >= 1
     Element,
-    Set,      // vertex or edge set (grid sets too, with grid_dims > 0)
+    Set,  // vertex or edge set (grid sets too, with grid_dims > 0)
     Tuple,
     Opaque,
-    Multi,    // the values of a call or map with several results
+    Multi,  // the values of a call or map with several results
   };
   Kind kind = Kind::Void;
 

@@ -40,7 +40,8 @@ inline Value& Interpreter::var(const frontend::ast::Variable& v) {
   return *frames_[depth_]->refs[v.slot];
 }
 
-inline Value& Interpreter::read_var(const frontend::ast::Variable& v, const frontend::ast::Expr& at) {
+inline Value& Interpreter::read_var(const frontend::ast::Variable& v,
+                                    const frontend::ast::Expr& at) {
   Value& value = var(v);
   if (value.empty()) [[unlikely]]
     fail_unset(v, at);

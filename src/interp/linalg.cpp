@@ -14,9 +14,9 @@
 namespace simit::interp {
 
 namespace ast = frontend::ast;
+using frontend::Type;
 using runtime::Fault;
 using runtime::SystemMatrix;
-using frontend::Type;
 
 namespace {
 
@@ -359,18 +359,24 @@ Value Interpreter::solver_intrinsic(const ast::Call& c, std::vector<Value>& args
     return *v.matrix();
   };
   auto handle = [&]() -> SolverHandle& {
-    if (args[0].kind() != Value::Kind::Opaque || !args[0].opaque()) fail(c.span, "expected a factorisation");
+    if (args[0].kind() != Value::Kind::Opaque || !args[0].opaque())
+      fail(c.span, "expected a factorisation");
     SolverHandle& h = *args[0].opaque();
-    if (std::holds_alternative<std::monostate>(h.factor)) fail(c.span, "the factorisation was already freed");
+    if (std::holds_alternative<std::monostate>(h.factor))
+      fail(c.span, "the factorisation was already freed");
     return h;
   };
   auto vector_solve = [&](auto& factor) {
     auto b = floats(args[1]);
     if (static_cast<int64_t>(b.size()) != factor.size())
-      fail(c.span, "the right-hand side has " + std::to_string(b.size()) + " components but the factorised matrix has " + std::to_string(factor.size()) + " rows");
+      fail(c.span, "the right-hand side has " + std::to_string(b.size()) +
+                       " components but the factorised matrix has " +
+                       std::to_string(factor.size()) + " rows");
     Tensor x(ComponentKind::Float, shape_of(*c.type, c.span));
     if (static_cast<int64_t>(x.size()) != factor.size())
-      fail(c.span, "the result has " + std::to_string(x.size()) + " components but the factorised matrix has " + std::to_string(factor.size()) + " rows");
+      fail(c.span, "the result has " + std::to_string(x.size()) +
+                       " components but the factorised matrix has " +
+                       std::to_string(factor.size()) + " rows");
     factor.solve(b, {x.mutable_floats(), x.size()});
     return Value::of_tensor(std::move(x));
   };
@@ -379,10 +385,13 @@ Value Interpreter::solver_intrinsic(const ast::Call& c, std::vector<Value>& args
       case Intrinsic::Lu:
       case Intrinsic::Chol: {
         const SystemMatrix& a = matrix(args[0]);
-        if (a.scalar_rows() != a.scalar_cols()) fail(c.span, "cannot factorise a non-square matrix");
+        if (a.scalar_rows() != a.scalar_cols())
+          fail(c.span, "cannot factorise a non-square matrix");
         auto h = std::make_shared<SolverHandle>();
-        if (c.intrinsic == Intrinsic::Lu) h->factor.emplace<runtime::LuFactor>(a);
-        else h->factor.emplace<runtime::CholeskyFactor>(a);
+        if (c.intrinsic == Intrinsic::Lu)
+          h->factor.emplace<runtime::LuFactor>(a);
+        else
+          h->factor.emplace<runtime::CholeskyFactor>(a);
         return Value::of_opaque(std::move(h));
       }
       case Intrinsic::LuSolve:
@@ -400,24 +409,26 @@ Value Interpreter::solver_intrinsic(const ast::Call& c, std::vector<Value>& args
                            runtime::component_name(b.kind()));
         SystemMatrix x;
         if (auto* lu = std::get_if<runtime::LuFactor>(&h.factor)) {
-          if (b.scalar_rows() != lu->size()) fail(c.span, "the right-hand side has the wrong number of rows");
+          if (b.scalar_rows() != lu->size())
+            fail(c.span, "the right-hand side has the wrong number of rows");
           x = lu->solve(b);
         } else {
           auto& ch = std::get<runtime::CholeskyFactor>(h.factor);
-          if (b.scalar_rows() != ch.size()) fail(c.span, "the right-hand side has the wrong number of rows");
+          if (b.scalar_rows() != ch.size())
+            fail(c.span, "the right-hand side has the wrong number of rows");
           x = ch.solve(b);
         }
         return matrix_value(std::move(x));
       }
       case Intrinsic::LuFree:
-      case Intrinsic::CholFree:
-        handle().factor = std::monostate{};
-        return {};
+      case Intrinsic::CholFree: handle().factor = std::monostate{}; return {};
       case Intrinsic::TriangularSolve: {
         const SystemMatrix& a = matrix(args[0]);
         auto b = floats(args[1]);
         if (static_cast<int64_t>(b.size()) != a.scalar_rows())
-          fail(c.span, "the right-hand side has " + std::to_string(b.size()) + " components but the matrix has " + std::to_string(a.scalar_rows()) + " rows");
+          fail(c.span, "the right-hand side has " + std::to_string(b.size()) +
+                           " components but the matrix has " + std::to_string(a.scalar_rows()) +
+                           " rows");
         Tensor x(ComponentKind::Float, shape_of(*c.type, c.span));
         runtime::lower_triangular_solve(a, b, {x.mutable_floats(), x.size()});
         return Value::of_tensor(std::move(x));

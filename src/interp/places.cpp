@@ -78,7 +78,9 @@ template <class T>
 void add_into(T* dst, const Value& v, size_t count) {
   if (v.is_tensor()) {
     const Tensor& t = v.tensor();
-    if (t.size() != count) throw runtime::Fault("cannot add a value of shape " + t.shape().str() + " into a part of " + std::to_string(count) + " components");
+    if (t.size() != count)
+      throw runtime::Fault("cannot add a value of shape " + t.shape().str() + " into a part of " +
+                           std::to_string(count) + " components");
     if constexpr (std::is_same_v<T, double>) {
       const double* s = t.floats();
       for (size_t i = 0; i < count; ++i) dst[i] += s[i];
@@ -92,9 +94,12 @@ void add_into(T* dst, const Value& v, size_t count) {
     return;
   }
   for (size_t i = 0; i < count; ++i) {
-    if constexpr (std::is_same_v<T, double>) dst[i] += v.as_float();
-    else if constexpr (std::is_same_v<T, int32_t>) dst[i] += v.as_int();
-    else dst[i] += v.as_complex();
+    if constexpr (std::is_same_v<T, double>)
+      dst[i] += v.as_float();
+    else if constexpr (std::is_same_v<T, int32_t>)
+      dst[i] += v.as_int();
+    else
+      dst[i] += v.as_complex();
   }
 }
 
@@ -102,8 +107,10 @@ void add_into(T* dst, const Value& v, size_t count) {
 
 void Interpreter::write_place(const Place& p, Value value, const SourceSpan& at) {
   try {
-    if (p.field_set) write_field(p, std::move(value), at);
-    else write_place_raw(p, std::move(value), at);
+    if (p.field_set)
+      write_field(p, std::move(value), at);
+    else
+      write_place_raw(p, std::move(value), at);
   } catch (const runtime::Fault& f) {
     fail(at, f.what());
   }

@@ -36,8 +36,7 @@ runtime::FieldType field_type_of(const Type& t) {
 
 void Interpreter::bind_set(const ast::Variable& v, runtime::Set& set) {
   const Type& t = *v.type;
-  if (t.kind != Type::Kind::Set || !t.element)
-    fail(v.span, "extern '" + v.name + "' is not a set");
+  if (t.kind != Type::Kind::Set || !t.element) fail(v.span, "extern '" + v.name + "' is not a set");
   SetBinding* b = nullptr;
   for (auto& existing : bindings_)
     if (existing->set == &set && existing->element == t.element) b = existing.get();
@@ -91,7 +90,8 @@ Value read_components(const runtime::Field& f, size_t offset, const Shape& shape
     // The kind (and width) is the field type's, so its bytes are read without a check.
     const std::byte* bytes = f.bytes();
     switch (t.kind) {
-      case ComponentKind::Int: return Value::of_int(reinterpret_cast<const int32_t*>(bytes)[offset]);
+      case ComponentKind::Int:
+        return Value::of_int(reinterpret_cast<const int32_t*>(bytes)[offset]);
       case ComponentKind::Bool: return Value::of_bool(reinterpret_cast<const bool*>(bytes)[offset]);
       case ComponentKind::Float:
         return Value::of_float(t.single ? reinterpret_cast<const float*>(bytes)[offset]
@@ -142,8 +142,10 @@ Value Interpreter::field_vector(const SetBinding& b, int field) {
 Value Interpreter::eval_field_read(const ast::FieldRead& r) {
   Value scratch;
   const Value& base = operand(*r.base, scratch);
-  if (r.of_set || base.kind() == Value::Kind::Set) return field_vector(*base.binding(), r.field_index);
-  if (base.kind() != Value::Kind::Element) fail(r.span, "field read of a value that is not an element");
+  if (r.of_set || base.kind() == Value::Kind::Set)
+    return field_vector(*base.binding(), r.field_index);
+  if (base.kind() != Value::Kind::Element)
+    fail(r.span, "field read of a value that is not an element");
   const SetBinding& b = *base.binding();
   const runtime::Set& s = *b.set;
   if (base.index() < 0 || base.index() >= s.size())
@@ -179,7 +181,8 @@ Value Interpreter::eval_tuple_read(const ast::TupleRead& r) {
 // `g[o;q]` (a link of the grid) and `P[o]` (a point at an offset), relative to the point
 // the stencil map is visiting.
 Value Interpreter::eval_set_read(const ast::SetRead& r) {
-  if (!map_ || !map_->grid) fail(r.span, "grid reads are only possible inside a map through a grid");
+  if (!map_ || !map_->grid)
+    fail(r.span, "grid reads are only possible inside a map through a grid");
   Value scratch;
   const Value& base = operand(*r.base, scratch);
   auto ints = [&](const std::vector<ast::ExprPtr>& exprs) {
@@ -266,8 +269,10 @@ void Interpreter::write_field(const Place& p, Value value, const SourceSpan& at)
   q.shape = p.shape;
   q.accumulate = p.accumulate;
   auto put_back = [&] {
-    if (one) s.set(p.field, p.element, staged.tensor());
-    else s.assign_field(p.field, staged.tensor());
+    if (one)
+      s.set(p.field, p.element, staged.tensor());
+    else
+      s.assign_field(p.field, staged.tensor());
   };
   try {
     write_place_raw(q, std::move(value), at);

@@ -10,13 +10,13 @@
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
 #include "jit/controller_state.h"
+#include "jit/decompose_call.h"
+#include "jit/lower.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
 #include "runtime/system_ops.h"
-#include "jit/decompose_call.h"
-#include "jit/lower.h"
 
 namespace simit::jit {
 

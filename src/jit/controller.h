@@ -13,9 +13,9 @@
 #include "interp/assembly_plan.h"
 #include "jit/executor.h"
 #include "jit/lower.h"
-#include "jit/target.h"
 #include "jit/matrix_sum.h"
 #include "jit/system_trace.h"
+#include "jit/target.h"
 #include "jit/trace_site.h"
 #include "jit/tunables.h"
 
@@ -28,8 +28,8 @@ struct JitOptions {
   bool eager = false;
   // Where compiled kernels are cached between runs; empty: no cache.
   std::string cache_dir;
-  bool float32 = false;            // the interpreter's float32 mode
-  bool check_finite = false;       // the interpreter's check-finite mode
+  bool float32 = false;       // the interpreter's float32 mode
+  bool check_finite = false;  // the interpreter's check-finite mode
   // Where `--dump=loop-ir,llvm` prints each compiled trace; null prints nothing.
   std::ostream* dump = nullptr;
   bool dump_loop_ir = false;

@@ -13,8 +13,8 @@ namespace {
 class SerialExecutor : public Executor {
  public:
   const char* name() const override { return "serial"; }
-  MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
-                     MapWrites, const std::function<bool()>& interrupt) override {
+  MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk, MapWrites,
+                     const std::function<bool()>& interrupt) override {
     MapOutcome out;
     for (int32_t begin = 0; begin < n; begin += chunk) {
       const int32_t end = std::min(n, begin + chunk);
@@ -35,7 +35,8 @@ class ShuffledExecutor : public Executor {
   const char* name() const override { return "shuffled"; }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
-    if (writes == MapWrites::Shared) return serial_.run_map(kernel, args, n, chunk, writes, interrupt);
+    if (writes == MapWrites::Shared)
+      return serial_.run_map(kernel, args, n, chunk, writes, interrupt);
     chunk = chunk_;
     const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;
     std::vector<int32_t> order(static_cast<size_t>(chunks));

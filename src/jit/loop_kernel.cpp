@@ -209,9 +209,8 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
     if (!v.empty()) scalars[i] = component(v, 0);
   }
   interp::Trap& trap = in.trap();
-  const int32_t rc =
-      executor_->run_system(
-          *e->kernel, {arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag()});
+  const int32_t rc = executor_->run_system(
+      *e->kernel, {arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag()});
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
   // the scalars go back to their variables, and the interrupt is raised below.

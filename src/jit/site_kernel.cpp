@@ -150,9 +150,8 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     }
   const MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
   interp::Trap& trap = call.interpreter.trap();
-  const MapOutcome out =
-      executor_->run_map(*e.kernel, args, call.target.size(), kChunkElements, e.writes,
-                         [&trap] { return trap.interrupt_pending(); });
+  const MapOutcome out = executor_->run_map(*e.kernel, args, call.target.size(), kChunkElements,
+                                            e.writes, [&trap] { return trap.interrupt_pending(); });
   if (out.code != 0) {
     const ErrorSite& err = t.errors[static_cast<size_t>(out.code - 1)];
     for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing

@@ -64,7 +64,7 @@ std::string run_lines(const std::vector<const frontend::ast::Stmt*>& run);
 // reading the shapes of vectors and matrices from the interpreter's variables. Under
 // `float32` every operator, call and literal is rounded to binary32, as the interpreter's
 // float32 mode rounds them (docs/arithmetic.md).
-TracedSystem trace_system(const std::vector<const frontend::ast::Stmt*>& run,
-                          interp::ExecState& in, bool float32 = false);
+TracedSystem trace_system(const std::vector<const frontend::ast::Stmt*>& run, interp::ExecState& in,
+                          bool float32 = false);
 
 }  // namespace simit::jit

@@ -26,7 +26,8 @@ std::vector<std::string> words(const std::string& text, int& brackets) {
       ++i;
     } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
       size_t b = i;
-      while (i < text.size() && (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_'))
+      while (i < text.size() &&
+             (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_'))
         ++i;
       out.push_back(text.substr(b, i - b));
     } else {
@@ -50,14 +51,19 @@ bool has_top_level_assignment(const std::string& text) {
   for (size_t i = 0; i < text.size(); ++i) {
     char c = text[i];
     if (in_string) {
-      if (c == '\\') ++i;
-      else if (c == '"') in_string = false;
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
       continue;
     }
     if (c == '%') return false;  // the rest is a comment
-    if (c == '"') in_string = true;
-    else if (c == '(' || c == '[') ++depth;
-    else if (c == ')' || c == ']') --depth;
+    if (c == '"')
+      in_string = true;
+    else if (c == '(' || c == '[')
+      ++depth;
+    else if (c == ')' || c == ']')
+      --depth;
     else if (c == '=' && depth == 0) {
       char prev = i > 0 ? text[i - 1] : ' ';
       char next = i + 1 < text.size() ? text[i + 1] : ' ';

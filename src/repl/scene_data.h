@@ -29,7 +29,7 @@ struct SceneData {
 
 // Reads a scene (float fields in binary32 when `float32`); on failure reports on `err` (as
 // `simit run` would) and returns nothing.
-using SceneLoader =
-    std::function<std::optional<SceneData>(const std::string& path, bool float32, std::ostream& err)>;
+using SceneLoader = std::function<std::optional<SceneData>(const std::string& path, bool float32,
+                                                           std::ostream& err)>;
 
 }  // namespace simit::repl

@@ -15,8 +15,8 @@ std::optional<SceneData> load_scene(const std::string& path, bool float32, std::
   d.step = built->step;
   d.sets = built->sets;
   for (auto& [name, t] : built->tensors)
-    d.tensors.emplace_back(name, t.shape().is_scalar() ? interp::Value::component(t, 0)
-                                                       : interp::Value::of_tensor(t));
+    d.tensors.emplace_back(
+        name, t.shape().is_scalar() ? interp::Value::component(t, 0) : interp::Value::of_tensor(t));
   d.owner = built->owner;
   return d;
 }

@@ -10,9 +10,9 @@ namespace simit::scene {
 
 struct FrameReport {
   int frame = 0, frames = 0;
-  double ms = 0.0;          // this frame
-  double total_ms = 0.0;    // every frame so far
-  double elapsed_s = 0.0;   // wall time since the first frame started
+  double ms = 0.0;         // this frame
+  double total_ms = 0.0;   // every frame so far
+  double elapsed_s = 0.0;  // wall time since the first frame started
   const std::vector<std::string>* stat_names = nullptr;
   const std::vector<double>* stats = nullptr;  // step's scalar results, in that order
 };

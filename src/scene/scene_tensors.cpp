@@ -91,7 +91,10 @@ interp::Value read_tensor(const SceneFile& file, const std::string& name, const 
                           (items.size() == 1 ? " was" : "s were") + " given");
   Storage s;
   switch (ft->kind) {
-    case ComponentKind::Float: s.doubles.resize(comps); s.floats.resize(comps); break;
+    case ComponentKind::Float:
+      s.doubles.resize(comps);
+      s.floats.resize(comps);
+      break;
     case ComponentKind::Int: s.ints.resize(comps); break;
     case ComponentKind::Bool: s.bools = std::make_unique<bool[]>(comps); break;
     default: break;

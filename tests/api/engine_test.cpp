@@ -127,12 +127,14 @@ TEST(Engine, OptionsReachTheExecutor) {
   EngineOptions o;
   o.out = &printed;
   Engine wide(f.compiled, o);
-  const double b64 = wide.call(f.func("third"), {Value::of_float(1.0)}).at(0).to_tensor().floats()[0];
+  const double b64 =
+      wide.call(f.func("third"), {Value::of_float(1.0)}).at(0).to_tensor().floats()[0];
   EXPECT_DOUBLE_EQ(b64, 1.0 / 3.0);
   EXPECT_FALSE(printed.str().empty());
   o.float32 = true;
   Engine narrow(f.compiled, o);
-  const double b32 = narrow.call(f.func("third"), {Value::of_float(1.0)}).at(0).to_tensor().floats()[0];
+  const double b32 =
+      narrow.call(f.func("third"), {Value::of_float(1.0)}).at(0).to_tensor().floats()[0];
   EXPECT_EQ(b32, static_cast<double>(1.0f / 3.0f));
 }
 

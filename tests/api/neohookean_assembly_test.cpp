@@ -21,8 +21,8 @@ using Dense = Eigen::MatrixXd;
 constexpr int kVerts = 5;
 constexpr double kMu = 3.5e5, kLambda = 1.2e6;
 
-const std::array<Vec3, kVerts> kRest = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
-                                        Vec3(0, 0, 1), Vec3(1, 1, 1)};
+const std::array<Vec3, kVerts> kRest = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1),
+                                        Vec3(1, 1, 1)};
 const std::array<Vec3, kVerts> kMotion = {Vec3(0.02, -0.01, 0.03), Vec3(0.1, 0.05, -0.02),
                                           Vec3(-0.04, 0.08, 0.01), Vec3(0.03, -0.02, 0.12),
                                           Vec3(-0.05, 0.04, 0.06)};
@@ -82,8 +82,8 @@ struct Pyramid {
   simit::FieldRef<double> mu = tets.add_field<double>("mu");
   simit::FieldRef<double> lambda = tets.add_field<double>("lambda");
   simit::Program program;
-  simit::Function assemble;      // f and K
-  simit::Function force_only;    // f (K assembled into a local)
+  simit::Function assemble;    // f and K
+  simit::Function force_only;  // f (K assembled into a local)
 
   Pyramid() {
     for (int v = 0; v < kVerts; ++v) {
@@ -140,13 +140,13 @@ bool matrix_results_work() {
   return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
-#define SKIP_UNLESS_MATRIX_RESULTS_WORK()                                                     \
-  if (!matrix_results_work())                                                                 \
-  GTEST_SKIP() << "the interpreter cannot yet return an assembled system matrix from an "     \
-                  "exported function: running `f, K = map tet_system to tets reduce +;` with "  \
-                  "K a result crashed or failed in a child process (seen: segfault in "         \
-                  "Interpreter::write_place_raw, places.cpp, whose system-matrix branch "       \
-                  "handles a whole-variable assignment as a block write into the result's "     \
+#define SKIP_UNLESS_MATRIX_RESULTS_WORK()                                                      \
+  if (!matrix_results_work())                                                                  \
+  GTEST_SKIP() << "the interpreter cannot yet return an assembled system matrix from an "      \
+                  "exported function: running `f, K = map tet_system to tets reduce +;` with " \
+                  "K a result crashed or failed in a child process (seen: segfault in "        \
+                  "Interpreter::write_place_raw, places.cpp, whose system-matrix branch "      \
+                  "handles a whole-variable assignment as a block write into the result's "    \
                   "empty zero matrix)"
 
 Dense to_dense(const simit::SystemMatrixView& K) {

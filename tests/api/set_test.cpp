@@ -3,8 +3,8 @@
 
 #include <sstream>
 
-#include "api_test_util.h"
 #include "api/set_access.h"
+#include "api_test_util.h"
 #include "simit/simit.h"
 
 namespace {
@@ -113,7 +113,7 @@ TEST(ApiSet, EdgeSetsHoldEndpoints) {
   EXPECT_EQ(ties.endpoint_set(1), &cells);
   EXPECT_EQ(bars.endpoints(s), (std::vector<simit::ElementRef>{a, b}));
   EXPECT_EQ(bars.endpoints_data()[1], 1);
-  EXPECT_THROW(bars.add(a), simit::Error);                       // wrong arity
+  EXPECT_THROW(bars.add(a), simit::Error);                        // wrong arity
   EXPECT_THROW(bars.add(a, simit::ElementRef(5)), simit::Error);  // not in nodes
   EXPECT_THROW(nodes.add(a), simit::Error);                       // vertex sets take none
 }

@@ -827,8 +827,9 @@ end
     EXPECT_EQ(e.stack()[1].func, "per_node");
     EXPECT_EQ(e.stack()[1].element, "mapping over element 2 of set 'nodes'");
     EXPECT_EQ(e.stack()[2].func, "run");
-    EXPECT_NE(e.render().find("  in per_node (assembly.sim:7), mapping over element 2 of set 'nodes'\n"),
-              std::string::npos)
+    EXPECT_NE(
+        e.render().find("  in per_node (assembly.sim:7), mapping over element 2 of set 'nodes'\n"),
+        std::string::npos)
         << e.render();
   }
 }

@@ -178,8 +178,7 @@ TEST_F(FieldView, Float32FieldsStillWork) {
   in_->bind_set(nodes_var(), small);
   in_->call(testing::func(*c_, "step"), {Value::of_float(0.5)});
   EXPECT_EQ(small.field(0).data<float>()[3], 1.0f);
-  std::vector<Value> r = in_->call(testing::func(*c_, "read_then_write"),
-                                   {element(1)});
+  std::vector<Value> r = in_->call(testing::func(*c_, "read_then_write"), {element(1)});
   EXPECT_EQ(r[0].tensor().floats()[3], 1.0);
   EXPECT_EQ(small.field(0).data<float>()[3], 7.0f);
   EXPECT_EQ(small.field(2).data<float>()[1], 3.0f);

@@ -63,9 +63,8 @@ TEST(Executor, SerialStopsAtTheFirstFailureAndForAnInterrupt) {
 
   RecordingKernel quiet;
   int asked = 0;
-  out = make_serial_executor()->run_map(quiet, {}, 12, 4, MapWrites::Shared, [&] {
-    return ++asked == 2;
-  });
+  out = make_serial_executor()->run_map(quiet, {}, 12, 4, MapWrites::Shared,
+                                        [&] { return ++asked == 2; });
   EXPECT_TRUE(out.interrupted);
   EXPECT_EQ(quiet.ranges.size(), 2u);  // stopped between the second and the third chunk
 }

@@ -348,7 +348,7 @@ TEST(PrunedMatrix, TheCopyDropsZeroBlocksHoldsColumnsAndIsPadded) {
   EXPECT_EQ(p.kept, 11);
   EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 4, 6, 9, 11}));
   EXPECT_EQ(p.cols[0], 0);
-  EXPECT_EQ(p.cols[1], 0);  // row 1 starts with block (1, 0)
+  EXPECT_EQ(p.cols[1], 0);        // row 1 starts with block (1, 0)
   ASSERT_EQ(p.cols.size(), 11u);  // the kept blocks only
   ASSERT_EQ(p.values.size(), 11u * 9 + 1);
   // Block (1, 0), by columns: component (i, j) at 3 j + i.

@@ -27,8 +27,8 @@ std::vector<std::string> split(const std::string& line) {
 }
 
 TEST(SceneStats, CsvSplitsEachFrameIntoAssemblyAndSolve) {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("simit_scene_stats_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("simit_scene_stats_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string src = SIMIT_SOURCE_DIR;
   // The fem example on the small bar of tests/data, with a loose CG so that it is quick.
