@@ -4,14 +4,17 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <unordered_map>
+#include <vector>
 
 namespace simit::jit {
 
@@ -282,6 +285,10 @@ std::optional<CacheEntry> KernelCache::load(const std::string& digest) const {
     return std::nullopt;                                                // truncated
   if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;  // trailing bytes
   if (checksum(e) != sum) return std::nullopt;
+  // Marks the entry used (its modification time: prune removes the least recently used).
+  std::error_code ec;
+  std::filesystem::last_write_time(path_of(digest), std::filesystem::file_time_type::clock::now(),
+                                   ec);
   return e;
 }
 
@@ -328,7 +335,47 @@ bool KernelCache::store(const std::string& digest, const CacheEntry& entry,
     ::unlink(temp.c_str());
     return false;
   }
+  prune(kKernelCacheMaxBytes);
   return true;
+}
+
+int KernelCache::prune(uint64_t max_bytes) const {
+  namespace fs = std::filesystem;
+  if (!enabled()) return 0;
+  struct File {
+    fs::path path;
+    fs::file_time_type used;
+    uint64_t bytes;
+  };
+  std::vector<File> entries;
+  uint64_t total = 0;
+  const auto now = fs::file_time_type::clock::now();
+  std::error_code ec;
+  for (fs::directory_iterator it(folder_, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code e;
+    const fs::path& p = it->path();
+    const std::string name = p.filename().string();
+    const auto used = fs::last_write_time(p, e);
+    const uint64_t bytes = e ? 0 : fs::file_size(p, e);
+    if (e) continue;  // removed meanwhile (another run's prune)
+    if (name.find(".o.tmp.") != std::string::npos) {
+      if (now - used > std::chrono::hours(1)) fs::remove(p, e);
+    } else if (name.size() == 2 * kDigestBytes + 2 && p.extension() == ".o") {
+      entries.push_back({p, used, bytes});
+      total += bytes;
+    }
+  }
+  if (total <= max_bytes) return 0;
+  std::sort(entries.begin(), entries.end(),
+            [](const File& a, const File& b) { return a.used < b.used; });
+  int removed = 0;
+  for (const File& f : entries) {
+    if (total <= max_bytes / 4 * 3) break;
+    std::error_code e;
+    if (fs::remove(f.path, e)) ++removed;
+    total -= f.bytes;
+  }
+  return removed;
 }
 
 }  // namespace simit::jit

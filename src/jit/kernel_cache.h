@@ -16,6 +16,9 @@ namespace simit::jit {
 // Bumped whenever the code generated for the same trace changes (the emitter, the pipeline,
 // the calling convention), so that no run loads the code of an older generator.
 inline constexpr int kKernelFormatVersion = 1;
+// The cache folder's size limit: a store that takes it above this removes the entries used
+// least recently (a load marks an entry used) until the folder holds three quarters of it.
+inline constexpr uint64_t kKernelCacheMaxBytes = uint64_t{256} << 20;
 
 // Every field of a trace that decides its code, as text: structure, types, constants (their
 // exact bits), slots and flags; not its name, source spans or error messages (a kernel reports
@@ -55,6 +58,10 @@ class KernelCache {
   // leave one whole entry. False with `error` set when something could not be written (the
   // temporary file is removed).
   bool store(const std::string& digest, const CacheEntry& entry, std::string& error) const;
+  // Keeps the folder within `max_bytes` (store calls it with kKernelCacheMaxBytes): removes
+  // entries, the least recently used first, until it holds at most three quarters of it, and
+  // temporary files a killed writer left more than an hour ago. Returns the entries removed.
+  int prune(uint64_t max_bytes) const;
 
  private:
   std::string folder_;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -282,6 +283,42 @@ TEST(KernelCache, NoFolderKeepsNothingAndAnUnwritableOneIsNoErrorToTheUser) {
   EXPECT_FALSE(b->cached);
   EXPECT_EQ(dir.files(), 1u);
   expect_same_bits(run_map(*b, mesh), reference(mesh, 0.0));
+}
+
+TEST(KernelCache, AFullFolderLosesItsLeastRecentlyUsedEntries) {
+  TempFolder dir;
+  const KernelCache cache(dir.str());
+  // Five entries of 1000 object bytes, made one after another, the first used last.
+  std::vector<std::string> digests;
+  const auto start = fs::file_time_type::clock::now() - std::chrono::minutes(10);
+  for (int i = 0; i < 5; ++i) {
+    std::string d(KernelCache::kDigestBytes, static_cast<char>('a' + i));
+    std::string error;
+    ASSERT_TRUE(cache.store(d, {"simit_k_" + std::to_string(i), std::string(1000, 'x')}, error))
+        << error;
+    fs::last_write_time(cache.path_of(d), start + std::chrono::seconds(i));
+    digests.push_back(d);
+  }
+  ASSERT_TRUE(cache.load(digests[0]));  // now the most recently used
+  const uint64_t entry_bytes = fs::file_size(cache.path_of(digests[1]));
+  // A temporary file a killed writer left two hours ago, and one being written now.
+  write_file(dir.path / (hex_of(digests[4]) + ".o.tmp.1.2.3"), "half");
+  fs::last_write_time(dir.path / (hex_of(digests[4]) + ".o.tmp.1.2.3"),
+                      fs::file_time_type::clock::now() - std::chrono::hours(2));
+  write_file(dir.path / (hex_of(digests[3]) + ".o.tmp.4.5.6"), "half");
+
+  // Room for four entries: down to three quarters, three entries; the oldest two go.
+  EXPECT_EQ(cache.prune(4 * entry_bytes), 2);
+  EXPECT_FALSE(cache.load(digests[1]));
+  EXPECT_FALSE(cache.load(digests[2]));
+  EXPECT_TRUE(cache.load(digests[0]));
+  EXPECT_TRUE(cache.load(digests[3]));
+  EXPECT_TRUE(cache.load(digests[4]));
+  EXPECT_FALSE(fs::exists(dir.path / (hex_of(digests[4]) + ".o.tmp.1.2.3")));
+  EXPECT_TRUE(fs::exists(dir.path / (hex_of(digests[3]) + ".o.tmp.4.5.6")));
+  // Within the limit, nothing goes.
+  EXPECT_EQ(cache.prune(100 * entry_bytes), 0);
+  EXPECT_EQ(dir.entries().size(), 3u);
 }
 
 TEST(KernelCache, AMissingFolderIsMadeWithItsParents) {
