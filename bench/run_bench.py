@@ -515,20 +515,19 @@ def main():
     args.simit = os.path.join(args.build, "tools", "simit")
     args.cloth = [int(n) for n in args.cloth.split(",") if n.strip()]
     args.executors = [e for e in args.executors.split(",") if e]
-    compare = []
-    for spec in args.compare_baseline:
-        label, sep, build = spec.partition("=")
-        if not sep or not label or not build:
-            p.error("--compare-baseline needs LABEL=DIR, got '%s'" % spec)
-        compare.append((label, os.path.abspath(build)))
-    args.compare_baseline = compare
-    others = []
-    for spec in args.compare_simit:
-        label, sep, build = spec.partition("=")
-        if not sep or not label or not build:
-            p.error("--compare-simit needs LABEL=DIR, got '%s'" % spec)
-        others.append((label, os.path.abspath(build)))
-    args.compare_simit = others
+
+    def label_dirs(option, specs):
+        """(label, absolute folder) of each LABEL=DIR given to OPTION."""
+        out = []
+        for spec in specs:
+            label, sep, build = spec.partition("=")
+            if not sep or not label or not build:
+                p.error("%s needs LABEL=DIR, got '%s'" % (option, spec))
+            out.append((label, os.path.abspath(build)))
+        return out
+
+    compare = args.compare_baseline = label_dirs("--compare-baseline", args.compare_baseline)
+    args.compare_simit = label_dirs("--compare-simit", args.compare_simit)
     for e in args.executors:
         if e not in EXECUTORS:
             p.error("unknown executor '%s' (known: %s)" % (e, ", ".join(EXECUTORS)))

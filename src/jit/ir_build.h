@@ -35,6 +35,16 @@ inline ExprRef node(ExprKind k, Ty ty, uint8_t op, std::vector<ExprRef> ops,
   return make(std::move(e));
 }
 
+// `local = value` at `at`.
+inline Stmt set_local(int local, ExprRef value, const frontend::SourceSpan& at) {
+  Stmt s;
+  s.kind = StmtKind::SetLocal;
+  s.slot = local;
+  s.value = std::move(value);
+  s.span = at;
+  return s;
+}
+
 inline ExprRef fconst(double v) {
   Expr e;
   e.kind = ExprKind::Const;

@@ -52,13 +52,6 @@ Lowered run_pipeline(T& t, const Pass<T> (&passes)[N], Target& target, const Low
   return out;
 }
 
-template <class T, size_t N>
-const char* const* names_of(const Pass<T> (&passes)[N]) {
-  static const char* names[N];
-  for (size_t i = 0; i < N; ++i) names[i] = passes[i].name;
-  return names;
-}
-
 }  // namespace
 
 Lowered lower(Trace& trace, Target& target, const LowerOptions& options) {
@@ -68,8 +61,5 @@ Lowered lower(Trace& trace, Target& target, const LowerOptions& options) {
 Lowered lower(SystemTrace& trace, Target& target, const LowerOptions& options) {
   return run_pipeline(trace, kSystemPasses, target, options);
 }
-
-const char* const* map_passes() { return names_of(kMapPasses); }
-const char* const* system_passes() { return names_of(kSystemPasses); }
 
 }  // namespace simit::jit

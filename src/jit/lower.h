@@ -33,8 +33,4 @@ struct Lowered {
 Lowered lower(Trace& trace, Target& target, const LowerOptions& options);
 Lowered lower(SystemTrace& trace, Target& target, const LowerOptions& options);
 
-// The names of the passes each pipeline runs, in order (for docs and tests).
-const char* const* map_passes();
-const char* const* system_passes();
-
 }  // namespace simit::jit

@@ -44,27 +44,20 @@ ExprRef SystemTracer::dot(const ast::Expr& u, const ast::Expr& v, const SourceSp
   const int t = temp(Ty::F64);
   // The sum starts at +0.0 at the top of every iteration, so that no scalar op stands
   // between the start and its pass: fuse_passes may move the pass up to another loop.
-  Stmt start;
-  start.kind = StmtKind::SetLocal;
-  start.slot = t;
-  start.value = fconst(0.0);
-  start.span = at;
-  starts_.push_back(std::move(start));
+  starts_.push_back(jit::set_local(t, fconst(0.0), at));
   ExprRef a = component(u), b = component(v);
   VectorOp pass;
   pass.kind = VectorOp::Kind::Pass;
   pass.length = n;
   pass.group = group;
   pass.sums = {t};
-  Stmt s;
-  s.kind = StmtKind::SetLocal;
-  s.slot = t;
-  s.value = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add),
-                 {local(t, Ty::F64),
-                  node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {a, b}, at)},
-                 at);
-  s.span = at;
-  pass.body.push_back(std::move(s));
+  pass.body.push_back(jit::set_local(
+      t,
+      node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add),
+           {local(t, Ty::F64),
+            node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {a, b}, at)},
+           at),
+      at));
   push_op(std::move(pass), at);
   return local(t, Ty::F64);
 }

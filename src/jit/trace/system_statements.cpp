@@ -26,12 +26,7 @@ void SystemTracer::push_op(VectorOp op, const SourceSpan& at) {
 }
 
 void SystemTracer::set_local(int l, ExprRef v, const SourceSpan& at) {
-  Stmt s;
-  s.kind = StmtKind::SetLocal;
-  s.slot = l;
-  s.value = std::move(v);
-  s.span = at;
-  scalar_stmt(std::move(s));
+  scalar_stmt(jit::set_local(l, std::move(v), at));
 }
 
 int SystemTracer::temp(Ty ty) {

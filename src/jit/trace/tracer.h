@@ -66,12 +66,7 @@ class Tracer {
   }
   void set_local(int l, ExprRef v, const SourceSpan& at) {
     if (v->loose) loose_locals_.insert(l);
-    Stmt s;
-    s.kind = StmtKind::SetLocal;
-    s.slot = l;
-    s.value = std::move(v);
-    s.span = at;
-    emit(std::move(s));
+    emit(jit::set_local(l, std::move(v), at));
   }
   // A value that later statements may read: constants, reads of locals nothing rewrites and
   // components of scratch arrays (each is filled once per element, before any read) stay as
