@@ -33,8 +33,9 @@ constexpr int kUsageError = 2;
 struct ExecutorFlags {
   ExecutorChoice* choice = nullptr;
   bool* stats = nullptr;
-  CLI::Option* kind = nullptr;   // --executor: given or not
-  CLI::Option* cache = nullptr;  // --jit-cache: given or not
+  CLI::Option* kind = nullptr;     // --executor: given or not
+  CLI::Option* threads = nullptr;  // --threads: given or not
+  CLI::Option* cache = nullptr;    // --jit-cache: given or not
 };
 
 struct Commands {
@@ -87,6 +88,20 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
                    "other system statements compiled to native code with LLVM; the rest "
                    "interpreted). --backend is another name of this option")
                ->type_name("interpreter|jit");
+  t.threads = add_parsed(
+                  sub, "--threads",
+                  [&x](const std::string& s, std::string& error) {
+                    std::optional<int> n = parse_threads(s, error);
+                    if (n) x.threads = *n;
+                    return n.has_value();
+                  },
+                  "jit: threads that run the compiled maps and solver loops, from 1 to " +
+                      std::to_string(kMaxThreads) +
+                      ", or all (or 0): every core this process may use (default: every core, " +
+                      std::to_string(default_threads()) +
+                      " here); results are the same for every count. The interpreter, and what "
+                      "the JIT leaves interpreted, runs on one thread whatever N")
+                  ->type_name("N|all");
   add_parsed(
       sub, "--jit-threshold",
       [&x](const std::string& s, std::string& error) {
@@ -290,6 +305,22 @@ bool names_unknown_command(const CLI::App& app, int argc, const char* const* arg
   return true;
 }
 
+// What `simit run SCENE.toml` hands to the scene: the options given, and which of them were
+// given (those win over the scene file's keys).
+SceneOptions scene_options(const Commands& c) {
+  SceneOptions so = c.scene_options;
+  so.file = c.run_options.file;
+  so.float32 = c.run_options.float32;
+  so.check_finite = c.run_options.check_finite;
+  so.executor = c.run_options.executor;
+  so.executor_given = c.run_executor.kind->count() > 0;
+  so.threads_given = c.run_executor.threads->count() > 0;
+  so.jit_cache_given = c.run_executor.cache->count() > 0;
+  so.jit_stats = c.run_options.jit_stats;
+  so.finite_check = !c.no_finite_check;
+  return so;
+}
+
 void add_commands(CLI::App& app, Commands& c) {
   app.set_version_flag("--version", "simit " SIMIT_VERSION);
   add_check(app, c);
@@ -324,6 +355,22 @@ std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const*
   return std::nullopt;
 }
 
+std::optional<SceneOptions> parse_scene_options(int argc, const char* const* argv,
+                                                std::ostream& err) {
+  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+  Commands c;
+  add_commands(app, c);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    err << "simit: error: " << e.what() << "\n";
+    return std::nullopt;
+  }
+  if (c.run->parsed() && ends_with(c.run_options.file, ".toml")) return scene_options(c);
+  err << "simit: error: not a scene run\n";
+  return std::nullopt;
+}
+
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
   Commands c;
@@ -354,15 +401,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (ends_with(c.run_options.file, ".toml")) {
       if (!c.run_options.func.empty() || !c.run->remaining().empty())
         return usage_error(app, "a scene (.toml) takes no --call and no arguments", err);
-      SceneOptions& so = c.scene_options;
-      so.file = c.run_options.file;
-      so.float32 = c.run_options.float32;
-      so.check_finite = c.run_options.check_finite;
-      so.executor = c.run_options.executor;
-      so.executor_given = c.run_executor.kind->count() > 0;
-      so.jit_cache_given = c.run_executor.cache->count() > 0;
-      so.jit_stats = c.run_options.jit_stats;
-      so.finite_check = !c.no_finite_check;
+      SceneOptions so = scene_options(c);
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
       return run_scene(so, out, err);

@@ -4,6 +4,7 @@
 #include <optional>
 #include <ostream>
 
+#include "scene_command.h"
 #include "simit/executor.h"
 
 namespace simit::tools {
@@ -17,5 +18,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 // on `err`.
 std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const* argv,
                                                     std::ostream& err);
+
+// The options `simit run SCENE.toml ...` hands to the scene, parsed as run_cli parses them,
+// nothing read or run (tests of the parsing); nullopt after a usage error on `err` or for
+// arguments that are not a scene run.
+std::optional<SceneOptions> parse_scene_options(int argc, const char* const* argv,
+                                                std::ostream& err);
 
 }  // namespace simit::tools

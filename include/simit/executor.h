@@ -14,10 +14,21 @@ namespace simit {
 // statements compiled to native code with LLVM; a build with -DSIMIT_WITH_LLVM=ON).
 enum class ExecutorKind { Interpreter, Jit };
 
+// The most threads a choice may ask for.
+inline constexpr int kMaxThreads = 1024;
+
+// Every core this process may use: the CPUs of its affinity mask (sched_getaffinity, so a run
+// under `taskset` or a container's CPU limit counts only its own), else
+// std::thread::hardware_concurrency(); at least 1 and at most kMaxThreads. Read anew at each
+// call (the mask may change).
+int default_threads();
+
 struct ExecutorChoice {
   ExecutorKind kind = ExecutorKind::Interpreter;
-  // Threads of a threaded executor (to come); only 1 runs today.
-  int threads = 1;
+  // jit: the threads that run compiled maps and solver loops (1: serially, on the calling
+  // thread), from 1 to kMaxThreads. The interpreter, and what the JIT leaves interpreted, runs
+  // on one thread whatever the count: results are the same bits for every count.
+  int threads = default_threads();
   // jit: executions of a site before it is compiled (0: at once); -1: the JIT's default.
   long threshold = -1;
   // jit (`--check-jit`): every compiled call also runs interpreted on the same inputs, and the
@@ -49,11 +60,14 @@ bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string&
 std::optional<long> parse_jit_threshold(std::string_view text, std::string& error);
 // "off" or a folder (not empty).
 std::optional<std::string> parse_jit_cache(std::string_view text, std::string& error);
+// A whole number of threads from 1 to kMaxThreads, or "all" (or "0", as in other tools'
+// thread options): default_threads(), the count returned.
+std::optional<int> parse_threads(std::string_view text, std::string& error);
 
 // Whether this build has the JIT (configured with -DSIMIT_WITH_LLVM=ON).
 bool jit_available();
 // "" when this build can run `choice`, otherwise why not (a JIT asked of a build without one,
-// more than one thread).
+// a thread count outside 1..kMaxThreads, which no parser gives but a program may set).
 std::string executor_unavailable(const ExecutorChoice& choice);
 
 }  // namespace simit

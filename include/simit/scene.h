@@ -27,10 +27,12 @@ struct SceneOptions {
   // frame, stopping at the first NaN or infinity (the scene's `finite_check = false`, or this
   // option false, turns it off).
   bool finite_check = true;
-  // What runs the frames (dumps print to the run's `out`). The scene file's `executor` and
-  // `jit_cache` keys choose the kind and the cache unless these flags say the options did.
+  // What runs the frames (dumps print to the run's `out`). The scene file's `executor`,
+  // `threads` and `jit_cache` keys choose the kind, the thread count and the cache unless these
+  // flags say the options did.
   ExecutorChoice executor;
   bool executor_given = false;   // `executor.kind` was given (`--executor`): the file's is ignored
+  bool threads_given = false;    // `executor.threads` was given (`--threads`): likewise
   bool jit_cache_given = false;  // `executor.jit_cache` was given (`--jit-cache`): likewise
   bool jit_stats = false;        // jit: print each trace's figures after the run
   bool progress_line = false;    // rewrite one progress line (a terminal) instead of plain lines

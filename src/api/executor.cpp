@@ -2,7 +2,14 @@
 // is turned into the typed value, with the one wording of its errors.
 #include "simit/executor.h"
 
+#include <algorithm>
+#include <cerrno>
 #include <charconv>
+#include <thread>
+
+#if defined(__linux__)
+#include <sched.h>
+#endif
 
 namespace simit {
 
@@ -47,6 +54,36 @@ std::optional<std::string> parse_jit_cache(std::string_view text, std::string& e
   return std::nullopt;
 }
 
+int default_threads() {
+#if defined(__linux__)
+  // The mask is read into a set sized for `cpus` CPUs, grown while the kernel's is larger
+  // (EINVAL): a fixed cpu_set_t holds 1024 only.
+  for (int cpus = 1024; cpus <= (1 << 20); cpus *= 2) {
+    cpu_set_t* set = CPU_ALLOC(cpus);
+    if (!set) break;
+    const size_t size = CPU_ALLOC_SIZE(cpus);
+    const int got = sched_getaffinity(0, size, set);
+    const int why = errno;
+    const int n = got == 0 ? CPU_COUNT_S(size, set) : 0;
+    CPU_FREE(set);
+    if (got == 0 && n > 0) return std::min(n, kMaxThreads);
+    if (got == 0 || why != EINVAL) break;
+  }
+#endif
+  return std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, kMaxThreads);
+}
+
+std::optional<int> parse_threads(std::string_view text, std::string& error) {
+  if (text == "all") return default_threads();
+  int n = -1;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec == std::errc() && end == text.data() + text.size() && n >= 0 && n <= kMaxThreads)
+    return n == 0 ? default_threads() : n;
+  error = "bad thread count '" + std::string(text) + "': expected a whole number from 1 to " +
+          std::to_string(kMaxThreads) + ", or all (or 0): every core this process may use";
+  return std::nullopt;
+}
+
 bool jit_available() {
 #ifdef SIMIT_HAS_JIT
   return true;
@@ -58,9 +95,10 @@ bool jit_available() {
 std::string executor_unavailable(const ExecutorChoice& choice) {
   if (choice.kind == ExecutorKind::Jit && !jit_available())
     return "this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON (LLVM 19)";
-  if (choice.threads != 1)
-    return std::to_string(choice.threads) +
-           " threads asked: the executors run on 1 thread (a threaded executor is not built yet)";
+  if (choice.threads < 1 || choice.threads > kMaxThreads)
+    return "bad thread count " + std::to_string(choice.threads) +
+           ": expected a whole number from 1 to " + std::to_string(kMaxThreads) +
+           " (default_threads(): every core this process may use)";
   return "";
 }
 

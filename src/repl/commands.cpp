@@ -31,8 +31,9 @@ const CommandHelp kCommands[] = {
     {"print", ":print SET.FIELD[i]", "one element's field value (or a whole field)"},
     {"time", ":time STMT", "run a statement and print how long it took"},
     {"run", ":run FUNC [N]", "run a function without parameters N times (default 1)"},
-    {"set", ":set OPTION VALUE",
-     "float32 on|off, check_finite on|off, print_limit N, executor interpreter|jit"},
+    {"set", ":set [OPTION VALUE]",
+     "float32 on|off, check_finite on|off, print_limit N, executor interpreter|jit, "
+     "threads N|all; alone, the settings"},
     {"jit", ":jit", "what the JIT compiled for :run (executor jit): site, compile ms, calls, ms"},
     {"reset", ":reset", "forget every declaration, variable and scene"},
     {"quit", ":quit", "leave (Ctrl-D too)"},
@@ -219,9 +220,16 @@ void Session::scene(const std::string& path) {
 
 void Session::set_option(const std::string& arg) {
   std::vector<std::string> w = split_blanks(arg);
+  if (w.empty()) {  // the settings, as `:set` takes them
+    out_ << "float32 " << (options_.float32 ? "on" : "off") << "\ncheck_finite "
+         << (options_.check_finite ? "on" : "off") << "\nprint_limit " << options_.print_limit
+         << "\nexecutor " << executor_name(options_.executor.kind) << "\nthreads "
+         << options_.executor.threads << "\n";
+    return;
+  }
   if (w.size() != 2) {
     err_ << ":set needs an option and a value (float32 on|off, check_finite on|off, "
-            "print_limit N, executor interpreter|jit)\n";
+            "print_limit N, executor interpreter|jit, threads N|all)\n";
     return;
   }
   bool flag = false;
@@ -261,8 +269,18 @@ void Session::set_option(const std::string& arg) {
       return;
     }
     options_.executor = choice;
+  } else if (w[0] == "threads") {
+    // The JIT's threads; the interpreter runs serially whatever the count.
+    std::string error;
+    std::optional<int> n = parse_threads(w[1], error);
+    if (!n) {
+      err_ << ":set threads: " << error << "\n";
+      return;
+    }
+    options_.executor.threads = *n;
   } else {
-    err_ << ":set: no option '" << w[0] << "' (float32, check_finite, print_limit, executor)\n";
+    err_ << ":set: no option '" << w[0]
+         << "' (float32, check_finite, print_limit, executor, threads)\n";
     return;
   }
 }
@@ -309,7 +327,8 @@ void Session::run_command(const std::string& arg) {
   std::string key = c->source->text();
   key += std::string(1, '\0') + (options_.float32 ? " float32" : "") +
          (options_.check_finite ? " check_finite" : "") + " " +
-         executor_name(options_.executor.kind);
+         executor_name(options_.executor.kind) + " threads " +
+         std::to_string(options_.executor.threads);
   if (key != run_.key || !run_.engine) run_ = RunEngine{std::move(key), std::move(c), nullptr};
   run_function(*run_.program, w[0], times);
 }

@@ -36,6 +36,7 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
     const SceneFile& file = *impl->file;
     ExecutorChoice& choice = impl->options.executor;
     if (file.executor && !options.executor_given) choice.kind = *file.executor;
+    if (file.threads && !options.threads_given) choice.threads = *file.threads;
     if (file.jit_cache && !options.jit_cache_given) choice.jit_cache = *file.jit_cache;
     if (std::string bad = executor_unavailable(choice); !bad.empty())
       file.fail(file.doc.get("executor"), "executor: " + bad);

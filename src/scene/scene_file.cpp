@@ -77,14 +77,26 @@ void read_frames(SceneFile& file) {
   }
 }
 
-// `executor = "interpreter" | "jit"` and `jit_cache = "off" | FOLDER` (relative to the scene's
-// folder), parsed as the command line parses `--executor` and `--jit-cache`.
+// `executor = "interpreter" | "jit"`, `threads = N | "all"` and `jit_cache = "off" | FOLDER`
+// (relative to the scene's folder), parsed as the command line parses `--executor`,
+// `--threads` and `--jit-cache`.
 void read_executor(SceneFile& file) {
   std::string error;
   if (const toml::node* n = file.doc.get("executor")) {
     if (!n->is_string()) file.fail(n, "executor: expected a string: interpreter or jit");
     file.executor = parse_executor_kind(*n->value<std::string>(), error);
     if (!file.executor) file.fail(n, "executor: " + error);
+  }
+  if (const toml::node* n = file.doc.get("threads")) {
+    // A number is read as the command line reads its text, so both say the same of it.
+    if (n->is_integer())
+      file.threads = parse_threads(std::to_string(*n->value<int64_t>()), error);
+    else if (n->is_string())
+      file.threads = parse_threads(*n->value<std::string>(), error);
+    else
+      file.fail(n, "threads: expected a whole number from 1 to " + std::to_string(kMaxThreads) +
+                       ", or \"all\"");
+    if (!file.threads) file.fail(n, "threads: " + error);
   }
   if (const toml::node* n = file.doc.get("jit_cache")) {
     if (!n->is_string()) file.fail(n, "jit_cache: expected a string: \"off\" or a folder");
@@ -207,7 +219,7 @@ std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
   file->dir = fs::path(path).parent_path().string();
   file->check_keys(file->doc, "the scene",
                    {"program", "init", "step", "frames", "frame_time", "finite_check", "executor",
-                    "jit_cache", "sets", "tensors", "output"});
+                    "threads", "jit_cache", "sets", "tensors", "output"});
   file->program_path = file->resolve(file->required_string(file->doc, "the scene", "program"));
   file->init_name = file->optional_string(file->doc, "the scene", "init").value_or("");
   file->step_name = file->required_string(file->doc, "the scene", "step");

@@ -31,8 +31,9 @@ struct SceneFile {
   int frames = 0;
   double frame_time = 1.0;
   bool finite_check = true;  // `finite_check = false` lets NaN and infinity through the frames
-  // `executor` and `jit_cache`, when the scene names them (the command line's win).
+  // `executor`, `threads` and `jit_cache`, when the scene names them (the command line's win).
   std::optional<ExecutorKind> executor;
+  std::optional<int> threads;
   std::optional<std::string> jit_cache;
   std::shared_ptr<const api::CompiledProgram> program;
   std::vector<std::string> stat_names;  // the scalar results of step, reported per frame

@@ -1,11 +1,14 @@
-// The executor choice (simit/executor.h): its parsers' values and errors, the API's spellings
-// of it (Options::executor, init("cpu")), the choice reaching the engine whole, and the engine's
-// resolution of the JIT cache setting.
+// The executor choice (simit/executor.h): its parsers' values and errors, the default thread
+// count (the process's affinity mask), the API's spellings of it (Options::executor,
+// init("cpu")), the choice reaching the engine whole, and the engine's resolution of the JIT
+// cache setting.
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "api/engine.h"
 #include "api_test_util.h"
@@ -57,20 +60,93 @@ TEST(ExecutorChoice, ParsesDumpKindsThresholdsAndCaches) {
   EXPECT_EQ(error, "empty JIT cache: expected 'off' or a folder");
 }
 
+TEST(ExecutorChoice, ParsesThreadCounts) {
+  std::string error;
+  EXPECT_EQ(simit::parse_threads("1", error), 1);
+  EXPECT_EQ(simit::parse_threads("3", error), 3);
+  EXPECT_EQ(simit::parse_threads("1024", error), 1024);
+  EXPECT_EQ(error, "");
+  // "all" and 0: every core this process may use.
+  EXPECT_EQ(simit::parse_threads("all", error), simit::default_threads());
+  EXPECT_EQ(simit::parse_threads("0", error), simit::default_threads());
+  for (const char* bad :
+       {"1025", "-1", "2.5", "x", "", "3 ", " 3", "+2", "ALL", "4096", "99999999999999999999"}) {
+    EXPECT_EQ(simit::parse_threads(bad, error), std::nullopt) << bad;
+    EXPECT_EQ(error, std::string("bad thread count '") + bad +
+                         "': expected a whole number from 1 to 1024, or all (or 0): every core "
+                         "this process may use");
+  }
+}
+
+// The CPUs this thread may run on, as a set of their numbers.
+std::vector<int> allowed_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  EXPECT_EQ(sched_getaffinity(0, sizeof set, &set), 0);
+  std::vector<int> cpus;
+  for (int i = 0; i < CPU_SETSIZE; ++i)
+    if (CPU_ISSET(i, &set)) cpus.push_back(i);
+  return cpus;
+}
+
+// Restricts this thread to `cpus` for one test, restoring the mask it had after it.
+struct ScopedAffinity {
+  explicit ScopedAffinity(const std::vector<int>& cpus) {
+    EXPECT_EQ(sched_getaffinity(0, sizeof old_, &old_), 0);
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    for (int c : cpus) CPU_SET(c, &set);
+    EXPECT_EQ(sched_setaffinity(0, sizeof set, &set), 0);
+  }
+  ~ScopedAffinity() { EXPECT_EQ(sched_setaffinity(0, sizeof old_, &old_), 0); }
+  cpu_set_t old_;
+};
+
+// The default is the number of CPUs in the affinity mask, not the machine's: a run restricted
+// to one CPU (taskset -c 0) defaults to one thread.
+TEST(ExecutorChoice, TheDefaultThreadCountIsTheAffinityMasks) {
+  const std::vector<int> cpus = allowed_cpus();
+  ASSERT_FALSE(cpus.empty());
+  EXPECT_EQ(simit::default_threads(), static_cast<int>(cpus.size()));
+  EXPECT_EQ(ExecutorChoice{}.threads, static_cast<int>(cpus.size()));
+  {
+    ScopedAffinity one({cpus.back()});
+    EXPECT_EQ(simit::default_threads(), 1);
+    EXPECT_EQ(ExecutorChoice{}.threads, 1);
+    std::string error;
+    EXPECT_EQ(simit::parse_threads("all", error), 1);
+  }
+  if (cpus.size() >= 2) {
+    ScopedAffinity two({cpus[0], cpus[1]});
+    EXPECT_EQ(simit::default_threads(), 2);
+  }
+  EXPECT_EQ(simit::default_threads(), static_cast<int>(cpus.size()));
+}
+
 TEST(ExecutorChoice, TheDefaultsAndWhatThisBuildRuns) {
   const ExecutorChoice c;
   EXPECT_EQ(c.kind, ExecutorKind::Interpreter);
-  EXPECT_EQ(c.threads, 1);
+  EXPECT_EQ(c.threads, static_cast<int>(allowed_cpus().size()));
   EXPECT_EQ(c.threshold, -1);
   EXPECT_FALSE(c.check);
   EXPECT_EQ(c.jit_cache, "");
   EXPECT_TRUE(c.eager);
   EXPECT_EQ(simit::executor_unavailable(c), "");
-  ExecutorChoice threads;
-  threads.threads = 4;
-  EXPECT_EQ(simit::executor_unavailable(threads),
-            "4 threads asked: the executors run on 1 thread (a threaded executor is not built "
-            "yet)");
+  // Any count from 1 to 1024, whatever the executor (the interpreter runs serially).
+  for (int n : {1, 4, 1024}) {
+    ExecutorChoice threads;
+    threads.threads = n;
+    EXPECT_EQ(simit::executor_unavailable(threads), "") << n;
+  }
+  // A count no parser gives, set by a program: refused.
+  for (int n : {0, -2, 1025}) {
+    ExecutorChoice threads;
+    threads.threads = n;
+    EXPECT_EQ(simit::executor_unavailable(threads),
+              "bad thread count " + std::to_string(n) +
+                  ": expected a whole number from 1 to 1024 (default_threads(): every core this "
+                  "process may use)");
+  }
   ExecutorChoice jit;
   jit.kind = ExecutorKind::Jit;
   if (simit::jit_available())
@@ -119,6 +195,7 @@ TEST(ExecutorChoice, OptionsReachTheEngine) {
   o.executor.threshold = 0;
   o.executor.check = true;
   o.executor.jit_cache = "off";
+  o.executor.threads = 3;
   simit::Program p(o);
   p.load_string(kProgram, "grow.sim");
   simit::Function step = p.compile("step");
@@ -132,6 +209,7 @@ TEST(ExecutorChoice, OptionsReachTheEngine) {
   EXPECT_EQ(got.threshold, 0);
   EXPECT_TRUE(got.check);
   EXPECT_EQ(got.jit_cache, "off");
+  EXPECT_EQ(got.threads, 3);
   step.run();
   step.run();
   // x -> 2x + 1, twice: 0 -> 3, 1 -> 7, 2 -> 11.
@@ -140,15 +218,37 @@ TEST(ExecutorChoice, OptionsReachTheEngine) {
   EXPECT_EQ(double(x(simit::ElementRef(2))), 11.0);
 }
 
+// The interpreter takes any thread count and runs serially: the values of one thread.
+TEST(ExecutorChoice, TheInterpreterRunsAnyThreadCount) {
+  for (int n : {1, 2, 7}) {
+    simit::Options o;
+    o.executor.threads = n;
+    simit::Program p(o);
+    p.load_string(kProgram, "grow.sim");
+    simit::Function step = p.compile("step");
+    simit::Set nodes("nodes");
+    simit::FieldRef<double> x = nodes.add_field<double>("x");
+    for (int i = 0; i < 3; ++i) x.set(nodes.add(), 1.0 * i);
+    step.bind("nodes", nodes);
+    step.init();
+    EXPECT_EQ(step.executor().threads, n);
+    step.run();
+    // x -> 2x + 1: 0 -> 1, 1 -> 3, 2 -> 5.
+    EXPECT_EQ(double(x(simit::ElementRef(0))), 1.0) << n;
+    EXPECT_EQ(double(x(simit::ElementRef(1))), 3.0) << n;
+    EXPECT_EQ(double(x(simit::ElementRef(2))), 5.0) << n;
+  }
+}
+
 // A choice this build cannot run is refused where the API meets it, naming why.
 TEST(ExecutorChoice, OptionsThisBuildCannotRunAreRefused) {
   simit::Options o;
-  o.executor.threads = 2;
+  o.executor.threads = 0;
   simit::Program p(o);
   p.load_string(kProgram, "grow.sim");
   EXPECT_EQ(message_of<simit::Error>([&] { (void)p.compile("step"); }),
-            "2 threads asked: the executors run on 1 thread (a threaded executor is not built "
-            "yet)");
+            "bad thread count 0: expected a whole number from 1 to 1024 (default_threads(): "
+            "every core this process may use)");
   if (simit::jit_available()) return;
   simit::Options jit;
   jit.executor.kind = ExecutorKind::Jit;

@@ -204,6 +204,68 @@ TEST(Session, SetExecutorReachesTheEngine) {
   EXPECT_EQ(r.feed(":jit"), "no traces: :set executor jit, then :run a function\n");
 }
 
+// The calls of the `lift_one` trace in `:jit`'s table, or -1.
+long lift_calls(Repl& r) {
+  const std::string traces = r.feed(":jit");
+  const size_t site = traces.find("\n  lift_one (line ");
+  if (site == std::string::npos) return -1;
+  const std::string row = traces.substr(site + 1, traces.find('\n', site + 1) - site - 1);
+  std::istringstream fields(row.substr(row.find(')') + 1));
+  double compile_ms = 0;
+  long calls = -1;
+  fields >> compile_ms >> calls;
+  return calls;
+}
+
+// `:set threads N` (all, 0: every core) is parsed as --threads is, listed by `:set` alone, and
+// reaches the `:run` engine: a new count is a new engine (its traces start over), with the
+// same values; a bad count keeps the current one.
+TEST(Session, SetThreadsReachesTheEngine) {
+  FakeScene scene;
+  Repl r;
+  r.s.set_scene_loader(scene.loader(scene_program()));
+  r.feed(":scene fake.toml");
+  const int every_core = default_threads();
+  EXPECT_EQ(r.s.options().executor.threads, every_core);
+  EXPECT_EQ(r.feed(":set"),
+            "float32 off\ncheck_finite off\nprint_limit 20\nexecutor "
+            "interpreter\nthreads " +
+                std::to_string(every_core) + "\n");
+  EXPECT_EQ(r.feed(":set threads 3"), "");
+  EXPECT_EQ(r.s.options().executor.threads, 3);
+  EXPECT_EQ(r.feed(":set threads 1025"),
+            ":set threads: bad thread count '1025': expected a whole number from 1 to 1024, or "
+            "all (or 0): every core this process may use\n");
+  EXPECT_EQ(r.feed(":set threads"),
+            ":set needs an option and a value (float32 on|off, check_finite on|off, print_limit "
+            "N, executor interpreter|jit, threads N|all)\n");
+  EXPECT_EQ(r.s.options().executor.threads, 3);
+  EXPECT_EQ(r.feed(":set threads all"), "");
+  EXPECT_EQ(r.s.options().executor.threads, every_core);
+  EXPECT_EQ(r.feed(":set threads 0"), "");
+  EXPECT_EQ(r.s.options().executor.threads, every_core);
+  // The interpreter runs serially whatever the count: lift adds dy (0.25, then 0.5).
+  EXPECT_EQ(r.feed(":set threads 4"), "");
+  EXPECT_NE(r.feed(":run lift 2").find("moved = 2"), std::string::npos);
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(0)[1], 0.5 + 0.25 + 0.5);
+  if (!jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  EXPECT_EQ(r.feed(":set executor jit"), "");
+  EXPECT_EQ(r.s.options().executor.threads, 4);  // the kind changes, the count stays
+  EXPECT_EQ(r.feed(":set"),
+            "float32 off\ncheck_finite off\nprint_limit 20\nexecutor "
+            "jit\nthreads 4\n");
+  EXPECT_NE(r.feed(":run lift 2").find("moved = 2"), std::string::npos);
+  EXPECT_EQ(lift_calls(r), 2);
+  EXPECT_NE(r.feed(":run lift 1").find("moved = 2"), std::string::npos);
+  EXPECT_EQ(lift_calls(r), 3);  // one engine while nothing changes
+  EXPECT_EQ(r.feed(":set threads 2"), "");
+  EXPECT_NE(r.feed(":run lift 1").find("moved = 2"), std::string::npos);
+  EXPECT_EQ(lift_calls(r), 1);  // a new engine for the new count
+  // dy, doubled by each run: 0.25, 0.5 interpreted; 1, 2, 4 and (2 threads) 8 compiled.
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(0)[1], 0.5 + 0.25 + 0.5 + 1 + 2 + 4 + 8);
+  EXPECT_DOUBLE_EQ(scene.verts->field(0).at<double>(2)[1], 2.5);  // pinned
+}
+
 TEST(Session, RuntimeErrorsNameTheInputLine) {
   Repl r;
   r.feed("v = [1.0, 2.0]';");

@@ -1,12 +1,15 @@
 // The command line's executor options: `--executor` (and its other name, `--backend`),
-// `--jit-threshold`, `--check-jit`, `--dump`, `--jit-cache`, each parsed once into the choice
-// the engine receives; bad values are usage errors naming the valid ones; and a scene run
-// shows the engine ran the JIT with the threshold given.
+// `--threads`, `--jit-threshold`, `--check-jit`, `--dump`, `--jit-cache`, each parsed once into
+// the choice the engine receives; bad values are usage errors naming the valid ones; a scene's
+// `threads` key and the command line's precedence over it; and a scene run shows the engine
+// ran the JIT with the threshold given.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -14,6 +17,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "scene/scene_sets.h"
 
 namespace simit::tools {
 namespace {
@@ -34,6 +38,14 @@ std::optional<ExecutorChoice> parse(std::vector<std::string> args, std::string* 
       parse_executor_choice(static_cast<int>(argv.size()), argv.data(), err);
   if (error) *error = err.str();
   return c;
+}
+
+// The CPUs this process may use, counted independently of default_threads().
+int cpu_count() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  EXPECT_EQ(sched_getaffinity(0, sizeof set, &set), 0);
+  return CPU_COUNT(&set);
 }
 
 struct Result {
@@ -60,25 +72,64 @@ TEST(ExecutorOptions, EachSpellingGivesOneChoice) {
     EXPECT_TRUE(c->dump_loop_ir);
     EXPECT_TRUE(c->dump_llvm);
     EXPECT_EQ(c->jit_cache, "off");
-    EXPECT_EQ(c->threads, 1);
+    EXPECT_EQ(c->threads, cpu_count());
     EXPECT_TRUE(c->eager);  // a production run
   }
-  std::optional<ExecutorChoice> test =
-      parse({"test", "--executor=jit", "--jit-threshold=0", "--jit-cache", "/tmp/k", "x.sim"});
+  std::optional<ExecutorChoice> test = parse({"test", "--executor=jit", "--jit-threshold=0",
+                                              "--jit-cache", "/tmp/k", "--threads", "5", "x.sim"});
   ASSERT_TRUE(test);
   EXPECT_EQ(test->kind, ExecutorKind::Jit);
   EXPECT_EQ(test->threshold, 0);
   EXPECT_FALSE(test->check);
   EXPECT_EQ(test->jit_cache, "/tmp/k");
-  // The defaults: the interpreter; `simit run` caches in the user's folder, `simit test` nowhere.
+  EXPECT_EQ(test->threads, 5);
+  // The defaults: the interpreter on every core; `simit run` caches in the user's folder,
+  // `simit test` nowhere.
   std::optional<ExecutorChoice> run = parse({"run", "s.toml"});
   ASSERT_TRUE(run);
   EXPECT_EQ(run->kind, ExecutorKind::Interpreter);
   EXPECT_EQ(run->threshold, -1);
   EXPECT_EQ(run->jit_cache, "");
+  EXPECT_EQ(run->threads, cpu_count());
   std::optional<ExecutorChoice> tests = parse({"test", "x.sim"});
   ASSERT_TRUE(tests);
   EXPECT_EQ(tests->jit_cache, "off");
+  EXPECT_EQ(tests->threads, cpu_count());
+}
+
+// --threads on both commands, with the interpreter too (which runs serially whatever N);
+// all and 0 are every core.
+TEST(ExecutorOptions, ThreadsReachTheChoice) {
+  for (const char* command : {"run", "test"})
+    for (const auto& [given, want] :
+         {std::pair{"1", 1}, std::pair{"12", 12}, std::pair{"1024", 1024},
+          std::pair{"all", cpu_count()}, std::pair{"0", cpu_count()}}) {
+      std::vector<std::string> args = {command, "--threads", given, "f.sim"};
+      if (std::string(command) == "run") args.insert(args.end(), {"--call", "main"});
+      std::optional<ExecutorChoice> c = parse(args);
+      ASSERT_TRUE(c) << command << " " << given;
+      EXPECT_EQ(c->threads, want) << command << " " << given;
+      EXPECT_EQ(c->kind, ExecutorKind::Interpreter);
+    }
+  std::optional<ExecutorChoice> jit = parse({"run", "f.sim", "--call", "main", "--executor", "jit",
+                                             "--threads=2", "--jit-threshold", "0"});
+  ASSERT_TRUE(jit);
+  EXPECT_EQ(jit->kind, ExecutorKind::Jit);
+  EXPECT_EQ(jit->threads, 2);
+  EXPECT_EQ(jit->threshold, 0);
+}
+
+// --help states the option, its range and the default, counted here.
+TEST(ExecutorOptions, HelpStatesTheThreadsDefault) {
+  for (const char* command : {"run", "test"}) {
+    Result r = cli({command, "--help"});
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find("--threads N|all"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(default: every core, " + std::to_string(cpu_count()) + " here)"),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("runs on one thread whatever N"), std::string::npos) << r.out;
+  }
 }
 
 // Each bad value is a usage error (status 2) that names it and the valid ones.
@@ -94,6 +145,15 @@ TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
       {{"--dump", "loop-ir,asm"},
        "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm"},
       {{"--jit-cache", ""}, "--jit-cache: empty JIT cache: expected 'off' or a folder"},
+      {{"--threads", "1025"},
+       "--threads: bad thread count '1025': expected a whole number from 1 to 1024, or all (or "
+       "0): every core this process may use"},
+      {{"--threads", "-2"},
+       "--threads: bad thread count '-2': expected a whole number from 1 to 1024, or all (or "
+       "0): every core this process may use"},
+      {{"--threads", "four"},
+       "--threads: bad thread count 'four': expected a whole number from 1 to 1024, or all (or "
+       "0): every core this process may use"},
   };
   for (const auto& [option, message] : cases) {
     std::vector<std::string> args = {"run", "f.sim", "--call", "main"};
@@ -110,6 +170,80 @@ TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
   EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
             "simit: error: --executor: unknown executor 'jti': valid executors are interpreter, "
             "jit");
+  r = cli({"test", "--threads", "2.5", "x.sim"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+            "simit: error: --threads: bad thread count '2.5': expected a whole number from 1 to "
+            "1024, or all (or 0): every core this process may use");
+}
+
+// A scene folder with a one-apply program; removed at the end of the test.
+struct SceneDir {
+  SceneDir() {
+    std::string pattern = (fs::temp_directory_path() / "simit-threads-XXXXXX").string();
+    EXPECT_NE(mkdtemp(pattern.data()), nullptr);
+    dir = pattern;
+    std::ofstream(dir / "nudge.sim")
+        << "element Point\n  x : vector[3](float);\n  w : float;\nend\n"
+           "extern points : set{Point};\n"
+           "func nudge(inout p : Point)\n  p.w = p.w + 1.0;\nend\n"
+           "export func step()\n  apply nudge to points;\nend\n";
+  }
+  ~SceneDir() { fs::remove_all(dir); }
+  // A scene whose top-level keys start with `keys`.
+  std::string write(const std::string& name, const std::string& keys) {
+    std::ofstream(dir / name) << keys
+                              << "program = \"nudge.sim\"\nstep = \"step\"\nframes = 2\n"
+                                 "[sets.points]\ngenerate = \"square_cloth\"\nn = 3\n"
+                                 "elements = \"vertices\"\n[sets.points.fields]\n"
+                                 "x = \"position\"\nw = 1.0\n";
+    return (dir / name).string();
+  }
+  fs::path dir;
+};
+
+// The threads the scene opened by `simit ARGS...` resolves, or -1 (with the error on `err`).
+int scene_threads(std::vector<std::string> args, std::string* error = nullptr) {
+  std::vector<const char*> argv = argv_of(args);
+  std::ostringstream err;
+  std::optional<SceneOptions> o =
+      parse_scene_options(static_cast<int>(argv.size()), argv.data(), err);
+  std::unique_ptr<scene::Scene> s = o ? scene::Scene::open(*o, err) : nullptr;
+  if (error) *error = err.str();
+  return s ? scene::SceneAccess::executor(*s).threads : -1;
+}
+
+// The scene's `threads` key sets the count unless --threads was given (as `executor` and
+// --executor); its bad values are located errors.
+TEST(ExecutorOptions, TheScenesThreadsKeyAndTheCommandLinesPrecedence) {
+  SceneDir d;
+  const std::string two = d.write("two.toml", "threads = 2\n");
+  EXPECT_EQ(scene_threads({"run", two}), 2);
+  EXPECT_EQ(scene_threads({"run", "--threads", "5", two}), 5);
+  EXPECT_EQ(scene_threads({"run", "--threads", "all", two}), cpu_count());
+  EXPECT_EQ(scene_threads({"run", d.write("all.toml", "threads = \"all\"\n")}), cpu_count());
+  EXPECT_EQ(scene_threads({"run", d.write("zero.toml", "threads = 0\n")}), cpu_count());
+  const std::string none = d.write("none.toml", "");
+  EXPECT_EQ(scene_threads({"run", none}), cpu_count());
+  EXPECT_EQ(scene_threads({"run", "--threads=3", none}), 3);
+
+  const std::string expected =
+      "expected a whole number from 1 to 1024, or all (or 0): every core this process may use";
+  for (const auto& [value, message] :
+       {std::pair{"2000", "threads: bad thread count '2000': " + expected},
+        std::pair{"-1", "threads: bad thread count '-1': " + expected},
+        std::pair{"\"many\"", "threads: bad thread count 'many': " + expected},
+        std::pair{"2.5", std::string("threads: expected a whole number from 1 to 1024, or "
+                                     "\"all\"")}}) {
+    const std::string bad = d.write("bad.toml", std::string("threads = ") + value + "\n");
+    std::string error;
+    EXPECT_EQ(scene_threads({"run", bad}, &error), -1) << value;
+    EXPECT_EQ(error, bad + ":1:11: error: " + message + "\n") << value;
+    // The whole run says the same, exit status 1.
+    Result r = cli({"run", bad});
+    EXPECT_EQ(r.status, 1) << value;
+    EXPECT_EQ(r.err, bad + ":1:11: error: " + message + "\n") << value;
+  }
 }
 
 // What the command line gives reaches the engine: the JIT runs the scene's apply, compiling
