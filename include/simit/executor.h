@@ -18,7 +18,7 @@ enum class ExecutorKind { Interpreter, Jit };
 inline constexpr int kMaxThreads = 1024;
 
 // Every core this process may use: the CPUs of its affinity mask (sched_getaffinity, so a run
-// under `taskset` or a container's CPU limit counts only its own), else
+// under `taskset` or in a container's cpuset counts only its own), else
 // std::thread::hardware_concurrency(); at least 1 and at most kMaxThreads. Read anew at each
 // call (the mask may change).
 int default_threads();
