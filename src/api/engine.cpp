@@ -67,6 +67,7 @@ void Engine::install_jit() {
   j.check = x.check;
   j.corrupt_for_test = options_.corrupt_for_test;
   j.shuffle_seed = options_.shuffle_seed_for_test;
+  j.threads = x.threads;
   // The corpus and the examples reach the shuffled executor through `simit` itself.
   if (const char* seed = std::getenv("SIMIT_TEST_SHUFFLE_SEED"); seed && !j.shuffle_seed)
     j.shuffle_seed = std::strtoull(seed, nullptr, 10);

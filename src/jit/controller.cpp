@@ -53,8 +53,12 @@ TraceController::TraceController(JitOptions options) : options_(options) {
   HostCalls host;
   host.decompose = reinterpret_cast<void*>(&simit_jit_decompose);
   target_ = make_cpu_target(host, options_.cache_dir, target_error_);
-  executor_ = options_.shuffle_seed ? make_shuffled_executor(options_.shuffle_seed, kShuffledChunk)
-                                    : make_serial_executor();
+  if (options_.shuffle_seed)
+    executor_ = make_shuffled_executor(options_.shuffle_seed, kShuffledChunk);
+  else if (options_.threads > 1)
+    executor_ = make_threaded_executor(options_.threads);
+  else
+    executor_ = make_serial_executor();
 }
 
 TraceController::~TraceController() = default;
@@ -65,6 +69,7 @@ LowerOptions TraceController::lower_options() const {
   o.dump_loop_ir = options_.dump_loop_ir;
   o.dump_passes = options_.dump_passes;
   o.dump_llvm = options_.dump_llvm;
+  o.defer_assembly = executor_->parallel();
   return o;
 }
 

@@ -44,6 +44,8 @@ struct JitOptions {
   // For the tests of the executor seam: nonzero runs map kernels through the shuffled
   // executor (jit/executor.h) with this seed instead of the serial one.
   uint64_t shuffle_seed = 0;
+  // Threads compiled maps and solver loops run on (the engine's pool; 1: the calling thread).
+  int threads = 1;
 };
 
 // One trace's figures for `--jit-stats`.
@@ -91,7 +93,12 @@ class TraceController : public interp::SiteHook {
                               interp::ExecState& in);
   Entry* entry_for(interp::SiteCall& call);
   bool run_kernel(Entry& e, interp::SiteCall& call);
-  std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call);
+  // Per result: its pattern table (null for a vector) and the pattern it belongs to.
+  bool prepare_deferred(Entry& e, interp::SiteCall& call, const std::vector<const int32_t*>& tables,
+                        const std::vector<runtime::PatternPtr>& patterns, int32_t chunk,
+                        MapWrites& writes);
+  std::vector<const int32_t*> prepare_results(Entry& e, interp::SiteCall& call,
+                                              std::vector<runtime::PatternPtr>* patterns = nullptr);
   void guard_results(Entry& e, interp::SiteCall& call, const std::vector<double>& scalars);
   void drop_specialised(Entry& e, interp::SiteCall& call);
   void specialise_results(Entry& e, interp::SiteCall& call);

@@ -12,6 +12,7 @@
 
 #include "interp/exec_state.h"
 #include "jit/controller.h"
+#include "jit/deferred_plan.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
@@ -47,6 +48,9 @@ struct TraceController::Entry {
   bool failed_last = false;  // the guard failed on the previous call
   std::string full_why;      // why the results stay on full patterns, for --jit-stats
   std::vector<std::vector<int32_t>> positions;  // per Positions array slot, this call's
+  // A deferred kernel's tables (jit/deferred_plan.h).
+  std::unique_ptr<DeferredPlan> plan;
+  bool split_noted = false;  // --jit-stats says once how the chunks split
 };
 
 struct TraceController::SiteState {

@@ -1,14 +1,32 @@
-// The serial executor and the test-only shuffled one (jit/executor.h).
+// The serial, threaded and test-only shuffled executors (jit/executor.h).
 #include "jit/executor.h"
 
 #include <algorithm>
+#include <atomic>
+#include <climits>
 #include <numeric>
 #include <random>
 #include <vector>
 
+#include "jit/thread_pool.h"
+#include "jit/tunables.h"
+
 namespace simit::jit {
 
+int32_t Executor::chunk_for(int32_t) const { return kChunkElements; }
+
 namespace {
+
+// The lowest failure among chunks that ran apart: per chunk its code and element.
+MapOutcome lowest_failure(const std::vector<std::pair<int32_t, int32_t>>& failures) {
+  MapOutcome out;
+  for (const auto& [code, element] : failures)
+    if (code != 0 && (out.code == 0 || element < out.element)) {
+      out.code = code;
+      out.element = element;
+    }
+  return out;
+}
 
 class SerialExecutor : public Executor {
  public:
@@ -33,11 +51,12 @@ class ShuffledExecutor : public Executor {
  public:
   ShuffledExecutor(uint64_t seed, int32_t chunk) : rng_(seed), chunk_(chunk > 0 ? chunk : 1) {}
   const char* name() const override { return "shuffled"; }
+  bool parallel() const override { return true; }
+  int32_t chunk_for(int32_t) const override { return chunk_; }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
     if (writes == MapWrites::Shared)
       return serial_.run_map(kernel, args, n, chunk, writes, interrupt);
-    chunk = chunk_;
     const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;
     std::vector<int32_t> order(static_cast<size_t>(chunks));
     std::iota(order.begin(), order.end(), 0);
@@ -67,6 +86,54 @@ class ShuffledExecutor : public Executor {
   SerialExecutor serial_;
 };
 
+class ThreadedExecutor : public Executor {
+ public:
+  explicit ThreadedExecutor(int threads) : pool_(threads) {}
+  const char* name() const override { return "threads"; }
+  bool parallel() const override { return true; }
+  // A few chunks per thread, so that a thread that finishes early takes another; large
+  // enough that a chunk's call costs far more than claiming it, and that few blocks are
+  // shared between chunks (each costs a deferred addition).
+  int32_t chunk_for(int32_t n) const override {
+    const int64_t per = (static_cast<int64_t>(n) + pool_.threads() * 4 - 1) / (pool_.threads() * 4);
+    const int64_t c = std::clamp<int64_t>(per, 256, kChunkElements);
+    return static_cast<int32_t>((c + kLanes - 1) / kLanes * kLanes);
+  }
+  MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
+                     MapWrites writes, const std::function<bool()>& interrupt) override {
+    const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;
+    if (writes == MapWrites::Shared || chunks <= 1 || pool_.threads() == 1)
+      return serial_.run_map(kernel, args, n, chunk, writes, interrupt);
+    std::vector<std::pair<int32_t, int32_t>> failures(static_cast<size_t>(chunks), {0, -1});
+    std::atomic<int32_t> lowest{INT32_MAX};  // the lowest element that failed so far
+    std::atomic<bool> stopped{false};        // an interrupt was seen
+    pool_.run(chunks, [&](int64_t k) {
+      const int32_t begin = static_cast<int32_t>(k) * chunk, end = std::min(n, begin + chunk);
+      // Chunks above a failure cannot hold the lowest one; the chunks below still run.
+      if (stopped.load(std::memory_order_relaxed) || begin > lowest.load(std::memory_order_relaxed))
+        return;
+      if (interrupt && interrupt()) {
+        stopped.store(true, std::memory_order_relaxed);
+        return;
+      }
+      int32_t element = -1;
+      const int32_t code = kernel.run(args, {begin, end}, &element);
+      if (code == 0) return;
+      failures[static_cast<size_t>(k)] = {code, element};
+      int32_t seen = lowest.load(std::memory_order_relaxed);
+      while (element < seen && !lowest.compare_exchange_weak(seen, element)) {
+      }
+    });
+    MapOutcome out = lowest_failure(failures);
+    out.interrupted = out.code == 0 && stopped.load();
+    return out;
+  }
+
+ private:
+  ThreadPool pool_;
+  SerialExecutor serial_;
+};
+
 bool at_element(const ExprRef& index) { return index && index->kind == ExprKind::Element; }
 
 bool disjoint(const std::vector<Stmt>& body) {
@@ -88,6 +155,10 @@ std::unique_ptr<Executor> make_serial_executor() { return std::make_unique<Seria
 
 std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk) {
   return std::make_unique<ShuffledExecutor>(seed, chunk);
+}
+
+std::unique_ptr<Executor> make_threaded_executor(int threads) {
+  return std::make_unique<ThreadedExecutor>(threads);
 }
 
 }  // namespace simit::jit

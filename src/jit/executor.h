@@ -25,12 +25,22 @@ enum class MapWrites {
   Disjoint,  // each element writes only its own blocks and fields: any chunk order gives the
              // same bits
   Shared,    // elements add into shared blocks (assembly): element order decides the bits
+  // Elements add into shared blocks, but the kernel reads where each element's blocks go
+  // from tables built for chunks of exactly the `chunk` elements it is run with: a block's
+  // first chunk adds in place, later chunks' contributions go to scratch blocks added in
+  // element order after the run (jit/defer_assembly.h). Chunks may run in any order.
+  Deferred,
 };
 
 class Executor {
  public:
   virtual ~Executor() = default;
   virtual const char* name() const = 0;
+  // Whether chunks run apart from one another (on threads, or shuffled), so that a kernel
+  // that assembles is worth compiling with deferred writes.
+  virtual bool parallel() const { return false; }
+  // The chunk of a map over n elements (a deferred assembly's tables are built for it).
+  virtual int32_t chunk_for(int32_t n) const;
   // Runs `kernel` over the elements [0, n) in chunks of `chunk` elements. `interrupt`, when
   // set, is asked between two chunks whether to stop there.
   virtual MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
@@ -52,5 +62,10 @@ std::unique_ptr<Executor> make_serial_executor();
 // `seed`; a map that adds into shared blocks runs its chunks in element order, which its bits
 // depend on. A failure is the one of the lowest element, as the serial executor reports it.
 std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk);
+// Map chunks on a pool of `threads` threads (the caller among them); a map that adds into
+// shared blocks without deferred writes runs serially. A failure is the lowest element's:
+// once one chunk fails, the chunks above it are skipped and those below still run. Ctrl-C
+// stops every thread at its next chunk.
+std::unique_ptr<Executor> make_threaded_executor(int threads);
 
 }  // namespace simit::jit

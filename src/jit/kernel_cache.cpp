@@ -80,6 +80,7 @@ class KeyWriter {
     num(s.slot);
     num(s.comp);
     num(s.pair);
+    num(s.member);
     num(s.error);
     num(s.fn);
     num(s.n);
@@ -206,6 +207,7 @@ std::string kernel_key_text(const Trace& t) {
   w.num(t.reduce);
   w.num(t.writes_fields);
   w.num(t.float32);
+  w.num(t.deferred);
   w.num(static_cast<int64_t>(t.errors.size()));
   w.out += '\n';
   w.arrays(t.arrays);

@@ -128,6 +128,13 @@ class Verifier {
     if (e->ty != ty)
       fail(std::string(where) + ": operand is " + ty_name(e->ty) + ", expected " + ty_name(ty));
   }
+  // Whether the trace has an array of `kind` for the result that array `result_slot` is.
+  bool slot_of(ArraySlot::Kind kind, int result_slot) const {
+    const int result = t_.arrays[static_cast<size_t>(result_slot)].index;
+    for (const ArraySlot& a : t_.arrays)
+      if (a.kind == kind && a.index == result) return true;
+    return false;
+  }
   void array(int slot, const char* where) {
     if (slot < 0 || static_cast<size_t>(slot) >= t_.arrays.size())
       fail(std::string(where) + ": array slot " + std::to_string(slot) + " out of range");
@@ -206,7 +213,12 @@ class Verifier {
       case StmtKind::Assemble:
         array(s.slot, "assemble");
         if (!error_.empty()) return;
-        if (s.pair < 0) need(s.index, Ty::I32, "assemble index");
+        if (s.pair < 0 && s.member < 0) need(s.index, Ty::I32, "assemble index");
+        if (s.member >= 0 && !t_.deferred) fail("assemble at a member outside a deferred trace");
+        if ((s.pair >= 0 || s.member >= 0) && !slot_of(ArraySlot::Kind::Table, s.slot))
+          fail("assemble through a table the trace lacks");
+        if (t_.deferred && !slot_of(ArraySlot::Kind::Deferred, s.slot))
+          fail("deferred assemble without deferred blocks");
         return need(s.value, t_.arrays[s.slot].ty, "assemble");
       case StmtKind::If: {
         need(s.value, Ty::Bool, "if");

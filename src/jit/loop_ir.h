@@ -109,8 +109,11 @@ struct Stmt {
   StmtKind kind = StmtKind::SetLocal;
   // SetLocal, For: local; Store: array; Assemble: result array; Put: scratch array
   int slot = 0;
-  int comp = 0;    // Store / Assemble: component within the element's block
-  int pair = -1;   // Assemble into a matrix: the (row member, column member) pair
+  int comp = 0;   // Store / Assemble: component within the element's block
+  int pair = -1;  // Assemble into a matrix: the (row member, column member) pair
+  // Assemble into a vector of a deferred trace (jit/defer_assembly.h): the member written
+  // (0: the element, k + 1: endpoint k), whose block the result's Table gives.
+  int member = -1;
   int error = -1;  // Check: index into Trace::errors
   // Store / Assemble into a vector: the element written; Put: the component written.
   ExprRef index;
@@ -138,6 +141,9 @@ struct ArraySlot {
     // Per element, where in partial matrix argument `index`'s pattern each block the trace
     // reads lies (-1: outside it), one component per entry of `reads`.
     Positions,
+    // Result `index`'s deferred blocks (jit/defer_assembly.h): a Table entry -1 - k sends the
+    // write to block k here instead of the result.
+    Deferred,
   };
   Kind kind = Kind::Field;
   int member = 0;       // Field
@@ -179,6 +185,9 @@ struct Trace {
   std::vector<int> scratch;
   bool writes_fields = false;  // some Store (an apply with inout fields)
   bool float32 = false;        // the interpreter's float32 mode (decompositions' tolerance)
+  // Assembly writes go through per-element tables, to the result or to its Deferred blocks
+  // (jit/defer_assembly.h), so that chunks of elements can run apart.
+  bool deferred = false;
 };
 
 // A run of system-level statements (a CG function's set-up, its while loop and its residual):

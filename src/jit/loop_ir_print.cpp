@@ -140,6 +140,8 @@ bool print_node_Assemble(std::ostream& os, const Stmt& s, Pad, int) {
   os << "r" << s.slot;
   if (s.pair >= 0) {
     os << "{pair " << s.pair << "}";
+  } else if (s.member >= 0) {
+    os << "{member " << s.member << "}";
   } else {
     os << "[";
     print_expr(os, *s.index);
@@ -239,11 +241,12 @@ void print_ops(std::ostream& os, const std::vector<VectorOp>& ops) {
 }  // namespace
 
 void print(std::ostream& os, const Trace& t) {
-  os << "trace " << t.name << " (arity " << t.arity << (t.reduce ? ", reduce +" : "") << ")\n";
+  os << "trace " << t.name << " (arity " << t.arity << (t.reduce ? ", reduce +" : "")
+     << (t.deferred ? ", deferred" : "") << ")\n";
   for (size_t i = 0; i < t.arrays.size(); ++i) {
     const ArraySlot& a = t.arrays[i];
-    static const char* const kinds[] = {"field", "vector", "result",   "table",
-                                        "marks", "matrix", "positions"};
+    static const char* const kinds[] = {"field", "vector", "result",    "table",
+                                        "marks", "matrix", "positions", "deferred"};
     os << "  a" << i << ": " << kinds[static_cast<int>(a.kind)] << " " << a.name << " "
        << (a.single ? "f32" : ty_name(a.ty)) << " x" << a.components
        << (a.written ? " written" : "") << "\n";

@@ -1,6 +1,8 @@
 // The lowering driver (jit/lower.h): the pass lists and the one sequence that runs them.
 #include "jit/lower.h"
 
+#include "jit/defer_assembly.h"
+
 namespace simit::jit {
 
 namespace {
@@ -13,9 +15,15 @@ struct Pass {
 };
 
 int fuse(SystemTrace& t) { return fuse_passes(t); }
+// A map that cannot defer stays as it is (and runs its chunks in order).
+int defer(Trace& t) {
+  defer_assembly(t);
+  return 0;
+}
 
-// The map pipeline has no pass of its own yet: the tracer folds as it goes.
+// The tracer folds as it goes: a map's only pass is for parallel executors.
 constexpr Pass<Trace> kMapPasses[] = {{nullptr, nullptr}};
+constexpr Pass<Trace> kParallelMapPasses[] = {{"defer-assembly", &defer}, {nullptr, nullptr}};
 constexpr Pass<SystemTrace> kSystemPasses[] = {{"fuse-passes", &fuse}, {nullptr, nullptr}};
 
 template <class T>
@@ -55,6 +63,7 @@ Lowered run_pipeline(T& t, const Pass<T> (&passes)[N], Target& target, const Low
 }  // namespace
 
 Lowered lower(Trace& trace, Target& target, const LowerOptions& options) {
+  if (options.defer_assembly) return run_pipeline(trace, kParallelMapPasses, target, options);
   return run_pipeline(trace, kMapPasses, target, options);
 }
 

@@ -3,6 +3,7 @@
 // (and the IR printed after it with `--dump=passes`), and the target compiles the result.
 //
 //   map site:           trace -> verify -> compile
+//   map site, parallel: trace -> verify -> defer-assembly -> verify -> compile
 //   system statements:  trace -> verify -> fuse-passes -> verify -> compile
 #pragma once
 
@@ -20,6 +21,9 @@ struct LowerOptions {
   bool dump_loop_ir = false;     // the IR as it is compiled
   bool dump_passes = false;      // the IR as traced and after each pass, named
   bool dump_llvm = false;        // the target's optimised LLVM module
+  // Chunks of a map's elements run apart (jit/executor.h, Executor::parallel): a map that
+  // adds into shared blocks defers the later chunks' additions (jit/defer_assembly.h).
+  bool defer_assembly = false;
 };
 
 struct Lowered {

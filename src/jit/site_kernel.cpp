@@ -90,6 +90,46 @@ void zero_results(interp::SiteCall& call) {
   }
 }
 
+// A deferred kernel's tables for this call (jit/deferred_plan.h): split into the executor's
+// chunks, or in element order while the call records the blocks it writes (the marks need
+// every write at its block) or when the topology does not allow a split. False when a
+// result is not what the trace was made for (the interpreter then runs the site).
+bool TraceController::prepare_deferred(Entry& e, interp::SiteCall& call,
+                                       const std::vector<const int32_t*>& tables,
+                                       const std::vector<runtime::PatternPtr>& patterns,
+                                       int32_t chunk, MapWrites& writes) {
+  const Trace& t = *e.traced.trace;
+  std::vector<DeferredPlan::Source> sources(call.results.size());
+  for (const ArraySlot& a : t.arrays) {
+    if (a.kind != ArraySlot::Kind::Result) continue;
+    DeferredPlan::Source& s = sources[static_cast<size_t>(a.index)];
+    const Value& r = call.results[static_cast<size_t>(a.index)];
+    s.components = a.components;
+    if (r.kind() == Value::Kind::Matrix && r.matrix()) {
+      s.table = tables[static_cast<size_t>(a.index)];
+      s.pattern = patterns[static_cast<size_t>(a.index)];
+      s.blocks = r.matrix()->pattern().nnz();
+      if (!s.table) return false;
+    } else if (r.is_tensor()) {
+      s.blocks = r.tensor().size() / a.components;
+    } else {
+      return false;
+    }
+  }
+  bool recording = false;
+  for (const Entry::Special& s : e.special) recording = recording || !s.marks.empty();
+  if (!e.plan) e.plan = std::make_unique<DeferredPlan>();
+  const bool split = !recording && call.target.size() > chunk;
+  writes = e.plan->prepare(t, call.target, sources, chunk, split) && split ? MapWrites::Deferred
+                                                                           : MapWrites::Shared;
+  if (writes == MapWrites::Deferred && !e.split_noted) {
+    e.split_noted = true;
+    e.stats.note += "; chunks of " + std::to_string(chunk) + " apart, " +
+                    std::to_string(e.plan->deferred_blocks()) + " deferred blocks";
+  }
+  return true;
+}
+
 bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   const Trace& t = *e.traced.trace;
   std::vector<double> scalars;
@@ -98,7 +138,11 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         s.partial >= 0 ? call.partial_args[s.partial] : call.interpreter.global(*s.global),
         s.component));
   guard_results(e, call, scalars);
-  const std::vector<const int32_t*> tables = prepare_results(e, call);
+  std::vector<runtime::PatternPtr> patterns;
+  const std::vector<const int32_t*> tables = prepare_results(e, call, &patterns);
+  const int32_t chunk = executor_->chunk_for(call.target.size());
+  MapWrites writes = e.writes;
+  if (t.deferred && !prepare_deferred(e, call, tables, patterns, chunk, writes)) return false;
   std::vector<void*> arrays(t.arrays.size(), nullptr);
   // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
   // pointers read afterwards then see the copy.
@@ -127,7 +171,12 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
             return false;
           break;
         }
-        case ArraySlot::Kind::Table: arrays[i] = const_cast<int32_t*>(tables[a.index]); break;
+        case ArraySlot::Kind::Table: {
+          const int32_t* table = e.plan ? e.plan->table(a.index) : nullptr;
+          arrays[i] = const_cast<int32_t*>(table ? table : tables[a.index]);
+          break;
+        }
+        case ArraySlot::Kind::Deferred: arrays[i] = e.plan->deferred(a.index); break;
         case ArraySlot::Kind::Marks: {
           const size_t r = static_cast<size_t>(a.index);
           arrays[i] = r < e.special.size() && !e.special[r].marks.empty()
@@ -150,8 +199,8 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     }
   const MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
   interp::Trap& trap = call.interpreter.trap();
-  const MapOutcome out = executor_->run_map(*e.kernel, args, call.target.size(), kChunkElements,
-                                            e.writes, [&trap] { return trap.interrupt_pending(); });
+  const MapOutcome out = executor_->run_map(*e.kernel, args, call.target.size(), chunk, writes,
+                                            [&trap] { return trap.interrupt_pending(); });
   if (out.code != 0) {
     const ErrorSite& err = t.errors[static_cast<size_t>(out.code - 1)];
     for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing
@@ -175,6 +224,17 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   if (out.interrupted) {
     trap.take_interrupt();
     throw interp::Interrupted(call.at, "interrupted");
+  }
+  if (writes == MapWrites::Deferred) {
+    std::vector<double*> values(call.results.size(), nullptr);
+    for (size_t i = 0; i < call.results.size(); ++i) {
+      Value& r = call.results[i];
+      if (r.kind() == Value::Kind::Matrix && r.matrix())
+        values[i] = r.matrix()->values();
+      else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float)
+        values[i] = r.tensor().mutable_floats();
+    }
+    e.plan->finish(values);
   }
   specialise_results(e, call);
   return true;

@@ -23,9 +23,11 @@ using interp::Value;
 
 // The matrix results: on the specialised pattern where there is one, otherwise on the full
 // one (made here when the interpreter left it to the hook). Returns the tables to use.
-std::vector<const int32_t*> TraceController::prepare_results(Entry& e, interp::SiteCall& call) {
+std::vector<const int32_t*> TraceController::prepare_results(
+    Entry& e, interp::SiteCall& call, std::vector<runtime::PatternPtr>* patterns) {
   e.special.resize(call.results.size());
   std::vector<const int32_t*> tables(call.results.size(), nullptr);
+  if (patterns) patterns->assign(call.results.size(), nullptr);
   for (size_t i = 0; i < call.results.size(); ++i) {
     interp::AssemblyPlan::Result& r = call.plan.results[i];
     if (!r.is_matrix || !r.pattern) continue;
@@ -43,6 +45,7 @@ std::vector<const int32_t*> TraceController::prepare_results(Entry& e, interp::S
       call.results[i] = Value::of_matrix(s.last);
     }
     tables[i] = special ? s.pattern->table.data() : r.pattern->assembly().table.data();
+    if (patterns) (*patterns)[i] = pattern;
   }
   return tables;
 }

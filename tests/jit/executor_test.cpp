@@ -72,9 +72,11 @@ TEST(Executor, SerialStopsAtTheFirstFailureAndForAnInterrupt) {
 TEST(Executor, ShuffledRunsDisjointChunksOutOfOrderAndSharedOnesInOrder) {
   RecordingKernel k;
   const int32_t n = 100;
-  MapOutcome out = make_shuffled_executor(7, 3)->run_map(k, {}, n, 16384, MapWrites::Disjoint, {});
+  const auto shuffled = make_shuffled_executor(7, 3);
+  EXPECT_EQ(shuffled->chunk_for(n), 3);  // its own chunks, so small sets have several
+  MapOutcome out = shuffled->run_map(k, {}, n, 3, MapWrites::Disjoint, {});
   EXPECT_EQ(out.code, 0);
-  EXPECT_EQ(k.ranges.size(), 34u);  // its own chunks of 3, not the caller's
+  EXPECT_EQ(k.ranges.size(), 34u);
   expect_cover(k.ranges, n);
   EXPECT_FALSE(std::is_sorted(k.ranges.begin(), k.ranges.end(),
                               [](ElementRange a, ElementRange b) { return a.begin < b.begin; }));
@@ -91,7 +93,7 @@ TEST(Executor, ShuffledReportsTheLowestFailingElement) {
     RecordingKernel k;
     k.failing = {61, 17, 90};
     const MapOutcome out =
-        make_shuffled_executor(seed, 3)->run_map(k, {}, 100, 16384, MapWrites::Disjoint, {});
+        make_shuffled_executor(seed, 3)->run_map(k, {}, 100, 3, MapWrites::Disjoint, {});
     EXPECT_EQ(out.code, 1);
     EXPECT_EQ(out.element, 17) << "seed " << seed;
   }
@@ -177,18 +179,18 @@ export func step() -> (s : float)
 end
 )";
 
-std::vector<double> run_program(uint64_t seed, double& s) {
+std::vector<double> run_program(uint64_t seed, double& s, int threads = 1, int n = 50) {
   auto compiled = api::CompiledProgram::from_source("seam.sim", kProgram);
   EXPECT_TRUE(compiled->ok());
-  const int n = 50;
   runtime::Set v("verts");
   runtime::Set e("edges", {&v, &v});
   v.add_many(n);
   v.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {2}, false});
   v.add_field("y", runtime::FieldType{runtime::ComponentKind::Float, {2}, false});
   for (int i = 0; i < n; ++i) {
-    v.field(0).at<double>(i)[0] = 0.1 * i - 0.7;
-    v.field(0).at<double>(i)[1] = 0.05 * i * i / n + 0.3;
+    const int j = i % 50;  // a large set repeats the first 50 vertices' positions
+    v.field(0).at<double>(i)[0] = 0.1 * j - 0.7;
+    v.field(0).at<double>(i)[1] = 0.05 * j * j / 50 + 0.3;
   }
   std::vector<int32_t> ends;
   for (int i = 0; i + 1 < n; ++i) ends.insert(ends.end(), {i, i + 1, (7 * i) % n, i});
@@ -197,6 +199,7 @@ std::vector<double> run_program(uint64_t seed, double& s) {
   o.executor.kind = api::ExecutorKind::Jit;
   o.executor.threshold = 0;
   o.shuffle_seed_for_test = seed;
+  o.executor.threads = threads;
   api::Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("verts"), v);
   engine.bind_set(*compiled->find_extern("edges"), e);
@@ -219,6 +222,21 @@ TEST(Executor, AProgramGivesTheSameBitsSerialAndShuffled) {
   EXPECT_EQ(std::memcmp(&s0, &s1, sizeof s0), 0);
   EXPECT_EQ(std::memcmp(&s0, &s2, sizeof s0), 0);
   EXPECT_TRUE(std::isfinite(s0));
+}
+
+// Threads: the same bits for every thread count, on a set large enough for several chunks
+// whose springs reach across chunks (their blocks are shared: deferred assembly).
+TEST(Executor, AProgramGivesTheSameBitsOnAnyNumberOfThreads) {
+  double s1 = 0;
+  const std::vector<double> one = run_program(0, s1, 1, 3000);
+  for (int threads : {2, 3, 7}) {
+    double s = 0;
+    const std::vector<double> many = run_program(0, s, threads, 3000);
+    ASSERT_EQ(one.size(), many.size());
+    EXPECT_EQ(std::memcmp(one.data(), many.data(), one.size() * sizeof(double)), 0) << threads;
+    EXPECT_EQ(std::memcmp(&s1, &s, sizeof s), 0) << threads;
+  }
+  EXPECT_TRUE(std::isfinite(s1));
 }
 
 }  // namespace

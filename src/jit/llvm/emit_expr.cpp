@@ -149,7 +149,8 @@ Value* Emitter::scratch_at(int slot, const Expr& index) {
 llvm::AAMDNodes Emitter::alias(int slot) const {
   if (!inputs_) return llvm::AAMDNodes();
   const ArraySlot::Kind k = slots_[static_cast<size_t>(slot)].kind;
-  const bool result = k == ArraySlot::Kind::Result || k == ArraySlot::Kind::Marks;
+  const bool result =
+      k == ArraySlot::Kind::Result || k == ArraySlot::Kind::Marks || k == ArraySlot::Kind::Deferred;
   return llvm::AAMDNodes(nullptr, nullptr, result ? results_ : inputs_,
                          result ? inputs_ : results_);
 }

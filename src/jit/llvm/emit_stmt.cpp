@@ -93,19 +93,26 @@ void Emitter::fail_unless(Value* ok, int error, const char* what) {
 
 // Where the element's block (or vector element) of an Assemble statement starts.
 Value* Emitter::assemble_base(const Stmt& s) {
-  if (s.pair < 0) return address(s.slot, expr(*s.index), 0);
-  // The block's position in the matrix comes from the pattern's per-element table.
+  if (s.pair < 0 && s.member < 0) return address(s.slot, expr(*s.index), 0);
+  // The block's position comes from a per-element table: a matrix's pattern table, or in a
+  // deferred trace a vector's table of the members it writes (jit/defer_assembly.h).
   const int result = slots_[s.slot].index;
-  int table = -1, marks = -1;
+  int table = -1, marks = -1, deferred = -1;
   for (size_t i = 0; i < slots_.size(); ++i) {
     if (slots_[i].index != result) continue;
     if (slots_[i].kind == ArraySlot::Kind::Table) table = static_cast<int>(i);
     if (slots_[i].kind == ArraySlot::Kind::Marks) marks = static_cast<int>(i);
+    if (slots_[i].kind == ArraySlot::Kind::Deferred) deferred = static_cast<int>(i);
   }
-  llvm::LoadInst* pos = b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair));
+  llvm::LoadInst* pos =
+      b_.CreateLoad(b_.getInt32Ty(), address(table, element_, s.pair >= 0 ? s.pair : s.member));
   tag(pos, table);
   if (marks >= 0) mark(marks, pos);
-  return address(s.slot, pos, 0);
+  Value* at = address(s.slot, pos, 0);
+  if (deferred < 0) return at;
+  // Entry -1 - k: the write goes to deferred block k (both addresses are computed, one kept).
+  Value* k = b_.CreateSub(b_.getInt32(-1), pos);
+  return b_.CreateSelect(b_.CreateICmpSLT(pos, b_.getInt32(0)), address(deferred, k, 0), at);
 }
 
 // While the controller records the blocks a call writes (jit/write_guard.h), `marks` is an

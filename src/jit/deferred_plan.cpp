@@ -1,0 +1,143 @@
+// Deferred assembly's tables and additions (jit/deferred_plan.h).
+#include "jit/deferred_plan.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+namespace simit::jit {
+
+namespace {
+
+// The pairs or members each assembled result is written through, by result index.
+void written_places(const std::vector<Stmt>& body, const Trace& t,
+                    std::map<int, std::set<int>>& out) {
+  for (const Stmt& s : body) {
+    if (s.kind == StmtKind::Assemble)
+      out[t.arrays[static_cast<size_t>(s.slot)].index].insert(s.pair >= 0 ? s.pair : s.member);
+    written_places(s.body, t, out);
+    written_places(s.orelse, t, out);
+  }
+}
+
+}  // namespace
+
+bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
+                           const std::vector<Source>& results, int32_t chunk, bool split) {
+  std::vector<const int32_t*> sources;
+  std::vector<runtime::PatternPtr> patterns;
+  for (const Source& s : results) {
+    sources.push_back(s.table);
+    patterns.push_back(s.pattern);
+  }
+  const bool same = set_id_ == target.id() && set_version_ == target.topology_version() &&
+                    size_ == target.size() && sources == sources_ && patterns == patterns_;
+  if (!same) {
+    set_id_ = target.id();
+    set_version_ = target.topology_version();
+    size_ = target.size();
+    sources_ = std::move(sources);
+    patterns_ = std::move(patterns);
+    built_split_ = false;
+    results_.clear();
+    std::map<int, std::set<int>> places;
+    written_places(t.body, t, places);
+    for (const auto& [index, written] : places) {
+      Result r;
+      r.result = index;
+      r.vector = results[static_cast<size_t>(index)].table == nullptr;
+      r.components = results[static_cast<size_t>(index)].components;
+      r.written.assign(written.begin(), written.end());
+      r.stride = r.vector ? target.arity() + 1 : t.pairs[static_cast<size_t>(index)];
+      r.source = results[static_cast<size_t>(index)].table;
+      if (r.vector) {
+        r.plain.assign(static_cast<size_t>(target.size()) * static_cast<size_t>(r.stride), 0);
+        for (int e = 0; e < target.size(); ++e)
+          for (int m : r.written)
+            r.plain[static_cast<size_t>(e) * static_cast<size_t>(r.stride) + m] =
+                runtime::member_element(target, e, m);
+        r.source = r.plain.data();
+      }
+      results_.push_back(std::move(r));
+    }
+  }
+  split_ = false;
+  if (!split) return true;
+  if (!built_split_ || chunk_ != chunk) {
+    chunk_ = chunk;
+    built_split_ = true;
+    split_ok_ = true;
+    for (Result& r : results_)
+      split_ok_ = split_ok_ && build(r, target, results[static_cast<size_t>(r.result)].blocks);
+  }
+  if (!split_ok_) return false;
+  split_ = true;
+  for (Result& r : results_) std::fill(r.scratch.begin(), r.scratch.end(), -0.0);
+  return true;
+}
+
+// A block's first chunk adds in place; each later contribution (element, block) gets a
+// deferred block of its own, numbered in element order, so that adding them in number order
+// adds each block's in element order. A deferred block starts at -0.0, which an addition
+// leaves exactly the value added.
+bool DeferredPlan::build(Result& r, const runtime::Set& target, int64_t blocks) {
+  const size_t stride = static_cast<size_t>(r.stride);
+  r.split.assign(static_cast<size_t>(target.size()) * stride, 0);
+  r.dest.clear();
+  std::vector<int32_t> owner(static_cast<size_t>(blocks), -1);
+  std::vector<int32_t> mine;  // the blocks of the element at hand
+  for (int e = 0; e < target.size(); ++e) {
+    const int32_t c = e / chunk_;
+    mine.clear();
+    for (int p : r.written) {
+      const size_t at = static_cast<size_t>(e) * stride + static_cast<size_t>(p);
+      const int32_t b = r.source[at];
+      if (b < 0 || b >= blocks) return false;
+      if (std::find(mine.begin(), mine.end(), b) != mine.end()) return false;
+      mine.push_back(b);
+      int32_t& o = owner[static_cast<size_t>(b)];
+      if (o < 0) o = c;
+      if (o == c) {
+        r.split[at] = b;
+      } else {
+        r.split[at] = -1 - static_cast<int32_t>(r.dest.size());
+        r.dest.push_back(b);
+      }
+    }
+  }
+  r.scratch.assign(r.dest.size() * static_cast<size_t>(r.components), -0.0);
+  return true;
+}
+
+const int32_t* DeferredPlan::table(int result) const {
+  for (const Result& r : results_)
+    if (r.result == result) return split_ ? r.split.data() : r.source;
+  return nullptr;
+}
+
+double* DeferredPlan::deferred(int result) {
+  for (Result& r : results_)
+    if (r.result == result) return r.scratch.data();
+  return nullptr;
+}
+
+void DeferredPlan::finish(const std::vector<double*>& values) const {
+  if (!split_) return;
+  for (const Result& r : results_) {
+    double* v = values[static_cast<size_t>(r.result)];
+    const size_t n = static_cast<size_t>(r.components);
+    for (size_t k = 0; k < r.dest.size(); ++k) {
+      double* to = v + static_cast<size_t>(r.dest[k]) * n;
+      const double* from = r.scratch.data() + k * n;
+      for (size_t c = 0; c < n; ++c) to[c] += from[c];
+    }
+  }
+}
+
+int64_t DeferredPlan::deferred_blocks() const {
+  int64_t n = 0;
+  for (const Result& r : results_) n += static_cast<int64_t>(r.dest.size());
+  return n;
+}
+
+}  // namespace simit::jit

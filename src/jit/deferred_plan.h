@@ -1,0 +1,66 @@
+// The tables a deferred map kernel (jit/defer_assembly.h) runs with, built once per
+// topology and chunk size and kept with the site's kernel, and the additions of the deferred
+// blocks after a run.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "jit/loop_ir.h"
+#include "runtime/set.h"
+#include "runtime/system_matrix.h"
+
+namespace simit::jit {
+
+class DeferredPlan {
+ public:
+  // What one result of the call is: its pattern table (a matrix; null for a vector), the
+  // pattern that owns it (kept alive, so its address names it), its blocks and components.
+  struct Source {
+    const int32_t* table = nullptr;
+    runtime::PatternPtr pattern;
+    int64_t blocks = 0;
+    int components = 1;
+  };
+
+  // Tables for running `t` over `target` in chunks of `chunk` elements (split: true) or in
+  // element order (split: false: every entry points at its block). False when chunks cannot
+  // run apart on this topology (an element writes one block through two of its members): the
+  // call then runs with split false, in order.
+  bool prepare(const Trace& t, const runtime::Set& target, const std::vector<Source>& results,
+               int32_t chunk, bool split);
+  // For the array slots of a Table or a Deferred array of result `result`.
+  const int32_t* table(int result) const;
+  double* deferred(int result);
+  // After a split run: each deferred block added to its block, in element order. `values`:
+  // per result its values (null for results not assembled).
+  void finish(const std::vector<double*>& values) const;
+  // Deferred blocks of the last split prepared (for --jit-stats).
+  int64_t deferred_blocks() const;
+
+ private:
+  struct Result {
+    int result = -1;
+    bool vector = false;
+    int components = 1;
+    std::vector<int> written;  // the pairs (matrix) or members (vector) the trace writes
+    int stride = 0;            // table entries per element
+    const int32_t* source = nullptr;
+    std::vector<int32_t> plain;  // a vector's member table
+    std::vector<int32_t> split;  // the table with later chunks' entries sent to deferred blocks
+    std::vector<int32_t> dest;   // per deferred block, its block
+    std::vector<double> scratch;
+  };
+  bool build(Result& r, const runtime::Set& target, int64_t blocks);
+
+  // What the tables were built for.
+  uint64_t set_id_ = 0, set_version_ = 0;
+  int32_t size_ = -1, chunk_ = 0;
+  std::vector<runtime::PatternPtr> patterns_;
+  std::vector<const int32_t*> sources_;
+  bool built_split_ = false, split_ok_ = false, split_ = false;
+  std::vector<Result> results_;
+};
+
+}  // namespace simit::jit
