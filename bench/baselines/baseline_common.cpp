@@ -13,22 +13,31 @@ namespace simit::baseline {
 
 namespace {
 
+int threads_in_use = 1;  // --threads, read through thread_count()
+
 // Prints the usage to stdout and exits 0 for --help, to stderr and exits 2 for bad arguments.
 [[noreturn]] void usage(const std::string& name, bool has_sim_form, bool asked = false) {
   std::FILE* out = asked ? stdout : stderr;
+#ifdef _OPENMP
+  const char* threads_note = "";
+#else
+  const char* threads_note = ";\n               this build has no OpenMP, so only 1";
+#endif
   std::fprintf(
       out,
-      "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock]%s [INPUT] "
-      "[FRAMES]\n"
+      "usage: %s [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--cpu-clock] [--threads N]%s "
+      "[INPUT] [FRAMES]\n"
       "  --csv FILE   write the final positions to FILE (x,y,z per vertex); without it\n"
       "               no positions are written\n"
       "  --check      exit nonzero when a final position is not finite\n"
       "  --cg-tol T   CG stops at r'r <= T (default: the example's)\n"
       "  --cg-max N   CG iteration cap (default: the example's)\n"
-      "  --cpu-clock  time frames in thread CPU time instead of wall time\n"
+      "  --cpu-clock  time frames in thread CPU time instead of wall time (one thread only)\n"
+      "  --threads N  run the frame loops on N OpenMP threads (default 1: the serial loops,\n"
+      "               whose results and times compare with runs made before the option)%s\n"
       "%s"
       "  --help       print this and exit\n",
-      name.c_str(), has_sim_form ? " [--sim-form]" : "",
+      name.c_str(), has_sim_form ? " [--sim-form]" : "", threads_note,
       has_sim_form ? "  --sim-form   evaluate element matrices as the .sim writes them\n" : "");
   std::exit(asked ? 0 : 2);
 }
@@ -63,7 +72,16 @@ Options parse_options(int argc, char** argv, const std::string& default_input, b
       }
     } else if (arg == "--cpu-clock") {
       o.cpu_clock = true;
-      Stopwatch::use_cpu_clock(true);
+    } else if (arg == "--threads" && i + 1 < argc) {
+      const char* text = argv[++i];
+      char* end = nullptr;
+      const long threads = std::strtol(text, &end, 10);
+      if (end == text || *end != '\0' || threads < 1 || threads > 4096) {
+        std::fprintf(stderr, "%s: --threads needs a whole number from 1 to 4096, got '%s'\n",
+                     name.c_str(), text);
+        std::exit(2);
+      }
+      o.threads = static_cast<int>(threads);
     } else if (arg == "--sim-form" && has_sim_form) {
       o.sim_form = true;
     } else if (arg.starts_with("-")) {
@@ -75,7 +93,62 @@ Options parse_options(int argc, char** argv, const std::string& default_input, b
   if (positional.size() > 0) o.input = positional[0];
   if (positional.size() > 1) o.frames = std::atoi(positional[1].c_str());
   if (positional.size() > 2 || o.frames < 0) usage(name, has_sim_form);
+#ifndef _OPENMP
+  if (o.threads > 1) {
+    std::fprintf(stderr,
+                 "%s: --threads %d is unavailable: this build has no OpenMP (CMake found none "
+                 "for the compiler), so the baselines run on one thread only\n",
+                 name.c_str(), o.threads);
+    std::exit(2);
+  }
+#endif
+  if (o.cpu_clock && o.threads > 1) {
+    std::fprintf(stderr,
+                 "%s: --cpu-clock cannot go with --threads %d: it times the main thread's CPU "
+                 "time, which leaves out the other threads' work; time threaded runs in wall "
+                 "time (without --cpu-clock)\n",
+                 name.c_str(), o.threads);
+    std::exit(2);
+  }
+  Stopwatch::use_cpu_clock(o.cpu_clock);
+  threads_in_use = o.threads;
   return o;
+}
+
+int thread_count() { return threads_in_use; }
+
+void ElementColouring::colour(const std::vector<int>& corners, int corner_count, int vertex_count) {
+  if (thread_count() == 1) return;  // mesh order: nothing to schedule
+  const int element_count = element_count_;
+  // The elements at each vertex (a CSR), to find an element's neighbours.
+  std::vector<int> start(vertex_count + 1, 0),
+      at(static_cast<size_t>(element_count) * corner_count);
+  for (int k = 0; k < element_count * corner_count; ++k) ++start[corners[k] + 1];
+  for (int v = 0; v < vertex_count; ++v) start[v + 1] += start[v];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int k = 0; k < element_count * corner_count; ++k) at[fill[corners[k]]++] = k / corner_count;
+  // Greedy, in mesh order: each element takes the least colour none of its coloured
+  // neighbours has (taken[c] == e marks colour c as taken for element e).
+  std::vector<int> colour(element_count, -1), taken;
+  for (int e = 0; e < element_count; ++e) {
+    for (int j = 0; j < corner_count; ++j) {
+      const int v = corners[static_cast<size_t>(e) * corner_count + j];
+      for (int k = start[v]; k < start[v + 1]; ++k)
+        if (colour[at[k]] >= 0) taken[colour[at[k]]] = e;
+    }
+    int c = 0;
+    while (c < static_cast<int>(taken.size()) && taken[c] == e) ++c;
+    if (c == static_cast<int>(taken.size())) taken.push_back(-1);
+    colour[e] = c;
+  }
+  // Counting sort by colour, stable: mesh order within a colour keeps what locality the
+  // mesh's numbering has.
+  colour_start_.assign(taken.size() + 1, 0);
+  for (int e = 0; e < element_count; ++e) ++colour_start_[colour[e] + 1];
+  for (size_t c = 0; c < taken.size(); ++c) colour_start_[c + 1] += colour_start_[c];
+  order_.resize(element_count);
+  std::vector<int> next(colour_start_.begin(), colour_start_.end() - 1);
+  for (int e = 0; e < element_count; ++e) order_[next[colour[e]]++] = e;
 }
 
 BlockPatternBuilder::BlockPatternBuilder(int block_rows) : rows_(block_rows) {
@@ -111,7 +184,7 @@ int BlockCsr::find(int i, int j) const {
 }
 
 void BlockCsr::set_zero() {
-  for (Mat3& b : blocks_) b.setZero();
+  parallel_for(static_cast<int>(blocks_.size()), [&](int k) { blocks_[k].setZero(); });
 }
 
 // The product reads blocks and vectors as plain double arrays, with three scalar row sums:
@@ -125,8 +198,8 @@ double BlockCsr::multiply_dot(const Vec3s& p, Vec3s& y) const {
   const double* blocks = blocks_.data()->data();  // column-major 3x3, 9 doubles apart
   const double* pv = p.data()->data();
   double* yv = y.data()->data();
-  double dot = 0.0;
-  for (int i = 0; i < n; ++i) {
+  // By rows: each thread writes only its own rows of y.
+  return parallel_sum(n, 0.0, [=](int i) {
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
     for (int k = start[i]; k < start[i + 1]; ++k) {
       const double* b = blocks + 9 * static_cast<size_t>(k);
@@ -136,23 +209,19 @@ double BlockCsr::multiply_dot(const Vec3s& p, Vec3s& y) const {
       y2 += b[2] * q[0] + b[5] * q[1] + b[8] * q[2];
     }
     yv[3 * i] = y0, yv[3 * i + 1] = y1, yv[3 * i + 2] = y2;
-    dot += pv[3 * i] * y0 + pv[3 * i + 1] * y1 + pv[3 * i + 2] * y2;
-  }
-  return dot;
+    return pv[3 * i] * y0 + pv[3 * i + 1] * y1 + pv[3 * i + 2] * y2;
+  });
 }
 
 double BlockCsr::residual(const Vec3s& b, const Vec3s& x, Vec3s& r, Vec3s& p) const {
-  const int n = block_rows();
-  double rr = 0.0;
-  for (int i = 0; i < n; ++i) {
+  return parallel_sum(block_rows(), 0.0, [&](int i) {
     Vec3 acc = b[i];
     for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
       acc.noalias() -= blocks_[k] * x[columns_[k]];
     r[i] = acc;
     p[i] = acc;
-    rr += acc.squaredNorm();
-  }
-  return rr;
+    return acc.squaredNorm();
+  });
 }
 
 double BlockCsr::cg_bytes_per_iteration() const {
@@ -170,19 +239,17 @@ CgResult ConjugateGradient::solve(const BlockCsr& a, const Vec3s& b, Vec3s& x, d
   CgResult result;
   while (rr > tol && result.iterations < max_iterations) {
     const double alpha = rr / a.multiply_dot(p_, ap_);
-    double rr_new = 0.0;
-    for (int i = 0; i < n; ++i) {
+    const double rr_new = parallel_sum(n, 0.0, [&](int i) {
       x[i] += alpha * p_[i];
       r_[i] -= alpha * ap_[i];
-      rr_new += r_[i].squaredNorm();
-    }
+      return r_[i].squaredNorm();
+    });
     const double beta = rr_new / rr;
-    for (int i = 0; i < n; ++i) p_[i] = r_[i] + beta * p_[i];
+    parallel_for(n, [&](int i) { p_[i] = r_[i] + beta * p_[i]; });
     rr = rr_new;
     ++result.iterations;
   }
-  double bb = 0.0;
-  for (const Vec3& bi : b) bb += bi.squaredNorm();
+  const double bb = parallel_sum(n, 0.0, [&](int i) { return b[i].squaredNorm(); });
   result.residual = std::sqrt(rr / bb);
   return result;
 }

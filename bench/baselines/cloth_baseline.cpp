@@ -2,7 +2,10 @@
 // discrete-shells bending on hinges, explicit Velocity Verlet, on a generated square cloth.
 // Each step is two passes: the forces over faces and hinges, then one over the points
 // (acceleration, velocity and the next step's positions fused).
-// Usage: cloth_baseline [--check] [--csv FILE] [N] [FRAMES]   (N x N vertices, default 32)
+// --threads N runs the steps on N OpenMP threads: faces and hinges colour by colour, the
+// point passes in chunks (baseline_common.h).
+// Usage: cloth_baseline [--check] [--csv FILE] [--threads N] [N] [FRAMES]
+//        (N x N vertices, default 32)
 // Final positions are written only with --csv FILE; --help lists every option.
 #include <cmath>
 #include <cstdio>
@@ -95,7 +98,13 @@ int main(int argc, char** argv) {
         0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() + e.cross(x[hg[3]] - x[hg[1]]).norm());
     hinge_rest[k] = {dihedral(x, hg, nullptr), 3.0 * kb * e.squaredNorm() / areas};
   }
-  std::printf("cloth %dx%d: %d points, %d faces, %d hinges\n", side, side, n, nf, nh);
+  // Faces (hinges) sharing a point add into the same force: threads take them colour by colour.
+  const ElementColouring face_colouring(faces, n), hinge_colouring(hinges, n);
+  std::printf("cloth %dx%d: %d points, %d faces, %d hinges", side, side, n, nf, nh);
+  if (options.threads > 1)
+    std::printf(", %d threads, %d colours of faces, %d of hinges", options.threads,
+                face_colouring.colour_count(), hinge_colouring.colour_count());
+  std::printf("\n");
 
   // Face k's deformation gradient and Green strain E = (F'F - I)/2.
   auto deformation = [&](int k) {
@@ -109,7 +118,7 @@ int main(int argc, char** argv) {
   };
   // Adds the membrane and bending forces into f (zero on entry).
   auto add_forces = [&]() {
-    for (int k = 0; k < nf; ++k) {
+    face_colouring.for_each([&](int k) {
       const auto& t = faces[k];
       const FaceRest& r = face_rest[k];
       const Mat32 F = deformation(k);
@@ -120,14 +129,14 @@ int main(int argc, char** argv) {
       f[t[0]] -= H.col(0) + H.col(1);
       f[t[1]] += H.col(0);
       f[t[2]] += H.col(1);
-    }
-    std::array<Vec3, 4> grad;
-    for (int k = 0; k < nh; ++k) {
+    });
+    hinge_colouring.for_each([&](int k) {
       const auto& hg = hinges[k];
+      std::array<Vec3, 4> grad;
       const double theta = dihedral(x, hg, &grad);
       const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
       for (int i = 0; i < 4; ++i) f[hg[i]] += s * grad[i];
-    }
+    });
   };
   auto acceleration = [&](int i) { return pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity); };
   // cloth.sim's energy statistic: area (lambda/2 tr(E)^2 + mu tr(E^2)) per face,
@@ -135,20 +144,19 @@ int main(int argc, char** argv) {
   // cloth.sim spreads each element's term over its corners only because its statistic is one
   // vector over the points.
   auto total_energy = [&]() {
-    double energy = 0.0;
-    for (int k = 0; k < nf; ++k) {
+    const double membrane = parallel_sum(nf, 0.0, [&](int k) {
       const Eigen::Matrix2d E = green_strain(deformation(k));
       const double trE = E.trace();
       // tr(E^2) is the sum of squares: E is symmetric.
-      energy += face_rest[k].area * (0.5 * lambda_s * trE * trE + mu_s * E.squaredNorm());
-    }
-    for (int k = 0; k < nh; ++k) {
+      return face_rest[k].area * (0.5 * lambda_s * trE * trE + mu_s * E.squaredNorm());
+    });
+    const double bending = parallel_sum(nh, membrane, [&](int k) {
       const double bend = dihedral(x, hinges[k], nullptr) - hinge_rest[k].theta0;
-      energy += hinge_rest[k].w * bend * bend;
-    }
-    for (int i = 0; i < n; ++i)
-      energy += 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
-    return energy;
+      return hinge_rest[k].w * bend * bend;
+    });
+    return parallel_sum(n, bending, [&](int i) {
+      return 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
+    });
   };
 
   std::fill(f.begin(), f.end(), Vec3::Zero());
@@ -158,7 +166,7 @@ int main(int argc, char** argv) {
   for (int frame = 1; frame <= options.frames; ++frame) {
     double force_ms = 0.0, integrate_ms = 0.0;
     Stopwatch clock;
-    for (int i = 0; i < n; ++i) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
+    parallel_for(n, [&](int i) { x[i] += h * v[i] + (0.5 * h * h) * acc[i]; });
     integrate_ms += clock.lap_ms();
     for (int s = 0; s < substeps; ++s) {
       add_forces();
@@ -166,13 +174,13 @@ int main(int argc, char** argv) {
       // One pass per step over the points: the new acceleration, the velocity, f cleared for
       // the next step and, unless the frame ends here, the next step's positions.
       const bool last = s + 1 == substeps;
-      for (int i = 0; i < n; ++i) {
+      parallel_for(n, [&](int i) {
         const Vec3 a_new = acceleration(i);
         v[i] += (0.5 * h) * (acc[i] + a_new);
         acc[i] = a_new;
         f[i].setZero();
         if (!last) x[i] += h * v[i] + (0.5 * h * h) * acc[i];
-      }
+      });
       integrate_ms += clock.lap_ms();
     }
     // The frame's positions and velocities are final here: the next frame's first position

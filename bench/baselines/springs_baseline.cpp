@@ -2,7 +2,10 @@
 // linearized backward Euler, unpreconditioned CG with the same stopping rule. The matrix is a
 // block-CSR of 3x3 blocks holding only the blocks springs.sim writes: the diagonal, and the
 // pairs of points joined by a spring when neither is pinned.
-// Usage: springs_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [MESH] [FRAMES]
+// --threads N runs the frame on N OpenMP threads: the springs colour by colour, the point
+// passes and CG by rows (baseline_common.h).
+// Usage: springs_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--threads N] [MESH]
+//                         [FRAMES]
 // Final positions are written only with --csv FILE; --help lists every option.
 #include <algorithm>
 #include <cmath>
@@ -26,14 +29,13 @@ const Vec3 gravity(0.0, -10.0, 0.0);
 // its statistic is one vector over the points.
 double total_energy(const simit::runtime::Mesh& mesh, const std::vector<double>& l0, const Vec3s& x,
                     const Vec3s& v, const std::vector<double>& m) {
-  double energy = 0.0;
-  for (size_t s = 0; s < l0.size(); ++s) {
+  const double elastic = parallel_sum(static_cast<int>(l0.size()), 0.0, [&](int s) {
     const double stretch = (x[mesh.edges[s][1]] - x[mesh.edges[s][0]]).norm() - l0[s];
-    energy += 0.5 * stiffness * stretch * stretch;
-  }
-  for (size_t i = 0; i < x.size(); ++i)
-    energy += 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
-  return energy;
+    return 0.5 * stiffness * stretch * stretch;
+  });
+  return parallel_sum(static_cast<int>(x.size()), elastic, [&](int i) {
+    return 0.5 * m[i] * v[i].squaredNorm() - m[i] * gravity.dot(x[i]);
+  });
 }
 
 }  // namespace
@@ -89,9 +91,14 @@ int main(int argc, char** argv) {
     blocks[s] = {pinned[p] ? -1 : a.diagonal(p), pinned[q] ? -1 : a.diagonal(q),
                  coupled ? a.find(p, q) : -1, coupled ? a.find(q, p) : -1};
   }
-  std::printf(
-      "%s: %d points, %d springs, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms\n",
-      options.input.c_str(), n, ns, a.block_count(), a.cg_bytes_per_iteration(), setup.lap_ms());
+  // Springs sharing a point write the same force and blocks: threads take them colour by colour.
+  const ElementColouring colouring(mesh.edges, n);
+  std::printf("%s: %d points, %d springs, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms",
+              options.input.c_str(), n, ns, a.block_count(), a.cg_bytes_per_iteration(),
+              setup.lap_ms());
+  if (options.threads > 1)
+    std::printf(", %d threads, %d colours of springs", options.threads, colouring.colour_count());
+  std::printf("\n");
 
   Vec3s f(n), b(n);
   ConjugateGradient cg(n);
@@ -99,9 +106,11 @@ int main(int argc, char** argv) {
   for (int frame = 1; frame <= options.frames; ++frame) {
     Stopwatch clock;
     a.set_zero();
-    std::fill(f.begin(), f.end(), Vec3::Zero());
-    for (int i = 0; i < n; ++i) a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
-    for (int s = 0; s < ns; ++s) {
+    parallel_for(n, [&](int i) {
+      f[i].setZero();
+      a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
+    });
+    colouring.for_each([&](int s) {
       const int p = mesh.edges[s][0], q = mesh.edges[s][1];
       const Vec3 d = x[q] - x[p];
       const double l = d.norm();
@@ -111,21 +120,22 @@ int main(int argc, char** argv) {
       // K = [-Ks Ks; Ks -Ks]; the transverse term is dropped under compression. Blocks
       // coupling to a pinned point are not written; a free end keeps its own block.
       const std::array<int, 4>& k = blocks[s];
-      if (k[0] < 0 && k[1] < 0) continue;
+      if (k[0] < 0 && k[1] < 0) return;
       const Vec3 u = d / l;
       const Mat3 uu = u * u.transpose();
       const Mat3 ks = stiffness * (uu + std::max(0.0, 1.0 - l0[s] / l) * (Mat3::Identity() - uu));
       if (k[0] >= 0) a.block(k[0]) += (h * h) * ks;
       if (k[1] >= 0) a.block(k[1]) += (h * h) * ks;
-      if (k[2] < 0) continue;
+      if (k[2] < 0) return;
       a.block(k[2]) -= (h * h) * ks;
       a.block(k[3]) -= (h * h) * ks;
-    }
-    for (int i = 0; i < n; ++i)
+    });
+    parallel_for(n, [&](int i) {
       b[i] = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
+    });
     const double assembly_ms = clock.lap_ms();
     const CgResult result = cg.solve(a, b, v, cg_tol, cg_max);
-    for (int i = 0; i < n; ++i) x[i] += h * v[i];
+    parallel_for(n, [&](int i) { x[i] += h * v[i]; });
     const double energy = total_energy(mesh, l0, x, v, m);
     log.frame(frame, assembly_ms, clock.lap_ms(), energy, result);
   }
