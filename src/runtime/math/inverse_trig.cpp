@@ -1,0 +1,147 @@
+// atan2, asin and acos (docs/math.md), all from one atan of a quotient n/d <= 1 kept as a
+// double-double: atan t = atan c + atan((t - c)/(1 + t c)) with c = j/64 from a table, and a
+// short odd polynomial for the second term; asin and acos are atan2 of x and sqrt(1 - x^2).
+#include "runtime/math/dd.h"
+#include "runtime/math/math_functions.h"
+#include "runtime/math/tables.h"
+
+#include <cmath>  // std::sqrt only: correctly rounded by IEEE 754, an instruction everywhere
+
+namespace simit::math {
+
+namespace {
+
+using namespace detail;
+namespace tb = tables;
+
+constexpr DD kPio2{tb::kPio2Hi, tb::kPio2Lo};
+constexpr DD kPi{tb::kPiHi, tb::kPiLo};
+
+DD negate(DD a) { return {-a.hi, -a.lo}; }
+
+// atan(n/d) for 0 <= n <= d, d > 0, n/d >= 2^-1000 or 0 (no quotient near underflow),
+// relative error near 2^-67.
+DD atan_core(DD n, DD d) {
+  constexpr double kShift = 0x1.8p52;
+  const double jd = (n.hi / d.hi * 64.0 + kShift) - kShift;
+  const int j = static_cast<int>(jd);
+  const double c = jd * 0x1p-6;
+  // v = (n/d - c)/(1 + c n/d) = (n - c d)/(d + c n), |v| <= 2^-7. n.hi - c d.hi cancels
+  // exactly (c d.hi is within a factor 2 of n.hi, or zero).
+  double p, pe;
+  two_prod(c, d.hi, p, pe);
+  DD num;
+  two_sum(n.hi - p, (n.lo - pe) - c * d.lo, num.hi, num.lo);
+  two_prod(c, n.hi, p, pe);
+  DD den;
+  double t;
+  two_sum(d.hi, p, den.hi, t);
+  fast_two_sum(den.hi, t + pe + d.lo + c * n.lo, den.hi, den.lo);
+  const DD v = div(num, den);
+  // atan v - v = v^3 (-1/3 + v^2/5 - v^4/7 + v^6/9), at most 2^-22.6 v: a double suffices.
+  const double v2 = v.hi * v.hi;
+  const double* a = tb::kAtanPoly;
+  const double tail = v.hi * v2 * (a[0] + v2 * (a[1] + v2 * (a[2] + v2 * a[3])));
+  double h;
+  two_sum(tb::kAtan[2 * j], v.hi, h, t);
+  const double l = t + (tb::kAtan[2 * j + 1] + v.lo + tail);
+  DD out;
+  fast_two_sum(h, l, out.hi, out.lo);
+  return out;
+}
+
+// pi/2 - a (a in [0, pi/4]) or pi - a (a in [0, pi/2]): no cancellation below half.
+DD minus(DD constant, DD a) { return add(constant, negate(a)); }
+
+// atan(n/d) for n, d >= 0 not both zero, either order; the larger is the divisor.
+DD atan_ratio(DD n, DD d) {
+  if (n.hi > d.hi) return minus(kPio2, atan_core(d, n));
+  return atan_core(n, d);
+}
+
+// sqrt(1 - x^2) for 0 <= ax <= 1 as a double-double: 1 - x^2 is formed exactly enough
+// ((1 - ax)(1 + ax) near 1, where 1 - ax is exact), then one Newton step on sqrt.
+DD sqrt_one_minus_square(double ax) {
+  DD w;
+  if (ax >= 0.5) {
+    DD b;
+    fast_two_sum(1.0, ax, b.hi, b.lo);
+    w = mul(b, 1.0 - ax);
+  } else {
+    double p, e, t;
+    two_prod(ax, ax, p, e);
+    fast_two_sum(1.0, -p, w.hi, t);
+    w.lo = t - e;
+  }
+  if (w.hi == 0.0) return {0.0, 0.0};
+  const double s = std::sqrt(w.hi);
+  double p, e;
+  two_prod(s, s, p, e);
+  DD out;
+  fast_two_sum(s, (((w.hi - p) - e) + w.lo) / (2.0 * s), out.hi, out.lo);
+  return out;
+}
+
+int biased_exponent(double x) { return static_cast<int>((bits_of(x) & kAbsMask) >> 52); }
+
+}  // namespace
+
+double atan2(double y, double x) {
+  if (is_nan(x) || is_nan(y)) return x + y;
+  const bool left = sign_of(x);  // -0 counts as left of the axis, as Annex F says
+  double ay = abs_of(y), ax = abs_of(x);
+  DD a;
+  if (ay == infinity() || ax == infinity()) {
+    if (ay != infinity()) {
+      a = left ? kPi : DD{0.0, 0.0};
+    } else if (ax != infinity()) {
+      a = kPio2;
+    } else {  // pi/4 or 3pi/4
+      const DD quarter{0.5 * tb::kPio2Hi, 0.5 * tb::kPio2Lo};
+      a = left ? minus(kPi, quarter) : quarter;
+    }
+    return with_sign(a.hi + a.lo, sign_of(y));
+  }
+  if (ay == 0.0 && ax == 0.0) {
+    a = left ? kPi : DD{0.0, 0.0};
+    return with_sign(a.hi + a.lo, sign_of(y));
+  }
+  const bool swap = ay > ax;
+  double n = swap ? ax : ay, d = swap ? ay : ax;
+  if (d < 0x1p-900) {  // both tiny: scale up (exactly) before looking at exponents
+    n *= 0x1p600;
+    d *= 0x1p600;
+  }
+  if (n == 0.0) {
+    a = {0.0, 0.0};
+  } else if (biased_exponent(d) - biased_exponent(n) > 60) {
+    a = {n / d, 0.0};  // atan q = q (1 - q^2/3): q rounded is atan q rounded
+  } else {
+    // d into [1, 2) and n with it (n stays normal: within 2^61 of d).
+    const int k = 1023 - biased_exponent(d);
+    a = atan_core({scale(n, k), 0.0}, {scale(d, k), 0.0});
+  }
+  if (swap) a = minus(kPio2, a);
+  if (left) a = minus(kPi, a);
+  return with_sign(a.hi + a.lo, sign_of(y));
+}
+
+double asin(double x) {
+  if (is_nan(x)) return x + x;
+  const double ax = abs_of(x);
+  if (ax > 1.0) return nan_of(x);
+  if (ax < 0x1p-26) return x;  // asin x = x + x^3/6 rounds to x (and keeps -0)
+  const DD a = atan_ratio({ax, 0.0}, sqrt_one_minus_square(ax));
+  return with_sign(a.hi + a.lo, sign_of(x));
+}
+
+double acos(double x) {
+  if (is_nan(x)) return x + x;
+  const double ax = abs_of(x);
+  if (ax > 1.0) return nan_of(x);
+  DD a = atan_ratio(sqrt_one_minus_square(ax), {ax, 0.0});
+  if (sign_of(x)) a = minus(kPi, a);
+  return a.hi + a.lo;
+}
+
+}  // namespace simit::math
