@@ -5,6 +5,7 @@
 #include "interp/frame.h"
 #include "interp/interpreter.h"
 #include "interp/operators.h"
+#include "interp/set_reductions.h"
 #include "runtime/fault.h"
 #include "runtime/system_ops.h"
 
@@ -163,7 +164,7 @@ Value Interpreter::eval_binary(const ast::Binary& b) {
     return v;
   }
   if (l.kind() == Value::Kind::Matrix || r.kind() == Value::Kind::Matrix ||
-      b.op == ast::Binary::Op::LeftDiv) {
+      b.op == ast::Binary::Op::LeftDiv || is_set_inner_product(b)) {
     Value v;
     if (system_binary(b, l, r, v)) {
       finish(v, b);

@@ -6,6 +6,8 @@
 
 #include "interp/frame.h"
 #include "interp/interpreter.h"
+#include "interp/set_reductions.h"
+#include "runtime/blocked_sum.h"
 #include "runtime/decompositions.h"
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
@@ -56,15 +58,21 @@ const double* floats_of(const Value& v, size_t& n) {
   return v.tensor().floats();
 }
 
-// Both sum each element's block first, as every inner product does (docs/arithmetic.md).
-Value norm(const Value& v) {
+// Both sum each element's block first, as every inner product does, and then the element
+// sums left to right, or for global vectors (`over_set`) in the blocked order
+// (docs/arithmetic.md).
+double sum_of_products(const double* x, const double* y, size_t n, size_t group, bool over_set) {
+  return over_set ? runtime::blocked_dot(x, y, n, group) : runtime::grouped_dot(x, y, n, group);
+}
+
+Value norm(const Value& v, bool over_set) {
   size_t n;
   const double* x = floats_of(v, n);
   const size_t group = runtime::inner_product_group(v.tensor().shape());
-  return Value::of_float(std::sqrt(runtime::grouped_dot(x, x, n, group)));
+  return Value::of_float(std::sqrt(sum_of_products(x, x, n, group, over_set)));
 }
 
-Value dot(const Value& a, const Value& b) {
+Value dot(const Value& a, const Value& b, bool over_set) {
   size_t n, m;
   const double* x = floats_of(a, n);
   const double* y = floats_of(b, m);
@@ -72,7 +80,7 @@ Value dot(const Value& a, const Value& b) {
   const size_t group = runtime::inner_product_group(a.tensor().shape());
   if (runtime::inner_product_group(b.tensor().shape()) != group)
     throw runtime::Fault("dot of vectors blocked differently");
-  return Value::of_float(runtime::grouped_dot(x, y, n, group));
+  return Value::of_float(sum_of_products(x, y, n, group, over_set));
 }
 
 Value cross(const Value& a, const Value& b) {
@@ -124,8 +132,10 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
     case Intrinsic::Inv2:
     case Intrinsic::Inv4: return Value::of_tensor(runtime::inverse(a0.tensor()));
     case Intrinsic::Cross: return cross(a0, a1);
-    case Intrinsic::Norm: return norm(a0);
-    case Intrinsic::Dot: return dot(a0, a1);
+    case Intrinsic::Norm: return norm(a0, is_set_vector(c.args[0]->type.get()));
+    case Intrinsic::Dot:
+      return dot(a0, a1,
+                 is_set_vector(c.args[0]->type.get()) || is_set_vector(c.args[1]->type.get()));
     case Intrinsic::CreateComplex: return Value::of_complex({a0.as_float(), a1.as_float()});
     case Intrinsic::ComplexGetReal: return Value::of_float(a0.as_complex().real());
     case Intrinsic::ComplexGetImag: return Value::of_float(a0.as_complex().imag());

@@ -6,7 +6,9 @@
 #include <type_traits>
 
 #include "interp/interpreter.h"
+#include "interp/set_reductions.h"
 #include "interp/system_values.h"
+#include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
 #include "runtime/solvers.h"
 #include "runtime/system_ops.h"
@@ -223,13 +225,41 @@ void write_matrix_part(SystemMatrix& m, size_t offset, size_t count, const Value
   for (size_t i = 0; i < count; ++i) dst[i] = v.is_tensor() ? v.tensor().bools()[i] : v.as_bool();
 }
 
-// One operand is a system matrix (or the operator is `\`): false when it is not a case for
-// the sparse operations, so the dense operators take over.
+bool is_set_vector(const Type* t) {
+  return t && t->kind == Type::Kind::Tensor && t->dims.size() == 1 &&
+         t->dims[0].kind != frontend::IndexSet::Kind::Fixed;
+}
+
+bool is_set_inner_product(const ast::Binary& b) {
+  return b.op == ast::Binary::Op::Mul && is_set_vector(b.lhs->type.get()) && b.lhs->type->row &&
+         is_set_vector(b.rhs->type.get()) && !b.rhs->type->row;
+}
+
+namespace {
+
+Value inner_product_over_set(const Value& l, const Value& r) {
+  if (!l.is_tensor() || !r.is_tensor()) throw Fault("an inner product needs two vectors");
+  if (l.tensor().kind() != r.tensor().kind()) throw Fault("product of different component types");
+  if (l.tensor().shape() != r.tensor().shape())
+    throw Fault("inner product of vectors of shapes " + l.tensor().shape().str() + " and " +
+                r.tensor().shape().str());
+  return Value::component(runtime::set_inner_product(l.tensor(), r.tensor()), 0);
+}
+
+}  // namespace
+
+// One operand is a system matrix, the operator is `\`, or the product is an inner product of
+// global vectors: false when it is not a case for the sparse operations, so the dense
+// operators take over.
 bool Interpreter::system_binary(const ast::Binary& b, const Value& l, const Value& r, Value& out) {
   using Op = ast::Binary::Op;
   const bool lm = l.kind() == Value::Kind::Matrix, rm = r.kind() == Value::Kind::Matrix;
   switch (b.op) {
     case Op::Mul:
+      if (!lm && !rm && is_set_inner_product(b)) {
+        out = inner_product_over_set(l, r);
+        return true;
+      }
       if (lm && rm) {
         out = matrix_value(runtime::multiply(*l.matrix(), *r.matrix()));
         return true;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <vector>
 
+#include "runtime/blocked_sum.h"
 #include "runtime/fault.h"
 
 namespace simit::runtime {
@@ -314,6 +315,21 @@ Tensor inner_product(const Tensor& u, const Tensor& v) {
       gemm(u, v, c, 1, n, 1);
       return c;
     }
+  }
+}
+
+Tensor set_inner_product(const Tensor& u, const Tensor& v) {
+  require(u.kind() == v.kind() && u.size() == v.size(), "inner product: sizes do not match");
+  const size_t group = inner_product_group(u.shape());
+  Tensor c(u.kind(), Shape{1});
+  switch (u.kind()) {
+    case ComponentKind::Float:
+      c.mutable_floats()[0] = blocked_dot(u.floats(), v.floats(), u.size(), group);
+      return c;
+    case ComponentKind::Complex:
+      c.mutable_complexes()[0] = blocked_dot(u.complexes(), v.complexes(), u.size(), group);
+      return c;
+    default: return inner_product(u, v);  // integer sums wrap: any order gives the same
   }
 }
 

@@ -21,13 +21,18 @@ Tensor matrix_vector_product(const Tensor& a, const Tensor& x);  // (m x n)(n) -
 Tensor vector_matrix_product(const Tensor& x, const Tensor& a);  // (m)(m x n) -> n
 Tensor outer_product(const Tensor& u, const Tensor& v);          // (m)(n) -> m x n
 // Sum over all components of u_i * v_i (same size, any shape); a 1-component tensor. A
-// blocked u sums each outermost block first (docs/arithmetic.md).
+// blocked u sums each outermost block first, then the block sums left to right
+// (docs/arithmetic.md): the order of dense vectors.
 Tensor inner_product(const Tensor& u, const Tensor& v);
+// The same for global vectors (whose outer dimension is a set): each outermost block summed
+// first, then the block sums in the blocked order of runtime/blocked_sum.h.
+Tensor set_inner_product(const Tensor& u, const Tensor& v);
 // The components of each outermost block of a tensor of this shape (1 when unblocked): the
 // group an inner product sums before adding it to the total.
 size_t inner_product_group(const Shape& s);
 // sum over k < n of x[k] y[k]: each run of `group` components summed from +0.0, the run sums
-// added in order from +0.0. With group 1 this is the plain left-to-right sum.
+// added in order from +0.0. With group 1 this is the plain left-to-right sum. For dense
+// vectors only: a reduction over a set is runtime::blocked_dot's.
 double grouped_dot(const double* x, const double* y, size_t n, size_t group);
 
 // Swaps the two dimensions of a matrix, and of each of its blocks.

@@ -6,6 +6,7 @@
 #include <string>
 #include <type_traits>
 
+#include "runtime/blocked_sum.h"
 #include "runtime/dense_linalg.h"
 
 namespace simit::runtime {
@@ -578,7 +579,7 @@ void divide_elementwise(std::span<const double> x, std::span<const double> y,
 double dot(std::span<const double> x, std::span<const double> y, size_t group) {
   check_same(x.size(), y.size());
   if (group == 0 || x.size() % group != 0) throw Fault("dot of vectors not made of whole blocks");
-  return grouped_dot(x.data(), y.data(), x.size(), group);
+  return blocked_dot(x.data(), y.data(), x.size(), group);
 }
 
 double norm(std::span<const double> x, size_t group) { return std::sqrt(dot(x, x, group)); }

@@ -65,7 +65,8 @@ void multiply_elementwise(std::span<const double> x, std::span<const double> y,
                           std::span<double> out);
 void divide_elementwise(std::span<const double> x, std::span<const double> y,
                         std::span<double> out);
-// Inner products sum each element's block of `group` components first (docs/arithmetic.md).
+// Inner products sum each element's block of `group` components first, then the element
+// sums in the blocked order of runtime/blocked_sum.h (docs/arithmetic.md).
 double dot(std::span<const double> x, std::span<const double> y, size_t group = 1);
 double norm(std::span<const double> x, size_t group = 1);  // Euclidean
 

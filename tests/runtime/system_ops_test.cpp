@@ -246,14 +246,20 @@ TEST(VectorOps, ElementwiseAndReductions) {
   EXPECT_THROW(dot(x, std::vector<double>(2)), Fault);
 }
 
-// docs/arithmetic.md: each element's block is summed before it joins the total. Component by
-// component, 1e16 + 1 rounds to 1e16 and the last 1 survives (1.0); by element both 1s are
-// lost inside their elements (0.0).
+// docs/arithmetic.md: each element's block is summed before it joins the total, and the
+// element sums go to lanes (element e to lane e) folded by a halving tree (lane i + lane
+// i + w for w = 16, ..., 1). By single components, lanes 1e16, 1, 0, -1e16, 1: the tree adds
+// 1e16 + 1 (lane 4 into 0, rounding to 1e16) and 1 + -1e16 (lane 3 into 1), then those: 0.0.
+// By elements of three, both 1s are lost inside their elements: 0.0. By elements of two,
+// (1e16, 1) (0, -1e16) (1, 0): lane 0 gets lane 2's 1 first (1e16), then lane 1's -1e16: 0.0.
 TEST(VectorOps, InnerProductsSumEachElementFirst) {
   const std::vector<double> x = {1e16, 1.0, 0.0, -1e16, 1.0, 0.0}, ones(6, 1.0);
-  EXPECT_EQ(dot(x, ones), 1.0);
+  EXPECT_EQ(dot(x, ones), 0.0);
   EXPECT_EQ(dot(x, ones, 3), 0.0);
-  EXPECT_EQ(dot(x, ones, 2), 1.0);  // runs (1e16, 1), (0, -1e16), (1, 0): 1e16 - 1e16 + 1
+  EXPECT_EQ(dot(x, ones, 2), 0.0);
+  // Lanes 1e16, 1, -1e16: lane 2 joins lane 0 first (0), then lane 1 (1); left to right, 0.
+  const std::vector<double> y = {1e16, 1.0, -1e16};
+  EXPECT_EQ(dot(y, std::vector<double>(3, 1.0)), 1.0);
   EXPECT_THROW(dot(x, ones, 4), Fault);
 }
 

@@ -1,5 +1,5 @@
 // Solver loops: a system trace's vector operations as loops, the sparse products over the
-// solver's column copy, and the passes with sums by runs (jit/llvm/emitter.h).
+// solver's column copy, and the passes with sums in the blocked order (jit/llvm/emitter.h).
 #include <algorithm>
 #include <bit>
 #include <functional>
@@ -9,28 +9,36 @@
 #include "jit/llvm/emitter.h"
 #include "jit/target.h"
 #include "jit/tunables.h"
+#include "runtime/blocked_sum.h"
 
 namespace simit::jit::codegen {
 
 // One op of a system trace. A product runs row block by row block: each component's sum
 // over the row's blocks in pattern order, then the fused body for each component of the row.
+// An op with sums (inner products) runs its elements chunk by chunk (chunked).
 void SystemEmitter::vector_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   switch (op.kind) {
     case VectorOp::Kind::Scalar: return block(op.body);
     case VectorOp::Kind::Pass:
-      if (op.group > 1 && !op.sums.empty()) {
-        Value* runs = b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group));
-        Value* begin = b_.getInt64(0);
-        if (pass_in_lanes(op)) {
-          // Four runs at a time in vectors; the runs left over one by one.
-          Value* quads = b_.CreateSDiv(runs, b_.getInt64(kLanes));
-          loop(begin, quads, [&](Value* q) {
-            runs_in_lanes(op, b_.CreateMul(q, b_.getInt64(kLanes * op.group)));
+      if (!op.sums.empty()) {
+        const int g = op.group;
+        Value* elements = b_.CreateSDiv(sizes[op.length], b_.getInt64(g));
+        return chunked(op, elements, [&](Value* begin, Value* end) {
+          Value* rest = begin;
+          if (pass_in_lanes(op)) {
+            // Four runs at a time in vectors, into four neighbouring lanes (a chunk starts
+            // at a multiple of four runs); the runs left over one by one.
+            Value* quads = b_.CreateSDiv(b_.CreateSub(end, begin), b_.getInt64(kLanes));
+            loop(b_.getInt64(0), quads, [&](Value* q) {
+              Value* offset = b_.CreateMul(q, b_.getInt64(kLanes));
+              runs_in_lanes(op, b_.CreateMul(b_.CreateAdd(begin, offset), b_.getInt64(g)),
+                            lane_of(offset));
+            });
+            rest = b_.CreateAdd(begin, b_.CreateMul(quads, b_.getInt64(kLanes)));
+          }
+          loop(rest, end, [&](Value* e) {
+            run_of(op, b_.CreateMul(e, b_.getInt64(g)), g, lane_of(b_.CreateSub(e, begin)));
           });
-          begin = b_.CreateMul(quads, b_.getInt64(kLanes));
-        }
-        return loop(begin, runs, [&](Value* e) {
-          run_of(op, b_.CreateMul(e, b_.getInt64(op.group)), op.group);
         });
       }
       return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
@@ -39,6 +47,69 @@ void SystemEmitter::vector_op(const VectorOp& op, const std::vector<Value*>& siz
       });
     case VectorOp::Kind::SpMV: return spmv(op, sizes);
   }
+}
+
+// The lane of the element `offset` (an i64) elements after its chunk's first.
+Value* SystemEmitter::lane_of(Value* offset) {
+  return b_.CreateAnd(offset, b_.getInt64(static_cast<int64_t>(runtime::kSumLanes - 1)));
+}
+
+// An op's elements 0 .. elements - 1 (an i64) chunk by chunk, in the blocked order of
+// runtime/blocked_sum.h (docs/arithmetic.md, "Sums"): per chunk, each sum's kSumLanes lane
+// accumulators start at +0.0, work(begin, end) runs the chunk's elements (run_of and
+// runs_in_lanes add each element's part to its lane), the halving tree folds the lanes into
+// the chunk's partial, and the partial is added to the sum: s = s + P_0 + P_1 + ... One
+// chunk's work touches its own elements' components and its lanes only, so it could run
+// apart from the other chunks' as long as the partials are added in chunk order.
+void SystemEmitter::chunked(const VectorOp& op, Value* elements,
+                            const std::function<void(Value*, Value*)>& work) {
+  llvm::Type* f64 = b_.getDoubleTy();
+  constexpr unsigned kWidth = runtime::kSumLanes;
+  auto* all_lanes = llvm::FixedVectorType::get(f64, kWidth);
+  llvm::AllocaInst* lanes;
+  {
+    llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
+    lanes = entry.CreateAlloca(llvm::ArrayType::get(f64, kWidth * op.sums.size()));
+    lanes->setAlignment(llvm::Align(32));
+  }
+  Value* outer = lanes_;
+  lanes_ = lanes;
+  const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
+  Value* chunks = b_.CreateSDiv(b_.CreateAdd(elements, b_.getInt64(chunk - 1)), b_.getInt64(chunk));
+  loop(b_.getInt64(0), chunks, [&](Value* c) {
+    Value* begin = b_.CreateMul(c, b_.getInt64(chunk));
+    Value* next = b_.CreateAdd(begin, b_.getInt64(chunk));
+    Value* end = b_.CreateSelect(b_.CreateICmpSLT(next, elements), next, elements);
+    std::vector<Value*> totals;
+    for (size_t k = 0; k < op.sums.size(); ++k) {
+      b_.CreateAlignedStore(llvm::ConstantFP::get(all_lanes, 0.0), lane_at(k, b_.getInt64(0)),
+                            llvm::Align(32));
+      // The sum so far: its local holds each run's part while the chunk's work runs.
+      totals.push_back(b_.CreateLoad(f64, locals_[op.sums[k]]));
+    }
+    work(begin, end);
+    for (size_t k = 0; k < op.sums.size(); ++k) {
+      Value* a = b_.CreateAlignedLoad(all_lanes, lane_at(k, b_.getInt64(0)), llvm::Align(32));
+      for (unsigned w = kWidth / 2; w >= 1; w /= 2) {
+        std::vector<int> low(w), high(w);
+        for (unsigned i = 0; i < w; ++i) {
+          low[i] = static_cast<int>(i);
+          high[i] = static_cast<int>(i + w);
+        }
+        a = b_.CreateFAdd(b_.CreateShuffleVector(a, low), b_.CreateShuffleVector(a, high));
+      }
+      Value* partial = b_.CreateExtractElement(a, uint64_t{0});
+      b_.CreateStore(b_.CreateFAdd(totals[k], partial), locals_[op.sums[k]]);
+    }
+  });
+  lanes_ = outer;
+}
+
+// Lane `lane` (an i64) of sum k's accumulators in the chunk being emitted.
+Value* SystemEmitter::lane_at(size_t k, Value* lane) {
+  return b_.CreateInBoundsGEP(
+      b_.getDoubleTy(), lanes_,
+      b_.CreateAdd(b_.getInt64(static_cast<int64_t>(k * runtime::kSumLanes)), lane));
 }
 
 // arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
@@ -63,7 +134,7 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
     llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
     sums = entry.CreateAlloca(vec);
   }
-  loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) {
+  auto row_of = [&](Value* r, Value* lane) {
     b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
     Value* lo =
         b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
@@ -113,7 +184,13 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
     for (int i = 0; i < bs; ++i)
       b_.CreateStore(b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
                      b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
-    run_of(op, row, bs);
+    run_of(op, row, bs, lane);
+  };
+  if (op.sums.empty())
+    return loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) { row_of(r, nullptr); });
+  // A reduction fused into the product: a row block is one element of its sums.
+  chunked(op, sizes[op.rows], [&](Value* begin, Value* end) {
+    loop(begin, end, [&](Value* r) { row_of(r, lane_of(b_.CreateSub(r, begin))); });
   });
 }
 
@@ -196,8 +273,9 @@ Value* SystemEmitter::pass_lanes(const Expr& e, Value* first) {
 
 // Four runs of op.group components from component `first` (an i64): each statement for four
 // components at a time, in the statements' order; then each run's part of each sum, its terms
-// added in order, and the parts added to the sum run by run: the order run_of adds them in.
-void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first) {
+// added in order (as run_of adds them), and the four parts added to the lanes `lane` ..
+// `lane` + 3 as one vector.
+void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first, Value* lane) {
   const int g = op.group;
   std::vector<std::vector<Value*>> terms(op.sums.size());
   for (int v = 0; v < g; ++v) {
@@ -215,11 +293,14 @@ void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first) {
       terms[k].push_back(pass_lanes(*s.value->ops[1], at));
     }
   }
+  auto* vec = llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes);
+  // The lanes are 32-byte aligned and `lane` is a multiple of four.
+  const llvm::Align aligned(32);
   for (size_t k = 0; k < op.sums.size(); ++k) {
     // Every statement adds one term per component; with several statements for one sum the
     // component's terms follow one another.
     const size_t per = terms[k].size() / static_cast<size_t>(g);
-    Value* total = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
+    Value* parts = llvm::PoisonValue::get(vec);
     for (int run = 0; run < kLanes; ++run) {
       Value* part = nullptr;
       for (int c = run * g; c < (run + 1) * g; ++c)
@@ -228,21 +309,21 @@ void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first) {
                                                 static_cast<uint64_t>(c % kLanes));
           part = part ? b_.CreateFAdd(part, term) : term;
         }
-      total = b_.CreateFAdd(total, part);
+      parts = b_.CreateInsertElement(parts, part, static_cast<uint64_t>(run));
     }
-    b_.CreateStore(total, locals_[op.sums[k]]);
+    Value* at = lane_at(k, lane);
+    b_.CreateAlignedStore(b_.CreateFAdd(b_.CreateAlignedLoad(vec, at, aligned), parts), at,
+                          aligned);
   }
 }
 
-// A sum's run part needs no +0.0 start either: its total starts at +0.0 (see the product).
-void SystemEmitter::run_of(const VectorOp& op, Value* first, int group) {
-  std::vector<Value*> totals;
-  const bool runs = group > 1 && !op.sums.empty();
+// A run's part of a sum needs no +0.0 start: its lane starts at +0.0 and so is never -0.0, and
+// a part that differs only in the sign of a zero then adds the same. The sum's local holds
+// the part while the run's statements add to it.
+void SystemEmitter::run_of(const VectorOp& op, Value* first, int group, Value* lane) {
+  const bool runs = !op.sums.empty();
   if (runs) {
-    for (int s : op.sums) {
-      totals.push_back(b_.CreateLoad(b_.getDoubleTy(), locals_[s]));
-      b_.CreateStore(llvm::ConstantFP::get(b_.getDoubleTy(), -0.0), locals_[s]);
-    }
+    for (int s : op.sums) b_.CreateStore(llvm::ConstantFP::get(b_.getDoubleTy(), -0.0), locals_[s]);
   }
   for (int i = 0; i < group; ++i) {
     element_wide_ = b_.CreateAdd(first, b_.getInt64(i));
@@ -253,7 +334,8 @@ void SystemEmitter::run_of(const VectorOp& op, Value* first, int group) {
   if (runs) {
     for (size_t k = 0; k < op.sums.size(); ++k) {
       Value* part = b_.CreateLoad(b_.getDoubleTy(), locals_[op.sums[k]]);
-      b_.CreateStore(b_.CreateFAdd(totals[k], part), locals_[op.sums[k]]);
+      Value* at = lane_at(k, lane);
+      b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), at), part), at);
     }
   }
 }

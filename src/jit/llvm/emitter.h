@@ -175,16 +175,24 @@ class SystemEmitter : public Emitter {
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
   void spmv(const VectorOp& op, const std::vector<Value*>& sizes);
   void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
-  // The op's body for the `group` components of one run starting at `first` (an i64), its
-  // sums taken over the run alone and then added to their totals.
-  void run_of(const VectorOp& op, Value* first, int group);
+  // The op's body for the `group` components of one run starting at `first` (an i64); with
+  // sums, each taken over the run alone and then added to lane `lane` (an i64) of its chunk.
+  void run_of(const VectorOp& op, Value* first, int group, Value* lane);
   bool pass_in_lanes(const VectorOp& op) const;
   Value* pass_lanes(const Expr& e, Value* first);
-  void runs_in_lanes(const VectorOp& op, Value* first);
+  void runs_in_lanes(const VectorOp& op, Value* first, Value* lane);
+  // An op with sums: its elements chunk by chunk (runtime/blocked_sum.h), work(begin, end)
+  // emitting a chunk's elements [begin, end) (i64s).
+  void chunked(const VectorOp& op, Value* elements,
+               const std::function<void(Value*, Value*)>& work);
+  Value* lane_of(Value* offset);
+  Value* lane_at(size_t k, Value* lane);
   void write_scalars(Value* scalars);
   void while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt);
 
   const SystemTrace& st_;
+  // The lane accumulators of the chunk being emitted: runtime::kSumLanes doubles per sum.
+  Value* lanes_ = nullptr;
 };
 
 }  // namespace simit::jit::codegen
