@@ -1,12 +1,32 @@
 #!/usr/bin/env bash
-# Builds Simit with AddressSanitizer and UndefinedBehaviorSanitizer (RelWithDebInfo, without
-# the generic twin, and without the JIT unless SIMIT_WITH_LLVM=ON) in BUILD (default
-# build-sanitize, build-sanitize-jit with the JIT) and runs the whole ctest suite there; the
-# first report stops its test. Extra arguments go to ctest. With the JIT only our code is
-# instrumented (LLVM and the compiled kernels are not), and leak checks are off: LLVM keeps
-# process-lifetime allocations.
+# Builds Simit with sanitizers (RelWithDebInfo, without the generic twin) and runs tests there;
+# the first report stops its test. Extra arguments go to ctest.
+#
+#   scripts/sanitize.sh [CTEST ARGS]           AddressSanitizer + UndefinedBehaviorSanitizer over
+#                                              the whole suite, in build-sanitize (without the
+#                                              JIT unless SIMIT_WITH_LLVM=ON: build-sanitize-jit)
+#   scripts/sanitize.sh --thread [CTEST ARGS]  ThreadSanitizer, with the JIT, in build-tsan, over
+#                                              the threaded tests (thread pool, executors, the
+#                                              corpus, random programs and examples on 3 threads)
+#
+# With the JIT only our code is instrumented (LLVM and the compiled kernels are not: two
+# kernels' writes are kept apart by construction, and the tests compare every thread count's
+# bits with one thread's), and leak checks are off: LLVM keeps process-lifetime allocations.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+if [ "${1:-}" = --thread ]; then
+  shift
+  build="${SIMIT_SANITIZE_BUILD_DIR:-$SIMIT_ROOT/build-tsan}"
+  ensure_deps --tests --llvm
+  configure_build "$build" RelWithDebInfo -DSIMIT_BUILD_TESTS=ON -DSIMIT_TSAN=ON \
+    -DSIMIT_WITH_LLVM=ON -DSIMIT_GENERIC_TWIN=OFF
+  cmake --build "$build" -j2
+  export TSAN_OPTIONS="${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}"
+  if [ $# -eq 0 ]; then set -- -R "ThreadPool|ThreadedExecutor|DeferAssembly|Executor\.|threads"; fi
+  ctest --test-dir "$build" --output-on-failure -j1 "$@"
+  exit
+fi
 
 llvm="${SIMIT_WITH_LLVM:-OFF}"
 if [ "$llvm" = ON ]; then

@@ -68,6 +68,10 @@ void Engine::install_jit() {
   j.corrupt_for_test = options_.corrupt_for_test;
   j.shuffle_seed = options_.shuffle_seed_for_test;
   j.threads = x.threads;
+  // The tests run the corpus and the random programs, whose sets are small, on threads in
+  // chunks of a few elements.
+  if (const char* chunk = std::getenv("SIMIT_TEST_THREAD_CHUNK"))
+    j.min_chunk_for_test = std::atoi(chunk);
   // The corpus and the examples reach the shuffled executor through `simit` itself.
   if (const char* seed = std::getenv("SIMIT_TEST_SHUFFLE_SEED"); seed && !j.shuffle_seed)
     j.shuffle_seed = std::strtoull(seed, nullptr, 10);

@@ -56,7 +56,7 @@ TraceController::TraceController(JitOptions options) : options_(options) {
   if (options_.shuffle_seed)
     executor_ = make_shuffled_executor(options_.shuffle_seed, kShuffledChunk);
   else if (options_.threads > 1)
-    executor_ = make_threaded_executor(options_.threads);
+    executor_ = make_threaded_executor(options_.threads, options_.min_chunk_for_test);
   else
     executor_ = make_serial_executor();
 }

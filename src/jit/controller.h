@@ -46,6 +46,8 @@ struct JitOptions {
   uint64_t shuffle_seed = 0;
   // Threads compiled maps and solver loops run on (the engine's pool; 1: the calling thread).
   int threads = 1;
+  // For the tests of threads on small sets: the smallest chunk of a map (0: kMinThreadChunk).
+  int min_chunk_for_test = 0;
 };
 
 // One trace's figures for `--jit-stats`.

@@ -88,7 +88,8 @@ class ShuffledExecutor : public Executor {
 
 class ThreadedExecutor : public Executor {
  public:
-  explicit ThreadedExecutor(int threads) : pool_(threads) {}
+  ThreadedExecutor(int threads, int32_t min_chunk)
+      : pool_(threads), min_chunk_(min_chunk > 0 ? min_chunk : kMinThreadChunk) {}
   const char* name() const override { return "threads"; }
   bool parallel() const override { return true; }
   // A few chunks per thread, so that a thread that finishes early takes another; large
@@ -96,8 +97,9 @@ class ThreadedExecutor : public Executor {
   // shared between chunks (each costs a deferred addition).
   int32_t chunk_for(int32_t n) const override {
     const int64_t per = (static_cast<int64_t>(n) + pool_.threads() * 4 - 1) / (pool_.threads() * 4);
-    const int64_t c = std::clamp<int64_t>(per, 256, kChunkElements);
-    return static_cast<int32_t>((c + kLanes - 1) / kLanes * kLanes);
+    const int64_t c = std::clamp<int64_t>(per, min_chunk_, kChunkElements);
+    return min_chunk_ < kMinThreadChunk ? static_cast<int32_t>(c)
+                                        : static_cast<int32_t>((c + kLanes - 1) / kLanes * kLanes);
   }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
@@ -131,6 +133,7 @@ class ThreadedExecutor : public Executor {
 
  private:
   ThreadPool pool_;
+  int32_t min_chunk_;
   SerialExecutor serial_;
 };
 
@@ -157,8 +160,8 @@ std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk) {
   return std::make_unique<ShuffledExecutor>(seed, chunk);
 }
 
-std::unique_ptr<Executor> make_threaded_executor(int threads) {
-  return std::make_unique<ThreadedExecutor>(threads);
+std::unique_ptr<Executor> make_threaded_executor(int threads, int32_t min_chunk) {
+  return std::make_unique<ThreadedExecutor>(threads, min_chunk);
 }
 
 }  // namespace simit::jit

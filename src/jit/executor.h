@@ -66,6 +66,7 @@ std::unique_ptr<Executor> make_shuffled_executor(uint64_t seed, int32_t chunk);
 // shared blocks without deferred writes runs serially. A failure is the lowest element's:
 // once one chunk fails, the chunks above it are skipped and those below still run. Ctrl-C
 // stops every thread at its next chunk.
-std::unique_ptr<Executor> make_threaded_executor(int threads);
+// `min_chunk` (0: kMinThreadChunk) is for the tests, whose sets are small.
+std::unique_ptr<Executor> make_threaded_executor(int threads, int32_t min_chunk = 0);
 
 }  // namespace simit::jit

@@ -37,6 +37,9 @@ inline constexpr size_t kTileAbove = 144;
 inline constexpr int kMaxInlineDepth = 256;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
+// The smallest chunk of a map on threads (a multiple of kLanes): a chunk's call must cost far
+// more than handing it to a thread.
+inline constexpr int kMinThreadChunk = 256;
 // The test-only shuffled executor's chunks (jit/executor.h): a few elements, so that the
 // corpus's small sets run in several chunks.
 inline constexpr int kShuffledChunk = 3;

@@ -3,10 +3,11 @@
 frames must write byte-identical final positions and the same per-frame statistics (every
 column but the timings), and the JIT must have compiled some of its sites.
 
-usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES [SHUFFLE_SEED]
+usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES [SHUFFLE_SEED] [--threads N]
 
 With SHUFFLE_SEED the JIT runs its maps through the test-only shuffled executor (chunks of a
-few elements in a shuffled order: jit/executor.h), which must give the same bits.
+few elements in a shuffled order: jit/executor.h), which must give the same bits. The JIT
+runs on N threads (default 1), which must give the same bits too.
 """
 import csv
 import os
@@ -17,7 +18,7 @@ import sys
 TIMING_COLUMNS = {"ms", "assembly_ms", "solve_ms"}
 
 
-def run(simit, scene, out, frames, backend, env=None):
+def run(simit, scene, out, frames, backend, env=None, threads=1):
     if os.path.exists(out):
         shutil.rmtree(out)
     os.makedirs(out)
@@ -25,7 +26,7 @@ def run(simit, scene, out, frames, backend, env=None):
     cmd = [simit, "run", scene, "--frames", str(frames), "--output", out, "--final-csv", final,
            "--executor", backend]
     if backend == "jit":
-        cmd += ["--jit-stats", "--jit-cache", "off"]
+        cmd += ["--jit-stats", "--jit-cache", "off", "--threads", str(threads)]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
         sys.exit(f"{backend}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
@@ -39,12 +40,20 @@ def run(simit, scene, out, frames, backend, env=None):
 
 
 def main():
+    args = sys.argv[1:]
+    threads = 1
+    if "--threads" in args:
+        at = args.index("--threads")
+        threads = int(args[at + 1])
+        del args[at:at + 2]
+    sys.argv[1:] = args
     simit, scene, outdir, frames = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
     a_final, a_rows, _ = run(simit, scene, os.path.join(outdir, "interpreter"), frames, "interpreter")
     env = dict(os.environ)
     if len(sys.argv) > 5:
         env["SIMIT_TEST_SHUFFLE_SEED"] = sys.argv[5]
-    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, "jit"), frames, "jit", env)
+    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, "jit"), frames, "jit", env,
+                                 threads)
     compiled = b_out.count(" compiled\n")
     print(b_out[b_out.find("jit traces:"):])
     if compiled == 0:

@@ -137,6 +137,10 @@ struct Runner {
     EngineOptions o;
     o.executor.kind = kind;
     o.executor.threshold = 0;
+    // One thread unless SIMIT_TEST_THREADS says (ctest runs them on 3, in chunks of a few
+    // elements: SIMIT_TEST_THREAD_CHUNK).
+    const char* threads = std::getenv("SIMIT_TEST_THREADS");
+    o.executor.threads = threads && *threads ? std::atoi(threads) : 1;
     o.float32 = g.float32;
     engine = std::make_unique<Engine>(program, o);
     engine->bind_set(*program->find_extern("verts"), world.verts);
