@@ -178,6 +178,22 @@ void Set::reserve(int elements) {
   endpoints_.reserve(static_cast<size_t>(elements) * arity());
 }
 
+void Set::set_mesh_numbers(std::vector<int32_t> numbers) {
+  if (numbers.size() != static_cast<size_t>(size_))
+    throw Fault(describe() + ": " + std::to_string(numbers.size()) + " mesh numbers for " +
+                std::to_string(size_) + " elements");
+  std::vector<char> seen(numbers.size(), 0);
+  for (size_t e = 0; e < numbers.size(); ++e) {
+    const int32_t m = numbers[e];
+    if (m < 0 || m >= size_ || seen[m])
+      throw Fault(element_str(*this, static_cast<int>(e)) + ": mesh number " + std::to_string(m) +
+                  (m < 0 || m >= size_ ? " is out of range" : " is given twice") +
+                  " (the mesh numbers must be a permutation of the elements)");
+    seen[m] = 1;
+  }
+  mesh_numbers_ = std::move(numbers);
+}
+
 int Set::add() { return add_many(1); }
 
 int Set::add_many(int count) {

@@ -141,6 +141,19 @@ class Set {
   int add_edges(std::span<const int32_t> flat);  // edge sets: arity indices per edge
   void reserve(int elements);
 
+  // --- mesh numbers -----------------------------------------------------------------------
+  // A set built from a mesh in another order (a scene renumbers its meshes for locality)
+  // remembers each element's number in the mesh, so that what a user sees (messages, output)
+  // names elements as the mesh does. Without mesh numbers, and for elements added after
+  // them, an element's mesh number is its index.
+  int32_t mesh_number(int element) const {
+    return static_cast<size_t>(element) < mesh_numbers_.size() ? mesh_numbers_[element] : element;
+  }
+  bool has_mesh_numbers() const { return !mesh_numbers_.empty(); }
+  std::span<const int32_t> mesh_numbers() const { return mesh_numbers_; }
+  // `numbers[e]`: element e's number in the mesh; a permutation of 0..size()-1 (Fault if not).
+  void set_mesh_numbers(std::vector<int32_t> numbers);
+
   // --- fields ---------------------------------------------------------------------------
   int add_field(const std::string& name, FieldType type);  // zero for every element
   int field_count() const { return static_cast<int>(fields_.size()); }
@@ -215,6 +228,7 @@ class Set {
   std::vector<const Set*> endpoint_sets_;
   std::vector<int32_t> endpoints_;
   std::vector<int> extents_;
+  std::vector<int32_t> mesh_numbers_;  // empty: every element is its own mesh number
 };
 
 }  // namespace simit::runtime
