@@ -4,7 +4,7 @@
 Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
                           [--only SUBSTRING] [--baseline-only SUBSTRING]...
                           [--compare-baseline LABEL=DIR]... [--compare-simit LABEL=DIR]...
-                          [--fem-sim-form]
+                          [--fem-sim-form] [--threads N]
                           [--executors interpreter,...] [--out FILE]...
 
 For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon160k;
@@ -13,6 +13,8 @@ once per executor (`simit run SCENE`, which writes a per-frame CSV) and the hand
 baseline (bench/baselines/EXAMPLE_baseline.cpp) once, for the same number of frames, and
 prints one row per run:
 
+  threads      the threads the run used: --threads N for the baselines and simit's JIT,
+               1 for the interpreter (which runs on one thread whatever N);
   ms/frame     median over the frames of the frame's wall time (set-up, reading the mesh,
                `init` and writing output are outside it);
   assembly     median of the time in outermost map/apply assemblies (simit's assembly_ms
@@ -41,7 +43,17 @@ the executors of another build's simit beside this one's, case by case (the prev
 to show a change costs nothing); --fem-sim-form adds a row for
 fem_baseline --sim-form, whose stiffness is evaluated column by column from dP (as fem.sim
 wrote it before) rather than in closed form. --baseline-cpu-clock times the baselines' frames in thread CPU time, which the
-machine's load inflates far less than wall time (compare baselines with baselines then).
+machine's load inflates far less than wall time (compare baselines with baselines then;
+one thread only).
+
+--threads N (default 1) runs both sides on N threads: `simit run --threads N` (the JIT's
+maps and solver loops) and `EXAMPLE_baseline --threads N` (the baselines' OpenMP loops:
+partitioned element loops, CG by rows). simit gets --threads whenever its `run --help` lists
+the option, 1 included, since its own default is every core; a simit that predates the
+option runs on one thread and is given nothing (with N above 1 its runs are skipped with a
+note). Baselines get --threads only when N is above 1, so that the --compare-baseline builds
+that predate it still run at 1 (above 1 those are skipped with a note). The default keeps
+the table comparable with one-thread results from before the option.
 
 Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
 iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through --cg-tol and
@@ -71,21 +83,22 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def scene_run(executor_flags):
-    """The argv of `simit run` with extra flags selecting an executor."""
-    def argv(simit, scene, frames, outdir, final_csv):
-        return ([simit, "run"] + executor_flags +
+    """The argv of `simit run` with extra flags selecting an executor; THREADS (a list, maybe
+    empty) holds the --threads flag when the run passes one."""
+    def argv(simit, scene, frames, outdir, final_csv, threads):
+        return ([simit, "run"] + executor_flags + threads +
                 ["--frames", str(frames), "--output", outdir, "--final-csv", final_csv, scene])
     return argv
 
 
-# Executors of simit, in table order: name -> (argv builder, availability check). The JIT
-# compiles every site at its first execution (--jit-threshold 0: the compile time falls in the
-# first frame, outside the medians) and prints its traces (--jit-stats), whose compile times
-# and CPU times go into the notes.
+# Executors of simit, in table order: name -> (argv builder, availability check, whether it
+# runs on --threads N threads). The JIT compiles every site at its first execution
+# (--jit-threshold 0: the compile time falls in the first frame, outside the medians) and
+# prints its traces (--jit-stats), whose compile times and CPU times go into the notes.
 EXECUTORS = {
-    "interpreter": (scene_run([]), lambda simit: True),
+    "interpreter": (scene_run([]), lambda simit: True, False),
     "jit": (scene_run(["--backend", "jit", "--jit-threshold", "0", "--jit-stats"]),
-            lambda simit: jit_available(simit)),
+            lambda simit: jit_available(simit), True),
 }
 
 
@@ -121,6 +134,21 @@ def help_mentions(simit, flag):
     """Whether `simit run --help` lists FLAG (for executors that need a newer simit)."""
     out = subprocess.run([simit, "run", "--help"], capture_output=True, text=True)
     return flag in out.stdout
+
+
+def baseline_has_threads(baseline):
+    """Whether a baseline's --help lists --threads (a baseline built before it has not)."""
+    out = subprocess.run([baseline, "--help"], capture_output=True, text=True)
+    return "--threads" in out.stdout
+
+
+def simit_thread_flags(simit, threads):
+    """The --threads flag for a simit run: always where this simit has the option (its default
+    is every core), none where it predates it (one thread); None when THREADS is above 1 and
+    this simit cannot run it."""
+    if help_mentions(simit, "--threads"):
+        return ["--threads", str(threads)]
+    return [] if threads == 1 else None
 
 
 def count_loc(path):
@@ -261,10 +289,10 @@ def read_baseline_log(path):
     return frames
 
 
-def row_of(case, who, frames_run, code, peak, data, loc):
+def row_of(case, who, threads, frames_run, code, peak, data, loc):
     ok = code == 0 and len(data["ms"]) == frames_run
     return {
-        "example": case.example, "mesh": case.mesh, "runner": who,
+        "example": case.example, "mesh": case.mesh, "runner": who, "threads": threads,
         "frames": len(data["ms"]), "ok": ok,
         "ms": median(data["ms"]), "assembly": median(data["assembly"]),
         "solve": median(data["solve"]),
@@ -276,11 +304,17 @@ def row_of(case, who, frames_run, code, peak, data, loc):
 
 def run_baseline(case, args, workdir, notes, label, build, extra_args):
     """Runs one baseline build's EXAMPLE_baseline on CASE; returns (row, per-frame data,
-    final positions CSV)."""
+    final positions CSV), or None when that build's baseline cannot run --threads N."""
     frames = args.frames or case.default_frames
     stem = os.path.join(workdir, "%s-%s-%s" % (case.example, case.mesh,
                                                 re.sub(r"[^\w-]+", "_", label)))
     argv = [os.path.join(build, "bench", case.example + "_baseline")] + extra_args
+    if args.threads != 1:
+        if not baseline_has_threads(argv[0]):
+            notes.append("%s %s: skipped, %s has no --threads (built before it)"
+                         % (case.name, label, argv[0]))
+            return None
+        argv += ["--threads", str(args.threads)]
     if args.baseline_cpu_clock:
         argv.append("--cpu-clock")
     if "cg_tol" in case.tensors:
@@ -296,7 +330,7 @@ def run_baseline(case, args, workdir, notes, label, build, extra_args):
         notes.append("%s %s exited with %d (log %s.log)" % (case.name, label, code, stem))
     # Another build's source is not at hand: its LOC is left blank.
     loc = count_loc(case.baseline_source) if build == args.build else None
-    row = row_of(case, label, frames, code, peak, data, loc)
+    row = row_of(case, label, args.threads, frames, code, peak, data, loc)
     return row, data, positions
 
 
@@ -344,31 +378,41 @@ def measure(case, args, workdir, notes):
     frames = args.frames or case.default_frames
     rows = []
     # The baseline first: its numbers are the reference of this case's ratios.
-    base_row, base, base_positions = run_baseline(case, args, workdir, notes, "baseline",
-                                                  args.build, [])
+    baseline_run = run_baseline(case, args, workdir, notes, "baseline", args.build, [])
+    if baseline_run is None:  # main() checked this build's baselines: not reached
+        sys.exit("%s: this build's baseline cannot run --threads" % case.name)
+    base_row, base, base_positions = baseline_run
     base_row["ratio"] = 1.0
     variants = [(label, build, []) for label, build in args.compare_baseline]
     if case.example == "fem" and args.fem_sim_form:
         variants.insert(0, ("baseline --sim-form", args.build, ["--sim-form"]))
     others = []  # (row, final positions) of the other baselines
     for label, build, extra in variants:
-        row, _, positions = run_baseline(case, args, workdir, notes, label, build, extra)
-        others.append((row, positions))
+        run = run_baseline(case, args, workdir, notes, label, build, extra)
+        if run:
+            others.append((run[0], run[2]))
     reference = None  # the first executor's final positions: the error column's reference
     # Each executor of this simit, then of each --compare-simit build, side by side.
     runs = [(name, name, args.simit) for name in args.executors]
     runs += [(name + " " + label, name, os.path.join(build, "tools", "simit"))
              for label, build in args.compare_simit for name in args.executors]
     for runner, name, simit in ([] if baseline_only(case, args) else runs):
-        make_argv, available = EXECUTORS[name]
+        make_argv, available, threaded = EXECUTORS[name]
         if not available(simit):
             notes.append("%s: executor %s is not available in %s" % (case.name, name, simit))
+            continue
+        thread_flags = simit_thread_flags(simit, args.threads)
+        if thread_flags is None and not threaded:
+            thread_flags = []  # one thread whatever N: a simit without --threads runs it too
+        if thread_flags is None:
+            notes.append("%s %s: skipped, %s has no --threads (built before it)"
+                         % (case.name, runner, simit))
             continue
         outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" +
                               re.sub(r"[^\w-]+", "_", runner))
         shutil.rmtree(outdir, ignore_errors=True)
         positions = outdir + "-final.csv"
-        argv = make_argv(simit, case.scene, frames, outdir, positions)
+        argv = make_argv(simit, case.scene, frames, outdir, positions, thread_flags)
         print("  " + " ".join(argv), flush=True)
         code, peak, wall = run_child(argv, outdir + ".log", args.timeout)
         try:
@@ -380,7 +424,8 @@ def measure(case, args, workdir, notes):
         if code != 0:
             notes.append("%s %s exited with %d after %.0f s (log %s.log)"
                          % (case.name, runner, code, wall, outdir))
-        row = row_of(case, runner, frames, code, peak, data, count_loc(case.program))
+        row = row_of(case, runner, args.threads if threaded else 1, frames, code, peak, data,
+                     count_loc(case.program))
         for trace in jit_traces(outdir + ".log"):
             notes.append("%s %s trace: %s" % (case.name, runner, trace))
         if base_row["ms"] > 0:
@@ -424,7 +469,7 @@ def fastest_of(runs):
 
 
 COLUMNS = [("example", "example"), ("mesh", "mesh"), ("runner", "runner"),
-           ("frames", "frames"), ("ms", "ms/frame"), ("assembly", "assembly ms"),
+           ("threads", "threads"), ("frames", "frames"), ("ms", "ms/frame"), ("assembly", "assembly ms"),
            ("solve", "solve ms"), ("iterations", "CG it/frame"), ("residual", "rel. resid."),
            ("peak_mb", "peak MB"), ("loc", "LOC"), ("ratio", "vs baseline"),
            ("error", "rel. err")]
@@ -496,7 +541,12 @@ def main():
                         "repeatable)")
     p.add_argument("--baseline-cpu-clock", action="store_true",
                    help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
-                        "busy machine inflates less than wall time; simit stays on wall time")
+                        "busy machine inflates less than wall time; simit stays on wall time "
+                        "(one thread only: not with --threads above 1)")
+    p.add_argument("--threads", type=int, default=1, metavar="N",
+                   help="run the baselines (--threads N, OpenMP) and simit's JIT (--threads N) "
+                        "on N threads; the interpreter runs on one (default 1, the one-thread "
+                        "table of before the option)")
     p.add_argument("--fem-sim-form", action="store_true",
                    help="also run fem_baseline --sim-form (the stiffness column by column from dP)")
     p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
@@ -515,6 +565,11 @@ def main():
     args.simit = os.path.join(args.build, "tools", "simit")
     args.cloth = [int(n) for n in args.cloth.split(",") if n.strip()]
     args.executors = [e for e in args.executors.split(",") if e]
+    if args.threads < 1:
+        p.error("--threads needs a whole number >= 1, got %d" % args.threads)
+    if args.baseline_cpu_clock and args.threads > 1:
+        p.error("--baseline-cpu-clock times one thread's CPU time: it cannot go with "
+                "--threads %d (time threaded runs in wall time)" % args.threads)
 
     def label_dirs(option, specs):
         """(label, absolute folder) of each LABEL=DIR given to OPTION."""
@@ -539,6 +594,12 @@ def main():
     if missing:
         sys.exit("missing: %s (build the targets simit and *_baseline in %s)"
                  % (", ".join(missing), args.build))
+    if args.threads > 1:
+        old = [x for x in ("fem", "springs", "cloth")
+               if not baseline_has_threads(os.path.join(args.build, "bench", x + "_baseline"))]
+        if old:
+            sys.exit("the baselines in %s have no --threads (%s): rebuild them"
+                     % (args.build, ", ".join(old)))
 
     workdir = os.path.abspath(args.keep) if args.keep else tempfile.mkdtemp(prefix="simit-bench-")
     os.makedirs(workdir, exist_ok=True)
@@ -559,6 +620,8 @@ def main():
     print("\nms: medians over the frames; solve = frame - assembly (simit: everything outside "
           "the maps, mostly CG).")
     print("Baseline LOC excludes baseline_common.{h,cpp} (%d lines shared by the three)." % common)
+    print("Threads: %d (the baselines' --threads and the JIT's; the interpreter runs on one)."
+          % args.threads)
     # Linux counts the launcher's resident set at exec into the child's ru_maxrss.
     _, floor, _ = run_child(["true"], os.devnull, 10)
     print("Peak MB has a floor of %.0f MB (this script's own RSS, which Linux counts into the "

@@ -117,38 +117,31 @@ Options parse_options(int argc, char** argv, const std::string& default_input, b
 
 int thread_count() { return threads_in_use; }
 
-void ElementColouring::colour(const std::vector<int>& corners, int corner_count, int vertex_count) {
-  if (thread_count() == 1) return;  // mesh order: nothing to schedule
-  const int element_count = element_count_;
-  // The elements at each vertex (a CSR), to find an element's neighbours.
-  std::vector<int> start(vertex_count + 1, 0),
-      at(static_cast<size_t>(element_count) * corner_count);
-  for (int k = 0; k < element_count * corner_count; ++k) ++start[corners[k] + 1];
-  for (int v = 0; v < vertex_count; ++v) start[v + 1] += start[v];
-  std::vector<int> fill(start.begin(), start.end() - 1);
-  for (int k = 0; k < element_count * corner_count; ++k) at[fill[corners[k]]++] = k / corner_count;
-  // Greedy, in mesh order: each element takes the least colour none of its coloured
-  // neighbours has (taken[c] == e marks colour c as taken for element e).
-  std::vector<int> colour(element_count, -1), taken;
-  for (int e = 0; e < element_count; ++e) {
-    for (int j = 0; j < corner_count; ++j) {
-      const int v = corners[static_cast<size_t>(e) * corner_count + j];
-      for (int k = start[v]; k < start[v + 1]; ++k)
-        if (colour[at[k]] >= 0) taken[colour[at[k]]] = e;
-    }
-    int c = 0;
-    while (c < static_cast<int>(taken.size()) && taken[c] == e) ++c;
-    if (c == static_cast<int>(taken.size())) taken.push_back(-1);
-    colour[e] = c;
+void PartitionedLoop::reserve(int threads) {
+  // Allocated once, zeroed here and kept zero by merge(); the first thread needs none.
+  while (static_cast<int>(private_f_.size()) < threads - 1) {
+    private_f_.emplace_back(n_, Vec3::Zero());
+    private_blocks_.emplace_back(blocks_, Mat3::Zero());
   }
-  // Counting sort by colour, stable: mesh order within a colour keeps what locality the
-  // mesh's numbering has.
-  colour_start_.assign(taken.size() + 1, 0);
-  for (int e = 0; e < element_count; ++e) ++colour_start_[colour[e] + 1];
-  for (size_t c = 0; c < taken.size(); ++c) colour_start_[c + 1] += colour_start_[c];
-  order_.resize(element_count);
-  std::vector<int> next(colour_start_.begin(), colour_start_.end() - 1);
-  for (int e = 0; e < element_count; ++e) order_[next[colour[e]]++] = e;
+}
+
+void PartitionedLoop::merge(int threads, Vec3* force, Mat3* block) {
+#ifdef _OPENMP
+#pragma omp for schedule(static) nowait
+  for (int k = 0; k < blocks_; ++k)
+    for (int t = 1; t < threads; ++t) {
+      block[k] += private_blocks_[t - 1][k];
+      private_blocks_[t - 1][k].setZero();
+    }
+#pragma omp for schedule(static)
+  for (int i = 0; i < n_; ++i)
+    for (int t = 1; t < threads; ++t) {
+      force[i] += private_f_[t - 1][i];
+      private_f_[t - 1][i].setZero();
+    }
+#else
+  (void)threads, (void)force, (void)block;
+#endif
 }
 
 BlockPatternBuilder::BlockPatternBuilder(int block_rows) : rows_(block_rows) {

@@ -2,8 +2,8 @@
 // discrete-shells bending on hinges, explicit Velocity Verlet, on a generated square cloth.
 // Each step is two passes: the forces over faces and hinges, then one over the points
 // (acceleration, velocity and the next step's positions fused).
-// --threads N runs the steps on N OpenMP threads: faces and hinges colour by colour, the
-// point passes in chunks (baseline_common.h).
+// --threads N runs the steps on N OpenMP threads: faces and hinges partitioned (each thread
+// adding into its own copy of the forces), the point passes in chunks (baseline_common.h).
 // Usage: cloth_baseline [--check] [--csv FILE] [--threads N] [N] [FRAMES]
 //        (N x N vertices, default 32)
 // Final positions are written only with --csv FILE; --help lists every option.
@@ -98,12 +98,10 @@ int main(int argc, char** argv) {
         0.5 * (e.cross(x[hg[2]] - x[hg[0]]).norm() + e.cross(x[hg[3]] - x[hg[1]]).norm());
     hinge_rest[k] = {dihedral(x, hg, nullptr), 3.0 * kb * e.squaredNorm() / areas};
   }
-  // Faces (hinges) sharing a point add into the same force: threads take them colour by colour.
-  const ElementColouring face_colouring(faces, n), hinge_colouring(hinges, n);
+  // Faces and hinges sharing a point add into the same force: each thread into its own copy.
+  PartitionedLoop force_loop(n, 0);
   std::printf("cloth %dx%d: %d points, %d faces, %d hinges", side, side, n, nf, nh);
-  if (options.threads > 1)
-    std::printf(", %d threads, %d colours of faces, %d of hinges", options.threads,
-                face_colouring.colour_count(), hinge_colouring.colour_count());
+  if (options.threads > 1) std::printf(", %d threads", options.threads);
   std::printf("\n");
 
   // Face k's deformation gradient and Green strain E = (F'F - I)/2.
@@ -116,9 +114,20 @@ int main(int argc, char** argv) {
   auto green_strain = [](const Mat32& F) {
     return Eigen::Matrix2d(0.5 * (F.transpose() * F - Eigen::Matrix2d::Identity()));
   };
-  // Adds the membrane and bending forces into f (zero on entry).
+  // Adds the membrane and bending forces into f (zero on entry): one loop over the faces,
+  // then the hinges (element nf + k is hinge k), so that the threads split both at once.
   auto add_forces = [&]() {
-    face_colouring.for_each([&](int k) {
+    force_loop.run(nf + nh, f.data(), nullptr, [&](int element, Vec3* force, Mat3*) {
+      if (element >= nf) {
+        const int k = element - nf;
+        const auto& hg = hinges[k];
+        std::array<Vec3, 4> grad;
+        const double theta = dihedral(x, hg, &grad);
+        const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
+        for (int i = 0; i < 4; ++i) force[hg[i]] += s * grad[i];
+        return;
+      }
+      const int k = element;
       const auto& t = faces[k];
       const FaceRest& r = face_rest[k];
       const Mat32 F = deformation(k);
@@ -126,16 +135,9 @@ int main(int argc, char** argv) {
       const Eigen::Matrix2d S =
           (lambda_s * E.trace()) * Eigen::Matrix2d::Identity() + (2.0 * mu_s) * E;
       const Mat32 H = -r.area * (F * S * r.B.transpose());
-      f[t[0]] -= H.col(0) + H.col(1);
-      f[t[1]] += H.col(0);
-      f[t[2]] += H.col(1);
-    });
-    hinge_colouring.for_each([&](int k) {
-      const auto& hg = hinges[k];
-      std::array<Vec3, 4> grad;
-      const double theta = dihedral(x, hg, &grad);
-      const double s = -2.0 * hinge_rest[k].w * (theta - hinge_rest[k].theta0);
-      for (int i = 0; i < 4; ++i) f[hg[i]] += s * grad[i];
+      force[t[0]] -= H.col(0) + H.col(1);
+      force[t[1]] += H.col(0);
+      force[t[2]] += H.col(1);
     });
   };
   auto acceleration = [&](int i) { return pinned[i] ? Vec3::Zero() : Vec3(f[i] / m[i] + gravity); };

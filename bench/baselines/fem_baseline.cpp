@@ -2,8 +2,9 @@
 // backward Euler, unpreconditioned CG with the same stopping rule. The matrix is a block-CSR
 // of 3x3 blocks holding only the blocks fem.sim writes: the diagonal, and the pairs of
 // vertices that share a tet when neither is pinned.
-// --threads N runs the frame on N OpenMP threads: the tets colour by colour, the vertex
-// passes and CG by rows (baseline_common.h).
+// --threads N runs the frame on N OpenMP threads: the tets partitioned (each thread adding
+// into its own copy of the forces and blocks), the vertex passes and CG by rows
+// (baseline_common.h).
 // Usage: fem_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--threads N] [--sim-form]
 //                     [MESH] [FRAMES]
 // Final positions are written only with --csv FILE; --help lists every option.
@@ -35,10 +36,11 @@ Mat3 edge_matrix(const Vec3s& x, const simit::runtime::Tet& t) {
   return d;
 }
 
-// A += -h^2 K for one tet, K's block (i, j) in closed form: with a_i = F^-T g_i,
-// K_ij = -W (mu (g_i'g_j) I + c a_j a_i' + lambda a_i a_j'), c = mu - lambda log J. It is
-// fem.sim's tet_stiffness: dP multiplied out (dF = e_d g_j' makes each term rank one).
-void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, const Mat3& FinvT,
+// A += -h^2 K for one tet (blocks: A's, or a thread's copy of them), K's block (i, j) in closed
+// form: with a_i = F^-T g_i, K_ij = -W (mu (g_i'g_j) I + c a_j a_i' + lambda a_i a_j'), c = mu -
+// lambda log J. It is fem.sim's tet_stiffness: dP multiplied out (dF = e_d g_j' makes each term
+// rank one).
+void add_stiffness(Mat3* blocks, const std::array<int, 16>& k, const TetRest& r, const Mat3& FinvT,
                    double c, double mu, double lambda) {
   std::array<Vec3, 4> af;
   for (int i = 0; i < 4; ++i) af[i] = FinvT * r.g[i];
@@ -46,7 +48,7 @@ void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, 
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) {
       if (k[4 * i + j] < 0) continue;
-      Mat3& block = a.block(k[4 * i + j]);
+      Mat3& block = blocks[k[4 * i + j]];
       block.noalias() += (s * c) * af[j] * af[i].transpose();
       block.noalias() += (s * lambda) * af[i] * af[j].transpose();
       block.diagonal().array() += s * mu * r.g[i].dot(r.g[j]);
@@ -56,7 +58,7 @@ void add_stiffness(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r, 
 // The same blocks column by column, as fem.sim wrote them before it took the closed form:
 // K's column (j, d) is -W dP g_i with
 // dP = mu dF + c F^-T dF' F^-T + lambda tr(F^-1 dF) F^-T, dF = e_d g_j' (--sim-form).
-void add_stiffness_as_sim(BlockCsr& a, const std::array<int, 16>& k, const TetRest& r,
+void add_stiffness_as_sim(Mat3* blocks, const std::array<int, 16>& k, const TetRest& r,
                           const Mat3& Finv, double c, double mu, double lambda) {
   const Mat3 FinvT = Finv.transpose();
   for (int j = 0; j < 4; ++j) {
@@ -66,7 +68,7 @@ void add_stiffness_as_sim(BlockCsr& a, const std::array<int, 16>& k, const TetRe
       const double tr = r.g[j].dot(Finv.col(d));
       const Mat3 dP = mu * dF + c * (FinvT * dF.transpose() * FinvT) + (lambda * tr) * FinvT;
       for (int i = 0; i < 4; ++i)
-        if (k[4 * i + j] >= 0) a.block(k[4 * i + j]).col(d) += (h * h * r.W) * (dP * r.g[i]);
+        if (k[4 * i + j] >= 0) blocks[k[4 * i + j]].col(d) += (h * h * r.W) * (dP * r.g[i]);
     }
   }
 }
@@ -135,13 +137,12 @@ int main(int argc, char** argv) {
         const auto& t = mesh.tets[e];
         blocks[e][4 * i + j] = pinned[t[i]] || pinned[t[j]] ? -1 : a.find(t[i], t[j]);
       }
-  // Tets sharing a vertex write the same force and blocks: threads take them colour by colour.
-  const ElementColouring colouring(mesh.tets, n);
+  // Tets sharing a vertex add into the same force and blocks: each thread into its own copy.
+  PartitionedLoop tet_loop(n, static_cast<int>(a.block_count()));
   std::printf("%s: %d vertices, %d tets, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms",
               options.input.c_str(), n, nt, a.block_count(), a.cg_bytes_per_iteration(),
               setup.lap_ms());
-  if (options.threads > 1)
-    std::printf(", %d threads, %d colours of tets", options.threads, colouring.colour_count());
+  if (options.threads > 1) std::printf(", %d threads", options.threads);
   std::printf("\n");
 
   // Compile-time constants, as the compiler folded them into the tet loop before its body
@@ -159,7 +160,7 @@ int main(int argc, char** argv) {
       f[i].setZero();
       a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
     });
-    colouring.for_each([&](int e) {
+    tet_loop.run(nt, f.data(), a.block_data(), [&](int e, Vec3* force, Mat3* block) {
       const auto& t = mesh.tets[e];
       const TetRest& r = rest[e];
       const Mat3 F = edge_matrix(x, t) * r.B;
@@ -167,12 +168,12 @@ int main(int argc, char** argv) {
       const Mat3 FinvT = Finv.transpose();
       const double logJ = std::log(F.determinant());
       const Mat3 P = mu * (F - FinvT) + lambda * logJ * FinvT;
-      for (int j = 0; j < 4; ++j) f[t[j]] += -r.W * (P * r.g[j]);
+      for (int j = 0; j < 4; ++j) force[t[j]] += -r.W * (P * r.g[j]);
       const double c = mu - lambda * logJ;
       if (options.sim_form)
-        add_stiffness_as_sim(a, blocks[e], r, Finv, c, mu, lambda);
+        add_stiffness_as_sim(block, blocks[e], r, Finv, c, mu, lambda);
       else
-        add_stiffness(a, blocks[e], r, FinvT, c, mu, lambda);
+        add_stiffness(block, blocks[e], r, FinvT, c, mu, lambda);
     });
     parallel_for(n, [&](int i) {
       b[i] = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));

@@ -2,8 +2,9 @@
 // linearized backward Euler, unpreconditioned CG with the same stopping rule. The matrix is a
 // block-CSR of 3x3 blocks holding only the blocks springs.sim writes: the diagonal, and the
 // pairs of points joined by a spring when neither is pinned.
-// --threads N runs the frame on N OpenMP threads: the springs colour by colour, the point
-// passes and CG by rows (baseline_common.h).
+// --threads N runs the frame on N OpenMP threads: the springs partitioned (each thread adding
+// into its own copy of the forces and blocks), the point passes and CG by rows
+// (baseline_common.h).
 // Usage: springs_baseline [--check] [--csv FILE] [--cg-tol T] [--cg-max N] [--threads N] [MESH]
 //                         [FRAMES]
 // Final positions are written only with --csv FILE; --help lists every option.
@@ -91,13 +92,12 @@ int main(int argc, char** argv) {
     blocks[s] = {pinned[p] ? -1 : a.diagonal(p), pinned[q] ? -1 : a.diagonal(q),
                  coupled ? a.find(p, q) : -1, coupled ? a.find(q, p) : -1};
   }
-  // Springs sharing a point write the same force and blocks: threads take them colour by colour.
-  const ElementColouring colouring(mesh.edges, n);
+  // Springs sharing a point add into the same force and blocks: each thread into its own copy.
+  PartitionedLoop spring_loop(n, static_cast<int>(a.block_count()));
   std::printf("%s: %d points, %d springs, %zu blocks, %.0f bytes per CG iteration, set-up %.3f ms",
               options.input.c_str(), n, ns, a.block_count(), a.cg_bytes_per_iteration(),
               setup.lap_ms());
-  if (options.threads > 1)
-    std::printf(", %d threads, %d colours of springs", options.threads, colouring.colour_count());
+  if (options.threads > 1) std::printf(", %d threads", options.threads);
   std::printf("\n");
 
   Vec3s f(n), b(n);
@@ -110,13 +110,13 @@ int main(int argc, char** argv) {
       f[i].setZero();
       a.block(a.diagonal(i)) = m[i] * Mat3::Identity();
     });
-    colouring.for_each([&](int s) {
+    spring_loop.run(ns, f.data(), a.block_data(), [&](int s, Vec3* force, Mat3* block) {
       const int p = mesh.edges[s][0], q = mesh.edges[s][1];
       const Vec3 d = x[q] - x[p];
       const double l = d.norm();
       const Vec3 t = stiffness * (l - l0[s]) / l * d;
-      f[p] += t;
-      f[q] -= t;
+      force[p] += t;
+      force[q] -= t;
       // K = [-Ks Ks; Ks -Ks]; the transverse term is dropped under compression. Blocks
       // coupling to a pinned point are not written; a free end keeps its own block.
       const std::array<int, 4>& k = blocks[s];
@@ -124,11 +124,11 @@ int main(int argc, char** argv) {
       const Vec3 u = d / l;
       const Mat3 uu = u * u.transpose();
       const Mat3 ks = stiffness * (uu + std::max(0.0, 1.0 - l0[s] / l) * (Mat3::Identity() - uu));
-      if (k[0] >= 0) a.block(k[0]) += (h * h) * ks;
-      if (k[1] >= 0) a.block(k[1]) += (h * h) * ks;
+      if (k[0] >= 0) block[k[0]] += (h * h) * ks;
+      if (k[1] >= 0) block[k[1]] += (h * h) * ks;
       if (k[2] < 0) return;
-      a.block(k[2]) -= (h * h) * ks;
-      a.block(k[3]) -= (h * h) * ks;
+      block[k[2]] -= (h * h) * ks;
+      block[k[3]] -= (h * h) * ks;
     });
     parallel_for(n, [&](int i) {
       b[i] = pinned[i] ? Vec3::Zero() : Vec3(m[i] * v[i] + h * (f[i] + m[i] * gravity));
