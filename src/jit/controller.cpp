@@ -15,6 +15,7 @@
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
+#include "jit/thread_pool.h"
 #include "jit/write_guard.h"
 #include "runtime/system_ops.h"
 
@@ -52,6 +53,7 @@ std::string key_of(const interp::SiteCall& call, const JitOptions& o) {
 TraceController::TraceController(JitOptions options) : options_(options) {
   HostCalls host;
   host.decompose = reinterpret_cast<void*>(&simit_jit_decompose);
+  host.parallel_for = reinterpret_cast<void*>(&simit_jit_parallel_for);
   target_ = make_cpu_target(host, options_.cache_dir, target_error_);
   if (options_.shuffle_seed)
     executor_ = make_shuffled_executor(options_.shuffle_seed, kShuffledChunk);

@@ -101,6 +101,11 @@ class ThreadedExecutor : public Executor {
     return min_chunk_ < kMinThreadChunk ? static_cast<int32_t>(c)
                                         : static_cast<int32_t>((c + kLanes - 1) / kLanes * kLanes);
   }
+  int32_t run_system(const Kernel& kernel, const SystemArgs& args) override {
+    SystemArgs on_pool = args;
+    on_pool.pool = &pool_;
+    return kernel.run(on_pool);
+  }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
     const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;

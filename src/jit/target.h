@@ -35,6 +35,8 @@ struct SystemArgs {
   double* scalars = nullptr;
   const int64_t* sizes = nullptr;
   const void* interrupt = nullptr;
+  // The executor's thread pool (jit/thread_pool.h) its passes run on, or null: one thread.
+  void* pool = nullptr;
 };
 
 // A system kernel's return when its loop stopped for the interrupt flag (the scalars written
@@ -72,6 +74,9 @@ class Target {
 struct HostCalls {
   // int32_t (int32_t fn, int32_t n, int32_t float32, const double* in, double* out)
   void* decompose = nullptr;
+  // void (void* pool, void (*op)(const int64_t*, int64_t, int64_t), const int64_t* context,
+  // int64_t units): simit_jit_parallel_for (jit/thread_pool.h)
+  void* parallel_for = nullptr;
 };
 
 // The host CPU through LLVM ORC; null with `error` set when LLVM cannot target this machine.

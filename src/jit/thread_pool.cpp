@@ -4,6 +4,8 @@
 // small pass.
 #include "jit/thread_pool.h"
 
+#include <algorithm>
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -83,3 +85,15 @@ void ThreadPool::work() {
 }
 
 }  // namespace simit::jit
+
+// A few ranges per thread, so that a thread that finishes early takes another.
+extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
+                                       const int64_t* context, int64_t units) {
+  auto* p = static_cast<simit::jit::ThreadPool*>(pool);
+  if (!p || p->threads() == 1 || units <= 1) {
+    if (units > 0) op(context, 0, units);
+    return;
+  }
+  const int64_t tasks = std::min<int64_t>(units, int64_t{4} * p->threads());
+  p->run(tasks, [&](int64_t t) { op(context, t * units / tasks, (t + 1) * units / tasks); });
+}

@@ -45,3 +45,9 @@ class ThreadPool {
 };
 
 }  // namespace simit::jit
+
+// What a compiled solver loop calls to run an outlined pass over `units` units on `pool` (a
+// ThreadPool, or null: on the calling thread): op(context, first, end) for contiguous ranges
+// of units that cover [0, units) once (jit/llvm/emit_parallel.cpp).
+extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
+                                       const int64_t* context, int64_t units);

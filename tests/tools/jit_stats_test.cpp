@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <sstream>
 #include <string>
@@ -124,14 +125,17 @@ TEST_F(JitStats, ScenePrintsThemAfterANonFiniteStop) {
 }
 
 // Ctrl-C under --jit-stats stops the run at its next statement with an error, and the table
-// follows, where without the option the process dies of the signal.
-TEST_F(JitStats, ScenePrintsThemAfterCtrlC) {
+// follows, where without the option the process dies of the signal. On threads, every
+// thread stops at its next chunk and the run reports the same.
+void ctrl_c_stops(const std::function<void(const std::string&, const std::string&)>& write,
+                  const std::function<std::string(const std::string&)>& path,
+                  const std::string& toml, const char* threads) {
   write("nudge.sim",
         "element Point\n  x : vector[3](float);\n  w : float;\nend\n"
         "extern points : set{Point};\n"
         "func nudge(inout p : Point)\n  p.w = p.w + 0.001;\nend\n"
         "export func step()\n  apply nudge to points;\nend\n");
-  write("scene.toml", scene("nudge.sim", 2000000000, 8));
+  write("scene.toml", toml);
   const std::string scene_path = path("scene.toml"), out_path = path("out.txt"),
                     err_path = path("err.txt");
   const pid_t child = fork();
@@ -140,7 +144,7 @@ TEST_F(JitStats, ScenePrintsThemAfterCtrlC) {
     if (!freopen(out_path.c_str(), "w", stdout) || !freopen(err_path.c_str(), "w", stderr))
       _exit(126);
     execl(SIMIT_EXE, SIMIT_EXE, "run", "--backend", "jit", "--jit-threshold", "0", "--jit-stats",
-          scene_path.c_str(), static_cast<char*>(nullptr));
+          "--threads", threads, scene_path.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
   // Frames are running once their progress lines reach the file (stdout is a file: buffered).
@@ -163,6 +167,19 @@ TEST_F(JitStats, ScenePrintsThemAfterCtrlC) {
   const size_t table = out.find("jit traces:\n");
   ASSERT_NE(table, std::string::npos) << out.substr(out.size() > 2000 ? out.size() - 2000 : 0);
   EXPECT_NE(out.find(" compiled\n", table), std::string::npos) << out.substr(table);
+}
+
+TEST_F(JitStats, ScenePrintsThemAfterCtrlC) {
+  ctrl_c_stops([&](const std::string& f, const std::string& t) { write(f, t); },
+               [&](const std::string& f) { return path(f); }, scene("nudge.sim", 2000000000, 8),
+               "1");
+}
+
+// A 500 x 500 cloth's points (250,000) in chunks on 3 threads.
+TEST_F(JitStats, ScenePrintsThemAfterCtrlCOnThreads) {
+  ctrl_c_stops([&](const std::string& f, const std::string& t) { write(f, t); },
+               [&](const std::string& f) { return path(f); }, scene("nudge.sim", 2000000000, 500),
+               "3");
 }
 
 }  // namespace

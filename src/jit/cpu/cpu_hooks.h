@@ -28,6 +28,7 @@ class CpuHooks : public codegen::TargetHooks {
   void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) override;
   llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                     llvm::FunctionType* type) override;
+  bool parallel_passes() const override { return true; }
 
  private:
   llvm::Value* failed_ = nullptr;  // the map kernel's failed_element (none in a system kernel)

@@ -41,10 +41,14 @@ void SystemEmitter::vector_op(const VectorOp& op, const std::vector<Value*>& siz
           });
         });
       }
-      return loop(b_.getInt32(0), b_.CreateTrunc(sizes[op.length], b_.getInt32Ty()), [&](Value* k) {
-        element_ = k;
-        block(op.body);
-      });
+      {
+        const auto [lo, hi] = unit_range(sizes[op.length], kPassUnit);
+        return loop(b_.CreateTrunc(lo, b_.getInt32Ty()), b_.CreateTrunc(hi, b_.getInt32Ty()),
+                    [&](Value* k) {
+                      element_ = k;
+                      block(op.body);
+                    });
+      }
     case VectorOp::Kind::SpMV: return spmv(op, sizes);
   }
 }
@@ -76,7 +80,10 @@ void SystemEmitter::chunked(const VectorOp& op, Value* elements,
   lanes_ = lanes;
   const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
   Value* chunks = b_.CreateSDiv(b_.CreateAdd(elements, b_.getInt64(chunk - 1)), b_.getInt64(chunk));
-  loop(b_.getInt64(0), chunks, [&](Value* c) {
+  // An outlined op runs the chunks of its units and leaves each chunk's partials in the
+  // partials array; the caller adds them to the sums in chunk order (emit_parallel.cpp).
+  const auto [first, last] = unit_range(chunks, 1);
+  loop(first, last, [&](Value* c) {
     Value* begin = b_.CreateMul(c, b_.getInt64(chunk));
     Value* next = b_.CreateAdd(begin, b_.getInt64(chunk));
     Value* end = b_.CreateSelect(b_.CreateICmpSLT(next, elements), next, elements);
@@ -99,6 +106,12 @@ void SystemEmitter::chunked(const VectorOp& op, Value* elements,
         a = b_.CreateFAdd(b_.CreateShuffleVector(a, low), b_.CreateShuffleVector(a, high));
       }
       Value* partial = b_.CreateExtractElement(a, uint64_t{0});
+      if (outlined_) {
+        Value* at = b_.CreateAdd(b_.CreateMul(c, b_.getInt64(static_cast<int64_t>(op.sums.size()))),
+                                 b_.getInt64(static_cast<int64_t>(k)));
+        b_.CreateStore(partial, b_.CreateInBoundsGEP(f64, outlined_->partials, at));
+        continue;
+      }
       b_.CreateStore(b_.CreateFAdd(totals[k], partial), locals_[op.sums[k]]);
     }
   });
@@ -186,8 +199,10 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
                      b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
     run_of(op, row, bs, lane);
   };
-  if (op.sums.empty())
-    return loop(b_.getInt64(0), sizes[op.rows], [&](Value* r) { row_of(r, nullptr); });
+  if (op.sums.empty()) {
+    const auto [lo, hi] = unit_range(sizes[op.rows], static_cast<int64_t>(runtime::kSumChunk));
+    return loop(lo, hi, [&](Value* r) { row_of(r, nullptr); });
+  }
   // A reduction fused into the product: a row block is one element of its sums.
   chunked(op, sizes[op.rows], [&](Value* begin, Value* end) {
     loop(begin, end, [&](Value* r) { row_of(r, lane_of(b_.CreateSub(r, begin))); });
@@ -196,12 +211,12 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
 
 // An op in a branch of an `if` runs when its guard holds.
 void SystemEmitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
-  if (op.guard < 0) return vector_op(op, sizes);
+  if (op.guard < 0) return parallel_op(op, sizes);
   auto* run = llvm::BasicBlock::Create(ctx_, "guarded", fn_);
   auto* join = llvm::BasicBlock::Create(ctx_, "guarded.done", fn_);
   b_.CreateCondBr(b_.CreateLoad(b_.getInt1Ty(), locals_[op.guard]), run, join);
   b_.SetInsertPoint(run);
-  vector_op(op, sizes);
+  parallel_op(op, sizes);
   b_.CreateBr(join);
   b_.SetInsertPoint(join);
 }
@@ -386,10 +401,11 @@ void SystemEmitter::while_loop(const std::vector<Value*>& sizes, Value* scalars,
 // and the ops after it in between.
 llvm::Function* SystemEmitter::run(const std::string& name) {
   llvm::Type* ptr = b_.getPtrTy();
-  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr, ptr}, false);
   fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
   auto arg = fn_->arg_begin();
-  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg++, *interrupt = &*arg;
+  Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg++, *interrupt = &*arg++;
+  pool_ = &*arg;
   auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
   b_.SetInsertPoint(entry);
   load_arrays(arrays);
@@ -403,10 +419,8 @@ llvm::Function* SystemEmitter::run(const std::string& name) {
                               : b_.CreateFCmpUNE(d, llvm::ConstantFP::get(f64, 0.0));
     b_.CreateStore(v, locals_[i]);
   }
-  std::vector<Value*> sizes;
-  for (size_t i = 0; i < st_.sizes.size(); ++i)
-    sizes.push_back(b_.CreateLoad(b_.getInt64Ty(),
-                                  b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), sizes_in, i)));
+  std::vector<Value*> sizes = load_sizes(sizes_in);
+  prepare_parallel(arrays, sizes_in, sizes);
   for (const VectorOp& op : st_.before) guarded_op(op, sizes);
   if (st_.condition) while_loop(sizes, scalars, interrupt);
   for (const VectorOp& op : st_.after) guarded_op(op, sizes);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <llvm/IR/IRBuilder.h>
@@ -163,7 +164,10 @@ class MapEmitter : public Emitter {
 };
 
 // A system kernel: int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes,
-// const void* interrupt) (jit/target.h, SystemArgs), whose returns are the kernel's status.
+// const void* interrupt, void* pool) (jit/target.h, SystemArgs), whose returns are the
+// kernel's status. Where the target runs passes in parallel (TargetHooks::parallel_passes),
+// each pass and product is outlined into a function over a range of its units, which the
+// runtime's simit_jit_parallel_for runs on the pool (jit/llvm/emit_parallel.cpp).
 class SystemEmitter : public Emitter {
  public:
   SystemEmitter(const SystemTrace& t, llvm::Module& m, TargetHooks& hooks)
@@ -189,10 +193,33 @@ class SystemEmitter : public Emitter {
   Value* lane_at(size_t k, Value* lane);
   void write_scalars(Value* scalars);
   void while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt);
+  std::vector<Value*> load_sizes(Value* sizes_in);
+
+  // Parallel passes (emit_parallel.cpp). A unit is a chunk of runtime::kSumChunk elements for
+  // an op with sums or a product's rows, kPassUnit components for a pass without sums.
+  void prepare_parallel(Value* arrays, Value* sizes_in, const std::vector<Value*>& sizes);
+  void parallel_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  bool outlinable(const VectorOp& op) const;
+  Value* units_of(const VectorOp& op, const std::vector<Value*>& sizes);
+  llvm::Function* outline(const VectorOp& op);
+  // [0, n) (i64s), or inside an outlined op the part of it its units cover (`unit` per unit).
+  std::pair<Value*, Value*> unit_range(Value* n, int64_t unit);
 
   const SystemTrace& st_;
   // The lane accumulators of the chunk being emitted: runtime::kSumLanes doubles per sum.
   Value* lanes_ = nullptr;
+  // Inside an outlined op: its units [begin, end) and where its chunks' partials go.
+  struct Outlined {
+    Value *begin = nullptr, *end = nullptr, *partials = nullptr;
+  };
+  Outlined* outlined_ = nullptr;
+  Value* pool_ = nullptr;      // the kernel's pool argument
+  Value* context_ = nullptr;   // what an outlined op reads: arrays, sizes, partials, locals
+  Value* partials_ = nullptr;  // per unit and sum, a chunk's partial
+  int outlined_ops_ = 0;
 };
+
+// Components of a pass without sums an outlined call runs per unit.
+inline constexpr int64_t kPassUnit = 1024;
 
 }  // namespace simit::jit::codegen

@@ -56,6 +56,9 @@ class TargetHooks {
   // that the code holds no address of this process.
   virtual llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                             llvm::FunctionType* type) = 0;
+  // Whether a solver loop's passes and products run their units on the kernel's pool
+  // (outlined, through the runtime's simit_jit_parallel_for), or inline in element order.
+  virtual bool parallel_passes() const { return false; }
 };
 
 }  // namespace simit::jit::codegen
