@@ -1,6 +1,8 @@
 // A small recursive-descent parser and tree evaluator for scene expressions.
 #include "scene/scene_expr.h"
 
+#include "runtime/math/math_functions.h"  // the functions Simit programs call, bit for bit
+
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -270,7 +272,7 @@ double eval_node(const Node& n, const double* const v[3]) {
       }
       return product;
     }
-    case Op::Pow: return std::pow(arg(0), arg(1));
+    case Op::Pow: return math::pow(arg(0), arg(1));
     case Op::Lt: return arg(0) < arg(1);
     case Op::Le: return arg(0) <= arg(1);
     case Op::Gt: return arg(0) > arg(1);
@@ -295,11 +297,11 @@ double eval_node(const Node& n, const double* const v[3]) {
       double a = arg(0);
       if (f == "sqrt") return std::sqrt(a);
       if (f == "abs") return std::fabs(a);
-      if (f == "sin") return std::sin(a);
-      if (f == "cos") return std::cos(a);
-      if (f == "tan") return std::tan(a);
-      if (f == "exp") return std::exp(a);
-      if (f == "log") return std::log(a);
+      if (f == "sin") return math::sin(a);
+      if (f == "cos") return math::cos(a);
+      if (f == "tan") return math::tan(a);
+      if (f == "exp") return math::exp(a);
+      if (f == "log") return math::log(a);
       if (f == "floor") return std::floor(a);
       return std::ceil(a);
     }

@@ -151,32 +151,15 @@ void with_neighbours(std::vector<double>& xs, double x, int n = 2) {
 
 TEST(MathAccuracy, Exp) {
   std::vector<double> xs;
-  for (double x : {0x1.62e42fefa39efp+9,
-                   0x1.62e42fefa39f0p+9,
-                   -0x1.74385446d71c3p+9,
-                   -0x1.74910d52d3051p+9,
-                   -0x1.6232bdd7abcd2p+9,
-                   -0x1.6232bdd7abcd3p+9,
-                   0x1p-54,
-                   0x1p-53,
-                   1.0,
-                   -1.0,
-                   0.5,
-                   1e-10,
-                   0x1p-1074,
-                   -0x1p-1074,
-                   0x1p-1022,
-                   709.7,
-                   -708.4,
-                   -709.5,
-                   -720.0,
-                   -740.0,
-                   -745.0,
-                   88.72283905206835,
-                   0x1.62e42fefa39efp-8,
-                   0x1.62e42fefa39efp-9,
-                   3.0 * 0x1.62e42fefa39efp-9})
-    with_neighbours(xs, x);
+  // Listed by hand: clang-format would put one number a line.
+  // clang-format off
+  const double kHard[] = {
+      0x1.62e42fefa39efp+9, 0x1.62e42fefa39f0p+9, -0x1.74385446d71c3p+9, -0x1.74910d52d3051p+9,
+      -0x1.6232bdd7abcd2p+9, -0x1.6232bdd7abcd3p+9, 0x1p-54, 0x1p-53, 1.0, -1.0, 0.5, 1e-10,
+      0x1p-1074, -0x1p-1074, 0x1p-1022, 709.7, -708.4, -709.5, -720.0, -740.0, -745.0,
+      88.72283905206835, 0x1.62e42fefa39efp-8, 0x1.62e42fefa39efp-9, 0x1.0a2b23f3bab73p-7};
+  // clang-format on
+  for (double x : kHard) with_neighbours(xs, x);
   Args a(1);
   for (int i = 0; i < kRandom; ++i) {
     switch (i % 4) {
@@ -213,35 +196,15 @@ TEST(MathAccuracy, Log) {
 }
 
 TEST(MathAccuracy, Pow) {
-  std::vector<std::pair<double, double>> xy = {{2.0, 0.5},
-                                               {2.0, 1023.0},
-                                               {2.0, 1024.0},
-                                               {2.0, -1074.0},
-                                               {2.0, -1075.0},
-                                               {2.0, -1074.5},
-                                               {2.0, -1022.5},
-                                               {0.5, 1074.0},
-                                               {10.0, 22.0},
-                                               {10.0, 23.0},
-                                               {10.0, -5.0},
-                                               {1.0000001, 1e10},
-                                               {1.0 - 0x1p-53, 0x1p62},
-                                               {1.0 + 0x1p-52, 0x1p61},
-                                               {DBL_MAX, 0.5},
-                                               {DBL_MIN, 0.5},
-                                               {0x1p-1074, 0.5},
-                                               {0x1p-1074, -0.5},
-                                               {-2.0, 3.0},
-                                               {-2.0, -1073.0},
-                                               {-0.5, 1075.0},
-                                               {2.718281828459045, 709.78},
-                                               {3.0, 2.0},
-                                               {134217727.0, 2.0},
-                                               {1e-300, 1.0},
-                                               {1e300, -1.0},
-                                               {7.0, 1.0 / 3.0},
-                                               {0x1.fffffffffffffp1023, 1.0},
-                                               {2.0, 1023.9999999999999}};
+  // clang-format off
+  std::vector<std::pair<double, double>> xy = {
+      {2.0, 0.5}, {2.0, 1023.0}, {2.0, 1024.0}, {2.0, -1074.0}, {2.0, -1075.0}, {2.0, -1074.5},
+      {2.0, -1022.5}, {0.5, 1074.0}, {10.0, 22.0}, {10.0, 23.0}, {10.0, -5.0}, {1.0000001, 1e10},
+      {1.0 - 0x1p-53, 0x1p62}, {1.0 + 0x1p-52, 0x1p61}, {DBL_MAX, 0.5}, {DBL_MIN, 0.5},
+      {0x1p-1074, 0.5}, {0x1p-1074, -0.5}, {-2.0, 3.0}, {-2.0, -1073.0}, {-0.5, 1075.0},
+      {2.718281828459045, 709.78}, {3.0, 2.0}, {134217727.0, 2.0}, {1e-300, 1.0}, {1e300, -1.0},
+      {7.0, 1.0 / 3.0}, {0x1.fffffffffffffp1023, 1.0}, {2.0, 1023.9999999999999}};
+  // clang-format on
   Args a(3);
   for (int i = 0; i < kRandom; ++i) {
     double x, y;
@@ -274,34 +237,15 @@ TEST(MathAccuracy, Pow) {
 // Arguments for sin, cos and tan: small, near multiples of pi/2, huge.
 std::vector<double> trig_args(uint64_t seed) {
   std::vector<double> xs;
-  for (double x : {0x1.921fb54442d18p+0,
-                   0x1.921fb54442d18p+1,
-                   0x1.921fb54442d18p+2,
-                   0x1.921fb54442d18p-1,
-                   0x1.2d97c7f3321d2p+1,
-                   1e22,
-                   0x1p1023,
-                   DBL_MAX,
-                   0x1.6ac5b262ca1ffp+849,
-                   5.319372648326541e+255,
-                   0x1p19,
-                   1e6,
-                   1e15,
-                   1e300,
-                   0x1p-26,
-                   0x1p-27,
-                   0x1p-1074,
-                   0x1p-1022,
-                   1.0,
-                   0.5,
-                   0.8,
-                   355.0,
-                   103993.0,
-                   104348.0,
-                   0x1.0p52,
-                   0x1.0p53,
-                   1.5707963267948966e10})
-    with_neighbours(xs, x, 3);
+  const double kHard[] = {0x1.921fb54442d18p+0, 0x1.921fb54442d18p+1, 0x1.921fb54442d18p+2,
+                          0x1.921fb54442d18p-1, 0x1.2d97c7f3321d2p+1, 1e22, 0x1p1023, DBL_MAX,
+                          0x1.6ac5b262ca1ffp+849, 5.319372648326541e+255, 0x1p19, 1e6, 1e15, 1e300,
+                          0x1p-26, 0x1p-27, 0x1p-1074, 0x1p-1022, 1.0, 0.5, 0.8, 355.0, 103993.0,
+                          104348.0, 0x1.0p52, 0x1.0p53, 1.5707963267948966e10,
+                          // the doubles below 2^19 closest to multiples of pi/2 (r ~ 2^-54)
+                          0x1.39c6fd67805a7p+18, 0x1.93c05c9ed3cbcp+18, 0x1.edb9bbd6273d1p+18,
+                          0x1.bf9b3c6059d24p+17, 0x1.65a1dd290660fp+16};
+  for (double x : kHard) with_neighbours(xs, x, 3);
   for (double k = 1; k < 2e6; k = k * 1.37 + 1)  // k pi/2 rounded, where r cancels most
     with_neighbours(xs, k * 1.5707963267948966, 1);
   Args a(seed);

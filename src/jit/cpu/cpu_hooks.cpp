@@ -3,6 +3,8 @@
 
 #include "jit/tunables.h"
 
+#include <string>
+
 namespace simit::jit::cpu {
 
 codegen::MapEntry CpuHooks::map_kernel(llvm::Module& m, const std::string& name) {
@@ -36,17 +38,20 @@ void CpuHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) 
   b.CreateRet(b.getInt32(0));
 }
 
+// The project's own functions (runtime/math/math_functions.h), the interpreter's bits, by
+// their C names: simit_math_sin and so on, which the linker resolves to this process's
+// (jit/cpu/llvm_backend.cpp). LLVM knows nothing of these names, so it folds no call.
 llvm::Value* CpuHooks::math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) {
   std::vector<llvm::Type*> params(args.size(), b.getDoubleTy());
   auto* ft = llvm::FunctionType::get(b.getDoubleTy(), params, false);
-  llvm::FunctionCallee callee =
-      b.GetInsertBlock()->getModule()->getOrInsertFunction(math_name(f), ft);
+  const std::string name = std::string("simit_math_") + math_name(f);
+  llvm::FunctionCallee callee = b.GetInsertBlock()->getModule()->getOrInsertFunction(name, ft);
   if (auto* fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
     fn->setDoesNotThrow();
-    fn->setDoesNotAccessMemory();  // errno is never read back
+    fn->setDoesNotAccessMemory();  // pure: no errno, no state
+    fn->setWillReturn();
   }
   llvm::CallInst* c = b.CreateCall(callee, args);
-  // The C library's result, not LLVM's idea of it: no folding into other operations.
   c->addFnAttr(llvm::Attribute::NoBuiltin);
   return c;
 }

@@ -27,6 +27,7 @@
 
 #include "jit/cpu/emitter.h"
 #include "jit/kernel_cache.h"
+#include "runtime/math/math_functions.h"
 
 #ifndef SIMIT_VERSION
 #define SIMIT_VERSION "unknown"
@@ -40,6 +41,48 @@ using cpu::Emitter;
 using cpu::lanes_fit;
 
 std::string message_of(llvm::Error e) { return llvm::toString(std::move(e)); }
+
+// Compiled code calls the project's transcendental functions by their C names
+// (jit/cpu/cpu_hooks.cpp), resolved here to this process's.
+struct MathSymbol {
+  const char* name;
+  void* fn;
+};
+const MathSymbol kMathSymbols[] = {
+    {"simit_math_exp", reinterpret_cast<void*>(&simit_math_exp)},
+    {"simit_math_log", reinterpret_cast<void*>(&simit_math_log)},
+    {"simit_math_pow", reinterpret_cast<void*>(&simit_math_pow)},
+    {"simit_math_sin", reinterpret_cast<void*>(&simit_math_sin)},
+    {"simit_math_cos", reinterpret_cast<void*>(&simit_math_cos)},
+    {"simit_math_tan", reinterpret_cast<void*>(&simit_math_tan)},
+    {"simit_math_asin", reinterpret_cast<void*>(&simit_math_asin)},
+    {"simit_math_acos", reinterpret_cast<void*>(&simit_math_acos)},
+    {"simit_math_atan2", reinterpret_cast<void*>(&simit_math_atan2)},
+    {"simit_math_cbrt", reinterpret_cast<void*>(&simit_math_cbrt)},
+};
+
+// The C library's names of those functions, which kernels compiled by earlier versions
+// called: never resolved, so that such a kernel from the cache fails to link and is compiled
+// again (with the project's functions) rather than run with the C library's bits.
+bool replaced_libm_name(llvm::StringRef name) {
+  static const char* const kNames[] = {"sin",   "cos",  "tan", "asin", "acos",
+                                       "atan2", "cbrt", "log", "exp",  "pow"};
+  for (const char* n : kNames)
+    if (name == n) return true;
+  return false;
+}
+
+// This process's symbols (the C library's, the runtime's), which every JITDylib LLJIT makes
+// links against: LLJIT's own process-symbols JITDylib, less the replaced C library names.
+llvm::Expected<llvm::orc::JITDylibSP> process_symbols(llvm::orc::LLJIT& j) {
+  auto gen = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
+      j.getDataLayout().getGlobalPrefix(),
+      [](const llvm::orc::SymbolStringPtr& name) { return !replaced_libm_name(*name); });
+  if (!gen) return gen.takeError();
+  llvm::orc::JITDylib& jd = j.getExecutionSession().createBareJITDylib("<Process Symbols>");
+  jd.addGenerator(std::move(*gen));
+  return llvm::orc::JITDylibSP(&jd);
+}
 
 // The one ORC session of the process: its code lives as long as the kernels that own it.
 class Session {
@@ -85,13 +128,21 @@ class Session {
     if (!tm) return message_of(tm.takeError());
     tm_ = std::move(*tm);
     jtmb_ = std::move(*jtmb);
-    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*jtmb_).create();
+    auto jit = llvm::orc::LLJITBuilder()
+                   .setJITTargetMachineBuilder(*jtmb_)
+                   .setProcessSymbolsJITDylibSetup(process_symbols)
+                   .create();
     if (!jit) return message_of(jit.takeError());
     jit_ = std::move(*jit);
-    auto gen = llvm::orc::DynamicLibrarySearchGenerator::GetForCurrentProcess(
-        jit_->getDataLayout().getGlobalPrefix());
-    if (!gen) return message_of(gen.takeError());
-    jit_->getMainJITDylib().addGenerator(std::move(*gen));
+    // The project's transcendental functions, which every kernel links against (the main
+    // JITDylib is in each kernel's link order).
+    llvm::orc::SymbolMap math;
+    for (const MathSymbol& m : kMathSymbols)
+      math[jit_->mangleAndIntern(m.name)] = {
+          llvm::orc::ExecutorAddr::fromPtr(m.fn),
+          llvm::JITSymbolFlags::Exported | llvm::JITSymbolFlags::Callable};
+    if (llvm::Error e = jit_->getMainJITDylib().define(llvm::orc::absoluteSymbols(std::move(math))))
+      return message_of(std::move(e));
     return "";
   }
 

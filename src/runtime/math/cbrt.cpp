@@ -39,3 +39,9 @@ double cbrt(double x) {
 }
 
 }  // namespace simit::math
+
+// The C names (math_functions.h), here beside the functions so that the object that
+// defines a function the interpreter calls also defines the name compiled code links to.
+extern "C" {
+double simit_math_cbrt(double x) { return simit::math::cbrt(x); }
+}

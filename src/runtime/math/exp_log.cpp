@@ -205,3 +205,11 @@ double pow(double x, double y) {
 }
 
 }  // namespace simit::math
+
+// The C names (math_functions.h), here beside the functions so that the object that
+// defines a function the interpreter calls also defines the name compiled code links to.
+extern "C" {
+double simit_math_exp(double x) { return simit::math::exp(x); }
+double simit_math_log(double x) { return simit::math::log(x); }
+double simit_math_pow(double x, double y) { return simit::math::pow(x, y); }
+}

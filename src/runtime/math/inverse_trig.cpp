@@ -145,3 +145,11 @@ double acos(double x) {
 }
 
 }  // namespace simit::math
+
+// The C names (math_functions.h), here beside the functions so that the object that
+// defines a function the interpreter calls also defines the name compiled code links to.
+extern "C" {
+double simit_math_asin(double x) { return simit::math::asin(x); }
+double simit_math_acos(double x) { return simit::math::acos(x); }
+double simit_math_atan2(double y, double x) { return simit::math::atan2(y, x); }
+}

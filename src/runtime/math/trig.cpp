@@ -113,9 +113,10 @@ Reduced reduce(double ax) {
   return out;
 }
 
-// sin r or cos r as a double-double, |r| <= 0.8, relative error near 2^-67: r = a + b with
-// a = j/64 from the table and |b| <= 1/128; sin b - b and cos b - 1 are short polynomials.
-DD sin_or_cos(DD r, bool want_cos) {
+// sin r and cos r as double-doubles (either may be null: not wanted), |r| <= 0.8, relative
+// error near 2^-67: r = a + b with a = j/64 from the table and |b| <= 1/128; sin b - b and
+// cos b - 1 are short polynomials.
+void sin_cos(DD r, DD* sin_r, DD* cos_r) {
   const bool negative = r.hi < 0.0;
   if (negative) r.hi = -r.hi, r.lo = -r.lo;
   constexpr double kShift = 0x1.8p52;
@@ -132,27 +133,31 @@ DD sin_or_cos(DD r, bool want_cos) {
   const double* row = tb::kSinCos + 4 * j;
   const double sah = row[0], sal = row[1], cah = row[2], cal = row[3];
   double p, pe, h, t, l;
-  if (!want_cos) {
+  if (sin_r) {
     // sin(a + b) = sin a + cos a b + (cos a (sin b - b) + sin a (cos b - 1))
     two_prod(cah, bh, p, pe);
     two_sum(sah, p, h, t);
     l = t + (pe + (sal + cah * bl + cal * bh + cah * sb3 + sah * cb1));
-  } else {
+    fast_two_sum(h, l, sin_r->hi, sin_r->lo);
+    if (negative) sin_r->hi = -sin_r->hi, sin_r->lo = -sin_r->lo;
+  }
+  if (cos_r) {
     // cos(a + b) = cos a - sin a b + (cos a (cos b - 1) - sin a (sin b - b))
     two_prod(sah, bh, p, pe);
     two_sum(cah, -p, h, t);
     l = t + (-pe + (cal - sah * bl - sal * bh + cah * cb1 - sah * sb3));
+    fast_two_sum(h, l, cos_r->hi, cos_r->lo);
   }
-  DD out;
-  fast_two_sum(h, l, out.hi, out.lo);
-  if (negative && !want_cos) out.hi = -out.hi, out.lo = -out.lo;
-  return out;
 }
 
 // sin or cos of k pi/2 + r: quadrant 0 sin r, 1 cos r, 2 -sin r, 3 -cos r (cos: one more).
 double from_quadrant(const Reduced& red, bool want_cos) {
   const int q = (red.k + (want_cos ? 1 : 0)) & 3;
-  const DD v = sin_or_cos(red.r, q & 1);
+  DD v;
+  if (q & 1)
+    sin_cos(red.r, nullptr, &v);
+  else
+    sin_cos(red.r, &v, nullptr);
   const double s = v.hi + v.lo;
   return q & 2 ? -s : s;
 }
@@ -179,7 +184,8 @@ double tan(double x) {
   if (ax < 0x1p-27) return x;  // tan x = x + x^3/3 rounds to x
   if (ax == infinity() || is_nan(x)) return nan_of(x);
   const Reduced red = reduce(ax);
-  const DD s = sin_or_cos(red.r, false), c = sin_or_cos(red.r, true);
+  DD s, c;
+  sin_cos(red.r, &s, &c);
   // tan(r + k pi/2) = sin r / cos r for even k, -cos r / sin r for odd k.
   const DD q = (red.k & 1) ? div(c, s) : div(s, c);
   double v = q.hi + q.lo;
@@ -188,3 +194,11 @@ double tan(double x) {
 }
 
 }  // namespace simit::math
+
+// The C names (math_functions.h), here beside the functions so that the object that
+// defines a function the interpreter calls also defines the name compiled code links to.
+extern "C" {
+double simit_math_sin(double x) { return simit::math::sin(x); }
+double simit_math_cos(double x) { return simit::math::cos(x); }
+double simit_math_tan(double x) { return simit::math::tan(x); }
+}
