@@ -155,7 +155,7 @@ class Session {
 using MapFn = int32_t (*)(void* const* arrays, const double* scalars, const int32_t* endpoints,
                           int32_t begin, int32_t end, int32_t* failed_element);
 using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes,
-                             const void* interrupt);
+                             const void* interrupt, void* pool);
 
 // A kernel's code lives in a JITDylib of its own: a cached object keeps the name its function
 // had when it was compiled, and two kernels of the same key (two engines, two threads) may
@@ -172,7 +172,8 @@ class CpuKernel : public Kernel {
                                                      r.end, failed);
   }
   int32_t run(const SystemArgs& a) const override {
-    return system ? reinterpret_cast<SystemFn>(address)(a.arrays, a.scalars, a.sizes, a.interrupt)
+    return system ? reinterpret_cast<SystemFn>(address)(a.arrays, a.scalars, a.sizes, a.interrupt,
+                                                        a.pool)
                   : 0;
   }
 
@@ -300,6 +301,10 @@ class CpuTarget : public Target {
       calls[jit.mangleAndIntern("simit_jit_decompose")] = {
           llvm::orc::ExecutorAddr::fromPtr(host_.decompose),
           llvm::JITSymbolFlags::Exported | llvm::JITSymbolFlags::Callable};
+      if (host_.parallel_for)
+        calls[jit.mangleAndIntern("simit_jit_parallel_for")] = {
+            llvm::orc::ExecutorAddr::fromPtr(host_.parallel_for),
+            llvm::JITSymbolFlags::Exported | llvm::JITSymbolFlags::Callable};
       if (llvm::Error e = jd->define(llvm::orc::absoluteSymbols(std::move(calls)))) {
         error = message_of(std::move(e));
         return nullptr;

@@ -1,5 +1,8 @@
 // Loop IR expressions to LLVM IR, on scalars or on vectors of one element per lane
 // (jit/llvm/emitter.h).
+#include <llvm/IR/Constants.h>
+#include <llvm/IR/IntrinsicInst.h>
+
 #include "jit/llvm/emitter.h"
 
 namespace simit::jit::codegen {
@@ -33,6 +36,55 @@ Value* Emitter::math(const Expr& e, const std::vector<Value*>& args) {
   return out;
 }
 
+namespace {
+
+// v as the binary32 value it holds exactly (a widened binary32 value, or a constant that is
+// one), or null.
+Value* binary32_of(Value* v) {
+  if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v))
+    if (ext->getSrcTy()->getScalarType()->isFloatTy()) return ext->getOperand(0);
+  if (auto* c = llvm::dyn_cast<llvm::Constant>(v)) {
+    auto* f = llvm::dyn_cast_or_null<llvm::ConstantFP>(c->getSplatValue());
+    if (!f && v->getType()->isDoubleTy()) f = llvm::dyn_cast<llvm::ConstantFP>(c);
+    if (!f) return nullptr;
+    const double d = f->getValueAPF().convertToDouble();
+    const float n = static_cast<float>(d);
+    if (static_cast<double>(n) != d && d == d) return nullptr;
+    llvm::Type* t = llvm::Type::getFloatTy(v->getContext());
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(v->getType()))
+      return llvm::ConstantVector::getSplat(vt->getElementCount(), llvm::ConstantFP::get(t, n));
+    return llvm::ConstantFP::get(t, n);
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+// `--float32` rounds every operation's binary64 result to binary32. For + - * / and sqrt of
+// binary32 operands that is exactly the binary32 operation's result (binary64 carries more
+// than 2 * 24 + 2 bits, so the double rounding is innocuous), which is computed so instead:
+// one instruction, without the two conversions, and the chain of operations stays binary32.
+Value* Emitter::in_binary32(Value* x) {
+  if (auto* op = llvm::dyn_cast<llvm::BinaryOperator>(x)) {
+    switch (op->getOpcode()) {
+      case llvm::Instruction::FAdd:
+      case llvm::Instruction::FSub:
+      case llvm::Instruction::FMul:
+      case llvm::Instruction::FDiv: break;
+      default: return nullptr;
+    }
+    Value* a = binary32_of(op->getOperand(0));
+    Value* b = binary32_of(op->getOperand(1));
+    if (!a || !b) return nullptr;
+    return b_.CreateBinOp(op->getOpcode(), a, b);
+  }
+  if (auto* call = llvm::dyn_cast<llvm::IntrinsicInst>(x))
+    if (call->getIntrinsicID() == llvm::Intrinsic::sqrt)
+      if (Value* a = binary32_of(call->getArgOperand(0)))
+        return b_.CreateUnaryIntrinsic(llvm::Intrinsic::sqrt, a);
+  return nullptr;
+}
+
 // `scalar` with as many lanes as `like` has (none for a scalar).
 llvm::Type* Emitter::like(llvm::Type* scalar, Value* like) {
   if (auto* v = llvm::dyn_cast<llvm::FixedVectorType>(like->getType()))
@@ -64,6 +116,7 @@ Value* Emitter::combine(const Expr& e, const std::vector<Value*>& args) {
                                  : b_.CreateSub(llvm::Constant::getNullValue(x->getType()), x);
         case UnOp::Not: return b_.CreateNot(x);
         case UnOp::Round32:
+          if (Value* narrow = in_binary32(x)) return b_.CreateFPExt(narrow, x->getType());
           return b_.CreateFPExt(b_.CreateFPTrunc(x, like(b_.getFloatTy(), x)),
                                 like(b_.getDoubleTy(), x));
         case UnOp::ToF64: return b_.CreateSIToFP(x, like(b_.getDoubleTy(), x));

@@ -107,6 +107,8 @@ class Emitter {
     return b_.CreateInBoundsGEP(storage(a), arrays_[slot], at);
   }
   Value* math(const Expr& e, const std::vector<Value*>& args);
+  // x (a binary64 operation) computed in binary32 where that gives its rounded value exactly.
+  Value* in_binary32(Value* x);
   llvm::Type* like(llvm::Type* scalar, Value* like);
   Value* int_divide(Value* x, Value* y, bool remainder);
   // Address of a component of a per-element scratch array (a tiled tensor).
