@@ -228,13 +228,14 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
 }
 
 // "mapping over element 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')": built only when
-// an error leaves the map.
+// an error leaves the map. Elements by their mesh numbers (a scene's renumbered mesh).
 std::string Interpreter::element_note(const MapContext& ctx) const {
   const runtime::Set* set = ctx.target ? ctx.target->set : nullptr;
   const ast::Variable* target = ctx.assembly ? ctx.assembly->target_set : nullptr;
   const std::string name = target ? target->name : set ? set->name() : "?";
-  std::string note =
-      "mapping over element " + std::to_string(ctx.element) + " of set '" + name + "'";
+  std::string note = "mapping over element " +
+                     std::to_string(set ? set->mesh_number(ctx.element) : ctx.element) +
+                     " of set '" + name + "'";
   if (!set || set->is_grid() || ctx.element < 0 || ctx.element >= set->size() || set->arity() == 0)
     return note;
   const Type* type = target && target->type ? target->type.get() : nullptr;
@@ -245,7 +246,7 @@ std::string Interpreter::element_note(const MapContext& ctx) const {
     const std::string of = ep ? ep->name : set->endpoint_set(k).name();
     if (!open.empty() && of != open) list += " of '" + open + "';";
     list += (list.empty() || of != open ? (list.empty() ? "" : " ") : ", ") +
-            std::to_string(set->endpoint(ctx.element, k));
+            std::to_string(set->endpoint_set(k).mesh_number(set->endpoint(ctx.element, k)));
     open = of;
   }
   return note + " (endpoints " + list + " of '" + open + "')";
@@ -297,7 +298,8 @@ namespace {
 
 std::string element_text(const Value& v) {
   if (v.kind() != Value::Kind::Element) return "a non-element";
-  return "element " + std::to_string(v.index()) + " of " + v.binding()->set->describe();
+  const runtime::Set& s = *v.binding()->set;
+  return "element " + std::to_string(s.mesh_number(v.index())) + " of " + s.describe();
 }
 
 }  // namespace
@@ -355,7 +357,8 @@ Place Interpreter::matrix_place(const ast::TensorRead& r, Value& m) {
   if (pos < 0)
     fail(r.span, "write to (" + element_text(row) + ", " + element_text(col) +
                      ") outside the sparsity pattern while mapping element " +
-                     std::to_string(ctx.element) + " of " + ctx.target->set->describe());
+                     std::to_string(ctx.target->set->mesh_number(ctx.element)) + " of " +
+                     ctx.target->set->describe());
   p.root = &m;
   p.offset = static_cast<size_t>(pos) * bsize;
   p.matrix_position = pos;
@@ -483,7 +486,7 @@ void Interpreter::check_vector_write(const ast::TensorRead& r, const Value& x) {
     ok = &t.endpoint_set(k) == s && t.endpoint(e, k) == x.index();
   if (!ok)
     fail(r.span, "write to " + element_text(x) + " outside the neighbourhood of element " +
-                     std::to_string(e) + " of " + t.describe());
+                     std::to_string(t.mesh_number(e)) + " of " + t.describe());
 }
 
 Value Interpreter::finish_grid_result(MapContext& ctx, size_t res) {

@@ -24,16 +24,16 @@ using interp::Value;
 namespace {
 
 // "mapping over element 5 of set 'tets' (endpoints 3, 9, 12, 40 of 'verts')", as the
-// interpreter writes it.
+// interpreter writes it: elements by their mesh numbers (a scene's renumbered mesh).
 std::string element_note(const interp::SiteCall& call, int element) {
   const runtime::Set& t = call.target;
   const ast::Variable* target = call.plan.site->target_set;
-  std::string note = "mapping over element " + std::to_string(element) + " of set '" +
-                     (target ? target->name : t.name()) + "'";
+  std::string note = "mapping over element " + std::to_string(t.mesh_number(element)) +
+                     " of set '" + (target ? target->name : t.name()) + "'";
   if (element < 0 || element >= t.size() || t.arity() == 0) return note;
   std::string list;
   for (int k = 0; k < t.arity(); ++k)
-    list += (k ? ", " : "") + std::to_string(t.endpoint(element, k));
+    list += (k ? ", " : "") + std::to_string(t.endpoint_set(k).mesh_number(t.endpoint(element, k)));
   const bool one_set = t.homogeneous();
   return note + " (endpoints " + list + (one_set ? " of '" + t.endpoint_set(0).name() + "'" : "") +
          ")";

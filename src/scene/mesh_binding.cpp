@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "api/binding_check.h"
+#include "runtime/mesh/reorder.h"
 #include "runtime/mesh/topology.h"
 #include "scene/field_values.h"
 
@@ -149,7 +150,8 @@ std::string missing_companions(const SceneSet& s) {
                              : ": they come from " + files + ", none of which exists";
 }
 
-void make_vertex_set(const SceneFile& file, SceneSet& s, const runtime::Mesh& m) {
+void make_vertex_set(const SceneFile& file, SceneSet& s, const runtime::Mesh& m,
+                     const MeshOrder& order) {
   const size_t ends = s.var->type->endpoints.size();
   if (ends != 0)
     file.fail(s.table->get("elements"), table_name(s) + ": extern '" + s.name +
@@ -157,10 +159,22 @@ void make_vertex_set(const SceneFile& file, SceneSet& s, const runtime::Mesh& m)
                                             " endpoints, but elements = \"vertices\"");
   s.set = std::make_unique<runtime::Set>(s.name);
   s.set->add_many(static_cast<int>(m.points.size()));
+  if (!order.identity()) s.set->set_mesh_numbers(order.vertex_order);
+}
+
+// The elements renumbered with their vertices (the vertex order within each kept) and sorted
+// by their smallest new vertex, so that neighbouring elements run together; each keeps its
+// number in the mesh's own element list.
+std::vector<int32_t> renumber(SceneSet& s, const MeshOrder& order) {
+  if (order.identity()) return {};
+  const runtime::ElementList list{s.connectivity, s.arity};
+  std::vector<int32_t> elements = runtime::element_order(list, order.vertex_position);
+  s.connectivity = runtime::renumber_elements(list, elements, order.vertex_position);
+  return elements;
 }
 
 void make_edge_set(const SceneFile& file, SceneSet& s, const runtime::Mesh& m,
-                   const BoundSets& all) {
+                   const MeshOrder& order, const BoundSets& all) {
   const std::string tname = table_name(s);
   try {
     connect(s, m);
@@ -189,8 +203,10 @@ void make_edge_set(const SceneFile& file, SceneSet& s, const runtime::Mesh& m,
                                           s.mesh_path + "')");
     endpoint_sets.push_back(v.set.get());
   }
+  std::vector<int32_t> mesh_numbers = renumber(s, order);
   s.set = std::make_unique<runtime::Set>(s.name, endpoint_sets);
   s.set->add_edges(std::span<const int32_t>(s.connectivity));
+  if (!mesh_numbers.empty()) s.set->set_mesh_numbers(std::move(mesh_numbers));
 }
 
 // Every field the element type declares, zero until the scene or `init` sets it.
@@ -208,7 +224,7 @@ void add_fields(const SceneFile& file, SceneSet& s, bool float32) {
 
 }  // namespace
 
-BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32) {
+BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32, Reorder reorder) {
   BoundSets out;
   declare_sets(file, meshes, out);
   // Vertex sets first: edge sets name them as endpoints.
@@ -219,12 +235,14 @@ BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32) {
       if (vertex != (pass == 0)) continue;
       const runtime::Mesh& m =
           meshes.read(file, s.mesh_path, s.table->get("mesh"), table_name(s) + " mesh");
+      const MeshOrder& order = meshes.order(s.mesh_path, reorder);
       if (vertex)
-        make_vertex_set(file, s, m);
+        make_vertex_set(file, s, m, order);
       else
-        make_edge_set(file, s, m, out);
+        make_edge_set(file, s, m, order, out);
       add_fields(file, s, float32);
-      init_fields(file, s, m);
+      // Field values per element from the positions in the new vertex order.
+      init_fields(file, s, order.identity() ? m : order.renumbered);
     }
   }
   return out;

@@ -23,8 +23,10 @@ struct SceneSet {
   Elements elements = Elements::Vertices;
   const toml::table* table = nullptr;            // [sets.NAME]
   const frontend::ast::Variable* var = nullptr;  // the program's extern
+  // Built in the mesh's renumbered order (MeshCache::order) when the scene reorders; the set's
+  // mesh numbers (runtime::Set::mesh_number) give each element's number in the mesh.
   std::unique_ptr<runtime::Set> set;
-  std::vector<int32_t> connectivity;  // arity indices per element (not for vertices)
+  std::vector<int32_t> connectivity;  // arity indices per element (not for vertices), as the set
   int arity = 0;
 };
 
@@ -33,9 +35,9 @@ struct BoundSets {
   std::map<std::string, SceneSet*> by_name;
 };
 
-// Builds every set of [sets] (vertex sets first) and initialises its fields. Throws
-// SceneError: an extern the scene leaves unbound or does not know, a bad mesh or elements, a
-// field value that does not fit.
-BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32);
+// Builds every set of [sets] (vertex sets first) and initialises its fields, each mesh
+// renumbered as `reorder` says. Throws SceneError: an extern the scene leaves unbound or does
+// not know, a bad mesh or elements, a field value that does not fit.
+BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32, Reorder reorder);
 
 }  // namespace simit::scene

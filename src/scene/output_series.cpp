@@ -20,32 +20,46 @@ namespace {
 
 const char* const kTable = "[output]";
 
-// Field values of a set as a VTK array (converted to double or int32 where needed).
+// Field values of a set as a VTK array, in the order of `rows` (row r holds element rows[r];
+// the set's own order when empty), converted to double or int32 where needed.
 struct ArrayStore {
   std::deque<std::vector<double>> doubles;
   std::deque<std::vector<int32_t>> ints;
-  runtime::VtuArray add(const runtime::Set& set, const std::string& name) {
+
+  template <typename To, typename From>
+  std::span<const To> copy(std::deque<std::vector<To>>& store, const From* p, size_t components,
+                           size_t count, std::span<const int32_t> rows) {
+    std::vector<To>& out = store.emplace_back();
+    out.reserve(count * components);
+    for (size_t r = 0; r < count; ++r) {
+      const From* e = p + (rows.empty() ? r : static_cast<size_t>(rows[r])) * components;
+      out.insert(out.end(), e, e + components);
+    }
+    return out;
+  }
+
+  runtime::VtuArray add(const runtime::Set& set, const std::string& name,
+                        std::span<const int32_t> rows) {
     const runtime::Field& f = set.field(name);
     const FieldType& ft = f.type();
-    const size_t count = ft.components() * static_cast<size_t>(set.size());
-    runtime::VtuArray a{name, static_cast<int>(ft.components()), std::span<const double>()};
+    const size_t comps = ft.components(), count = static_cast<size_t>(set.size());
+    runtime::VtuArray a{name, static_cast<int>(comps), std::span<const double>()};
     switch (ft.kind) {
       case ComponentKind::Float:
-        if (!ft.single) {
-          a.values = std::span<const double>(f.data<double>(), count);
-        } else {
-          const float* p = f.data<float>();
-          doubles.emplace_back(p, p + count);
-          a.values = std::span<const double>(doubles.back());
-        }
+        if (!ft.single && rows.empty())
+          a.values = std::span<const double>(f.data<double>(), comps * count);
+        else if (!ft.single)
+          a.values = copy(doubles, f.data<double>(), comps, count, rows);
+        else
+          a.values = copy(doubles, f.data<float>(), comps, count, rows);
         break;
-      case ComponentKind::Int: a.values = std::span<const int32_t>(f.data<int32_t>(), count); break;
-      case ComponentKind::Bool: {
-        const bool* p = f.data<bool>();
-        ints.emplace_back(p, p + count);
-        a.values = std::span<const int32_t>(ints.back());
+      case ComponentKind::Int:
+        if (rows.empty())
+          a.values = std::span<const int32_t>(f.data<int32_t>(), comps * count);
+        else
+          a.values = copy(ints, f.data<int32_t>(), comps, count, rows);
         break;
-      }
+      case ComponentKind::Bool: a.values = copy(ints, f.data<bool>(), comps, count, rows); break;
       default: break;
     }
     return a;
@@ -56,17 +70,29 @@ double coordinate(const runtime::Field& f, int i, int d) {
   return f.type().single ? f.at<float>(i)[d] : f.at<double>(i)[d];
 }
 
-void add_cells(const SceneSet& cells, runtime::Mesh& m) {
+// Row r of the output holds element rows[r] of `set`: the set in its mesh's order. Empty for a
+// set in that order already.
+std::vector<int32_t> mesh_rows(const runtime::Set& set) {
+  if (!set.has_mesh_numbers()) return {};
+  std::vector<int32_t> rows(static_cast<size_t>(set.size()));
+  for (int e = 0; e < set.size(); ++e) rows[set.mesh_number(e)] = e;
+  return rows;
+}
+
+// The cells in the mesh's order and with the mesh's vertex numbers (`points` numbers them).
+void add_cells(const SceneSet& cells, std::span<const int32_t> rows, const runtime::Set& points,
+               runtime::Mesh& m) {
   const std::vector<int32_t>& c = cells.connectivity;
   const size_t ne = c.size() / cells.arity;
-  for (size_t e = 0; e < ne; ++e) {
-    const int32_t* v = c.data() + e * cells.arity;
+  for (size_t r = 0; r < ne; ++r) {
+    const int32_t* v = c.data() + (rows.empty() ? r : static_cast<size_t>(rows[r])) * cells.arity;
+    auto p = [&](int k) { return points.mesh_number(v[k]); };
     if (cells.arity == 4)
-      m.tets.push_back({v[0], v[1], v[2], v[3]});
+      m.tets.push_back({p(0), p(1), p(2), p(3)});
     else if (cells.arity == 3)
-      m.triangles.push_back({v[0], v[1], v[2]});
+      m.triangles.push_back({p(0), p(1), p(2)});
     else
-      m.edges.push_back({v[0], v[1]});
+      m.edges.push_back({p(0), p(1)});
   }
 }
 
@@ -162,6 +188,12 @@ void OutputSeries::configure(const BoundSets& sets) {
   check_png(*t);
   check_final_csv();
   check_collisions(*t, sets);
+  // What a user sees is in the mesh's order, whatever order the sets run in.
+  point_rows_ = mesh_rows(*points_->set);
+  if (cells_) {
+    cell_rows_ = mesh_rows(*cells_->set);
+    add_cells(*cells_, cell_rows_, *points_->set, frame_);
+  }
 }
 
 // A name from [output] (name, csv, png) that stays directly inside the output folder.
@@ -359,22 +391,22 @@ void OutputSeries::remove_stale_temporaries() const {
 
 void OutputSeries::write_frame(const MeshCache& meshes, int frame, bool last) {
   if (!pvd_) return;
-  runtime::Mesh m;
+  runtime::Mesh& m = frame_;
   const runtime::Set& ps = *points_->set;
   if (position_field_.empty()) {
-    m.points = meshes.at(points_->mesh_path).points;
+    m.points = meshes.at(points_->mesh_path).points;  // the mesh's order already
   } else {
     const runtime::Field& f = ps.field(position_field_);
     m.points.resize(ps.size());
-    for (int i = 0; i < ps.size(); ++i)
-      for (int d = 0; d < 3; ++d) m.points[i][d] = coordinate(f, i, d);
+    for (int r = 0; r < ps.size(); ++r)
+      for (int d = 0; d < 3; ++d) m.points[r][d] = coordinate(f, row(point_rows_, r), d);
   }
-  if (cells_) add_cells(*cells_, m);
   ArrayStore store;
   std::vector<runtime::VtuArray> point_data, cell_data;
-  for (const std::string& f : point_fields_) point_data.push_back(store.add(ps, f));
+  for (const std::string& f : point_fields_) point_data.push_back(store.add(ps, f, point_rows_));
   if (cells_)
-    for (const std::string& f : cell_fields_) cell_data.push_back(store.add(*cells_->set, f));
+    for (const std::string& f : cell_fields_)
+      cell_data.push_back(store.add(*cells_->set, f, cell_rows_));
   pvd_->write_frame(frame * file_.frame_time, m, point_data, cell_data);
   std::string png_error;
   if (last && !png_path_.empty() && !runtime::write_quicklook(m, png_path_, png_error))
@@ -396,8 +428,8 @@ void OutputSeries::write_final_csv() const {
   out.precision(17);
   out << "x,y,z\n";
   const runtime::Field& f = points_->set->field(position_field_);
-  for (int i = 0; i < points_->set->size(); ++i) {
-    for (int d = 0; d < 3; ++d) out << (d ? "," : "") << coordinate(f, i, d);
+  for (int r = 0; r < points_->set->size(); ++r) {
+    for (int d = 0; d < 3; ++d) out << (d ? "," : "") << coordinate(f, row(point_rows_, r), d);
     out << '\n';
   }
   runtime::AtomicFile file(options_.final_csv);

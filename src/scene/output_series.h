@@ -65,6 +65,10 @@ class OutputSeries {
   SceneSet* cells_ = nullptr;
   std::string position_field_;
   std::vector<std::string> point_fields_, cell_fields_;
+  // Row r of the output is element rows[r] of the set (empty: element r): the mesh's order.
+  static int row(const std::vector<int32_t>& rows, int r) { return rows.empty() ? r : rows[r]; }
+  std::vector<int32_t> point_rows_, cell_rows_;
+  runtime::Mesh frame_;  // the cells (the mesh's order and numbers), the points of each frame
   int every_ = 1;
   std::unique_ptr<runtime::PvdWriter> pvd_;
   std::ofstream csv_;

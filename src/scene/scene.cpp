@@ -76,7 +76,10 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
   std::unique_ptr<SceneRun> run;  // outlives the try: --jit-stats prints after the error
   try {
-    run = std::make_unique<SceneRun>(*impl_->file, o, impl_->meshes, impl_->trap);
+    // The step debugger takes and shows element indices (breakpoints, watches, frames): its
+    // runs keep each mesh's own order, so that they are the mesh's numbers.
+    const Reorder reorder = impl_->trap ? Reorder::Off : impl_->file->reorder;
+    run = std::make_unique<SceneRun>(*impl_->file, o, impl_->meshes, reorder, impl_->trap);
     run->build();
     run->run(count, out);
   } catch (const SceneError& e) {
@@ -108,7 +111,9 @@ int Scene::run(std::ostream& out, std::ostream& err, int frames) {
 
 std::optional<SceneSets> SceneAccess::build(Scene& scene, std::ostream& err) {
   const std::unique_ptr<Scene::Impl>& impl_ = scene.impl_;
-  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes, impl_->trap);
+  // The REPL indexes these sets by element (`:print verts.x[3]`): each mesh's own order.
+  auto run = std::make_shared<SceneRun>(*impl_->file, impl_->options, impl_->meshes, Reorder::Off,
+                                        impl_->trap);
   try {
     run->build();
   } catch (const SceneError& e) {

@@ -77,6 +77,26 @@ void read_frames(SceneFile& file) {
   }
 }
 
+// `reorder = true | false | "rcm" | "hilbert"`: how the meshes are renumbered for locality.
+void read_reorder(SceneFile& file) {
+  const toml::node* n = file.doc.get("reorder");
+  if (!n) return;
+  const std::string expected = "reorder: expected true, false, \"rcm\" or \"hilbert\"";
+  if (n->is_boolean()) {
+    file.reorder = *n->value<bool>() ? kDefaultReorder : Reorder::Off;
+  } else if (n->is_string()) {
+    const std::string v = *n->value<std::string>();
+    if (v == "rcm")
+      file.reorder = Reorder::Rcm;
+    else if (v == "hilbert")
+      file.reorder = Reorder::Hilbert;
+    else
+      file.fail(n, expected + ", not \"" + v + "\"");
+  } else {
+    file.fail(n, expected);
+  }
+}
+
 // `executor = "interpreter" | "jit"`, `threads = N | "all"` and `jit_cache = "off" | FOLDER`
 // (relative to the scene's folder), parsed as the command line parses `--executor`,
 // `--threads` and `--jit-cache`.
@@ -219,11 +239,12 @@ std::unique_ptr<SceneFile> read_scene_file(const std::string& path) {
   file->dir = fs::path(path).parent_path().string();
   file->check_keys(file->doc, "the scene",
                    {"program", "init", "step", "frames", "frame_time", "finite_check", "executor",
-                    "threads", "jit_cache", "sets", "tensors", "output"});
+                    "threads", "jit_cache", "reorder", "sets", "tensors", "output"});
   file->program_path = file->resolve(file->required_string(file->doc, "the scene", "program"));
   file->init_name = file->optional_string(file->doc, "the scene", "init").value_or("");
   file->step_name = file->required_string(file->doc, "the scene", "step");
   read_frames(*file);
+  read_reorder(*file);
   read_executor(*file);
   compile_program(*file);
   return file;

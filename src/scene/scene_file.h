@@ -23,6 +23,12 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// How a scene renumbers each mesh before it builds sets from it (the `reorder` key): not at
+// all, vertices by reverse Cuthill-McKee, or vertices along a Hilbert curve; the elements
+// then by their smallest new vertex (runtime/mesh/reorder.h, scene/mesh_cache.h).
+enum class Reorder { Off, Rcm, Hilbert };
+constexpr Reorder kDefaultReorder = Reorder::Rcm;
+
 struct SceneFile {
   std::string path;  // the scene file as given
   std::string dir;   // its folder, against which the paths inside it are resolved
@@ -31,6 +37,7 @@ struct SceneFile {
   int frames = 0;
   double frame_time = 1.0;
   bool finite_check = true;  // `finite_check = false` lets NaN and infinity through the frames
+  Reorder reorder = kDefaultReorder;  // `reorder`
   // `executor`, `threads` and `jit_cache`, when the scene names them (the command line's win).
   std::optional<ExecutorKind> executor;
   std::optional<int> threads;

@@ -17,7 +17,7 @@ using runtime::ComponentKind;
 
 void SceneRun::build() {
   tensors_ = read_tensors(file_, options_.float32);
-  sets_ = build_sets(file_, meshes_, options_.float32);
+  sets_ = build_sets(file_, meshes_, options_.float32, reorder_);
 }
 
 // Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
@@ -84,16 +84,23 @@ void SceneRun::print_sizes(std::ostream& out, int frames) const {
 
 namespace {
 
-// The first non-finite component of a float field: element and component, or -1.
+// The first non-finite component of a float field of `set` in the mesh's order (the element
+// of least mesh number, then its first such component): element and component, or -1.
 template <typename T>
-std::pair<int, int> first_non_finite(const runtime::Field& f, int size) {
+std::pair<int, int> first_non_finite(const runtime::Set& set, const runtime::Field& f) {
   const T* p = f.data<T>();
   const size_t components = f.components();
-  const size_t count = components * static_cast<size_t>(size);
-  for (size_t i = 0; i < count; ++i)
-    if (!std::isfinite(p[i]))
-      return {static_cast<int>(i / components), static_cast<int>(i % components)};
-  return {-1, -1};
+  const size_t count = components * static_cast<size_t>(set.size());
+  std::pair<int, int> first = {-1, -1};
+  for (size_t i = 0; i < count; ++i) {
+    if (std::isfinite(p[i])) continue;
+    const int element = static_cast<int>(i / components);
+    if (first.first < 0 || set.mesh_number(element) < set.mesh_number(first.first))
+      first = {element, static_cast<int>(i % components)};
+    if (!set.has_mesh_numbers()) break;
+    i = (i / components + 1) * components - 1;  // the element's later components come after
+  }
+  return first;
 }
 
 std::string number_text(double v) { return std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf"; }
@@ -115,8 +122,8 @@ void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& r
     for (int k = 0; k < set.field_count(); ++k) {
       const runtime::Field& f = set.field(k);
       if (f.type().kind != ComponentKind::Float) continue;
-      auto [element, component] = f.type().single ? first_non_finite<float>(f, set.size())
-                                                  : first_non_finite<double>(f, set.size());
+      auto [element, component] =
+          f.type().single ? first_non_finite<float>(set, f) : first_non_finite<double>(set, f);
       if (element < 0) continue;
       const double v = f.type().single
                            ? f.data<float>()[size_t(element) * f.components() + component]
@@ -124,8 +131,8 @@ void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& r
       const std::string part =
           f.components() > 1 ? " (component " + std::to_string(component) + ")" : "";
       throw RunFailure(file_.path + ": error: " + when + ": field '" + f.name() + "' of element " +
-                       std::to_string(element) + " of set '" + s->name + "' is " + number_text(v) +
-                       part + hint);
+                       std::to_string(set.mesh_number(element)) + " of set '" + s->name + "' is " +
+                       number_text(v) + part + hint);
     }
   }
   const std::vector<ast::Param>& declared = file_.program->find_func(file_.step_name)->results;

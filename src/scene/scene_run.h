@@ -28,10 +28,16 @@ struct RunFailure : std::runtime_error {
 
 class SceneRun {
  public:
-  // `trap`: the interpreter's trap point switch (the step debugger), or null.
-  SceneRun(const SceneFile& file, const SceneOptions& options, MeshCache& meshes,
+  // `trap`: the interpreter's trap point switch (the step debugger), or null. `reorder`: how
+  // the meshes are renumbered (Reorder::Off keeps the sets in each mesh's own order).
+  SceneRun(const SceneFile& file, const SceneOptions& options, MeshCache& meshes, Reorder reorder,
            interp::Trap* trap = nullptr)
-      : file_(file), options_(options), meshes_(meshes), trap_(trap), output_(file, options) {}
+      : file_(file),
+        options_(options),
+        meshes_(meshes),
+        reorder_(reorder),
+        trap_(trap),
+        output_(file, options) {}
 
   // Reads [tensors] and builds [sets]. Throws SceneError.
   void build();
@@ -59,6 +65,7 @@ class SceneRun {
   const SceneFile& file_;
   const SceneOptions& options_;
   MeshCache& meshes_;
+  Reorder reorder_;
   interp::Trap* trap_;
   BoundSets sets_;
   std::map<std::string, SceneTensor> tensors_;
