@@ -88,7 +88,7 @@ void read_scene(std::string_view text) {
     options.file = path;
     options.quiet = true;
     scene::MeshCache meshes;
-    scene::SceneRun run(*file, options, meshes);
+    scene::SceneRun run(*file, options, meshes, file->reorder);
     run.build();
   } catch (const scene::SceneError& e) {
     if (std::string(e.what()).find(path) == std::string::npos)
