@@ -80,10 +80,14 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
 // deferred block of its own, numbered in element order, so that adding them in number order
 // adds each block's in element order. A deferred block starts at -0.0, which an addition
 // leaves exactly the value added.
+//
+// Deferred block 0 is a sink: a specialised pattern's table has -1 for the blocks the guard
+// knows the call does not write (jit/specialise.h); they point at the sink, which is never
+// added anywhere.
 bool DeferredPlan::build(Result& r, const runtime::Set& target, int64_t blocks) {
   const size_t stride = static_cast<size_t>(r.stride);
   r.split.assign(static_cast<size_t>(target.size()) * stride, 0);
-  r.dest.clear();
+  r.dest.assign(1, -1);
   std::vector<int32_t> owner(static_cast<size_t>(blocks), -1);
   std::vector<int32_t> mine;  // the blocks of the element at hand
   for (int e = 0; e < target.size(); ++e) {
@@ -92,7 +96,11 @@ bool DeferredPlan::build(Result& r, const runtime::Set& target, int64_t blocks) 
     for (int p : r.written) {
       const size_t at = static_cast<size_t>(e) * stride + static_cast<size_t>(p);
       const int32_t b = r.source[at];
-      if (b < 0 || b >= blocks) return false;
+      if (b < 0) {
+        r.split[at] = -1;  // the sink
+        continue;
+      }
+      if (b >= blocks) return false;
       if (std::find(mine.begin(), mine.end(), b) != mine.end()) return false;
       mine.push_back(b);
       int32_t& o = owner[static_cast<size_t>(b)];
@@ -126,7 +134,7 @@ void DeferredPlan::finish(const std::vector<double*>& values) const {
   for (const Result& r : results_) {
     double* v = values[static_cast<size_t>(r.result)];
     const size_t n = static_cast<size_t>(r.components);
-    for (size_t k = 0; k < r.dest.size(); ++k) {
+    for (size_t k = 1; k < r.dest.size(); ++k) {
       double* to = v + static_cast<size_t>(r.dest[k]) * n;
       const double* from = r.scratch.data() + k * n;
       for (size_t c = 0; c < n; ++c) to[c] += from[c];
@@ -136,7 +144,8 @@ void DeferredPlan::finish(const std::vector<double*>& values) const {
 
 int64_t DeferredPlan::deferred_blocks() const {
   int64_t n = 0;
-  for (const Result& r : results_) n += static_cast<int64_t>(r.dest.size());
+  for (const Result& r : results_)
+    n += r.dest.empty() ? 0 : static_cast<int64_t>(r.dest.size()) - 1;
   return n;
 }
 

@@ -49,7 +49,7 @@ class DeferredPlan {
     const int32_t* source = nullptr;
     std::vector<int32_t> plain;  // a vector's member table
     std::vector<int32_t> split;  // the table with later chunks' entries sent to deferred blocks
-    std::vector<int32_t> dest;   // per deferred block, its block
+    std::vector<int32_t> dest;   // per deferred block, its block (block 0: the sink, -1)
     std::vector<double> scratch;
   };
   bool build(Result& r, const runtime::Set& target, int64_t blocks);

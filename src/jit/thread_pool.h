@@ -6,9 +6,9 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
-#include <functional>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace simit::jit {
@@ -23,25 +23,38 @@ class ThreadPool {
 
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
   // Runs task(i) for i in [0, tasks) on the pool and the calling thread; returns when every
-  // task has returned. Tasks are claimed in increasing order. One job at a time: the pool is
-  // the engine's, and the engine runs one statement at a time.
-  void run(int64_t tasks, const std::function<void(int64_t)>& task);
+  // task has returned. One job at a time: the pool is the engine's, and the engine runs one
+  // statement at a time. `task` is called, never copied (no allocation per job).
+  template <class F>
+  void run(int64_t tasks, F&& task) {
+    using T = std::remove_reference_t<F>;
+    run(tasks, Task{const_cast<void*>(static_cast<const void*>(&task)),
+                    [](void* f, int64_t i) { (*static_cast<T*>(f))(i); }});
+  }
 
  private:
+  struct Task {
+    void* object;
+    void (*call)(void*, int64_t);
+  };
+  void run(int64_t tasks, Task task);
   void work();
-  void claim(const std::function<void(int64_t)>& task, int64_t tasks);
+  // Claims and runs tasks of the current job until none is left.
+  void claim();
 
   std::vector<std::thread> workers_;
-  std::mutex mutex_;
-  std::condition_variable wake_, done_;
-  // The current job, published under mutex_ with a new generation.
-  const std::function<void(int64_t)>* task_ = nullptr;
+  // The job: its task and size, written before `work_` publishes it. work_ holds the job's
+  // number (high 32 bits) and its tasks not yet claimed (low 32 bits), so that a claim is one
+  // compare-and-swap and a thread late from an earlier job can claim nothing of a later one.
+  Task task_{};
   int64_t tasks_ = 0;
-  uint64_t generation_ = 0;
-  bool stop_ = false;
-  std::atomic<uint64_t> published_{0};  // generation_, readable without the lock (spinning)
-  std::atomic<int64_t> next_{0};        // the next task to claim
-  int busy_ = 0;                        // workers inside the current job
+  std::atomic<uint64_t> work_{0};
+  std::atomic<int64_t> finished_{0};  // tasks of the current job that have returned
+  // Workers asleep (between jobs, after spinning a while) and what wakes them.
+  std::atomic<int> sleepers_{0};
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable wake_;
 };
 
 }  // namespace simit::jit
