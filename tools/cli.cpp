@@ -338,17 +338,27 @@ void add_commands(CLI::App& app, Commands& c) {
 
 }  // namespace
 
-std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const* argv,
-                                                    std::ostream& err) {
-  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
-  Commands c;
+namespace {
+
+// The command line parsed into `c` without running anything (for the tests of the options).
+bool parse_only(CLI::App& app, Commands& c, int argc, const char* const* argv, std::ostream& err) {
   add_commands(app, c);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     err << "simit: error: " << e.what() << "\n";
-    return std::nullopt;
+    return false;
   }
+  return true;
+}
+
+}  // namespace
+
+std::optional<ExecutorChoice> parse_executor_choice(int argc, const char* const* argv,
+                                                    std::ostream& err) {
+  CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
+  Commands c;
+  if (!parse_only(app, c, argc, argv, err)) return std::nullopt;
   if (c.run->parsed()) return c.run_options.executor;
   if (c.test->parsed()) return c.test_options.executor;
   err << "simit: error: neither run nor test\n";
@@ -359,13 +369,7 @@ std::optional<SceneOptions> parse_scene_options(int argc, const char* const* arg
                                                 std::ostream& err) {
   CLI::App app("Simit: a language for physical simulation on hypergraphs.", "simit");
   Commands c;
-  add_commands(app, c);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    err << "simit: error: " << e.what() << "\n";
-    return std::nullopt;
-  }
+  if (!parse_only(app, c, argc, argv, err)) return std::nullopt;
   if (c.run->parsed() && ends_with(c.run_options.file, ".toml")) return scene_options(c);
   err << "simit: error: not a scene run\n";
   return std::nullopt;
