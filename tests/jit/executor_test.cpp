@@ -12,27 +12,11 @@
 #include "api/compiled_program.h"
 #include "api/engine.h"
 #include "jit/executor.h"
+#include "recording_kernel.h"
 #include "runtime/set.h"
 
 namespace simit::jit {
 namespace {
-
-// A kernel that records the ranges it is asked to run and fails at chosen elements.
-class RecordingKernel : public Kernel {
- public:
-  mutable std::vector<ElementRange> ranges;
-  std::vector<int32_t> failing;  // elements whose check fails (error 0)
-  int32_t run(const MapArgs&, ElementRange r, int32_t* failed) const override {
-    ranges.push_back(r);
-    for (int32_t e = r.begin; e < r.end; ++e)
-      if (std::find(failing.begin(), failing.end(), e) != failing.end()) {
-        *failed = e;
-        return 1;
-      }
-    return 0;
-  }
-  int32_t run(const SystemArgs&) const override { return 0; }
-};
 
 // Every element of [0, n) exactly once.
 void expect_cover(const std::vector<ElementRange>& ranges, int32_t n) {

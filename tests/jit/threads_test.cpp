@@ -7,13 +7,13 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <mutex>
 #include <vector>
 
 #include "jit/defer_assembly.h"
 #include "jit/deferred_plan.h"
 #include "jit/executor.h"
 #include "jit/thread_pool.h"
+#include "recording_kernel.h"
 #include "runtime/set.h"
 
 namespace simit::jit {
@@ -33,27 +33,6 @@ TEST(ThreadPool, RunsEveryTaskOnceJobAfterJob) {
     }
   }
 }
-
-// A kernel that records the ranges it runs (from any thread) and fails at chosen elements.
-class RecordingKernel : public Kernel {
- public:
-  mutable std::mutex mutex;
-  mutable std::vector<ElementRange> ranges;
-  std::vector<int32_t> failing;
-  int32_t run(const MapArgs&, ElementRange r, int32_t* failed) const override {
-    {
-      std::lock_guard lock(mutex);
-      ranges.push_back(r);
-    }
-    for (int32_t e = r.begin; e < r.end; ++e)
-      if (std::find(failing.begin(), failing.end(), e) != failing.end()) {
-        *failed = e;
-        return 1;
-      }
-    return 0;
-  }
-  int32_t run(const SystemArgs&) const override { return 0; }
-};
 
 TEST(ThreadedExecutor, CoversEveryElementOnceInItsChunks) {
   for (int threads : {2, 3, 7}) {
