@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -17,6 +18,9 @@ namespace simit {
 
 namespace api {
 class CompiledProgram;
+}
+namespace scene {
+class Stepper;
 }
 namespace runtime {
 class SystemMatrix;
@@ -36,6 +40,10 @@ struct Options {
   bool check_finite = false;
   // Where `print` writes; null means standard output.
   std::ostream* out = nullptr;
+  // While run() runs, the first SIGINT (Ctrl-C) stops it at its next statement (compiled maps
+  // between chunks of elements) and run() throws Interrupted; a second one does what SIGINT
+  // did before. For hosts that keep going after an interrupt (Python's KeyboardInterrupt).
+  bool stop_on_interrupt = false;
 };
 
 // Options from the original's `init(backend, floatSize)` spelling: "cpu" (the JIT),
@@ -86,6 +94,13 @@ class RuntimeError : public Error {
   int line_;
 };
 
+// A run stopped by Ctrl-C (Options::stop_on_interrupt); what() names the statement it
+// stopped at. The function can run again.
+class Interrupted : public RuntimeError {
+ public:
+  using RuntimeError::RuntimeError;
+};
+
 class Function;
 
 // A dense result of a run (Function::result): its components row-major, global vectors block
@@ -96,6 +111,9 @@ class DenseResult {
 
   ComponentKind kind() const;
   size_t size() const;
+  // The dimensions, outermost first and every block level after its outer one (a global
+  // vector of 3-vectors over 10 points: {10, 3}); empty for a scalar.
+  std::vector<int> dims() const;
   // The components; the kind must match (ints for Int, floats for Float, ...).
   const int32_t* ints() const;
   const double* floats() const;
@@ -104,6 +122,7 @@ class DenseResult {
 
  private:
   friend class Function;
+  friend class scene::Stepper;
   explicit DenseResult(std::shared_ptr<const runtime::Tensor> t) : t_(std::move(t)) {}
   std::shared_ptr<const runtime::Tensor> t_;
 };
@@ -171,6 +190,11 @@ class Function {
   void bind(const std::string& name, Tensor<T, dims...>* tensor) {
     bind(name, tensor->slot());
   }
+
+  // The host type the extern tensor, parameter or result `name` binds as (component kind,
+  // dimensions with block levels after their outer one, binary32 floats under float size 4);
+  // nullopt for a set, or a tensor whose size depends on a set. BindError for an unknown name.
+  std::optional<FieldType> tensor_type(const std::string& name) const;
 
   // Names that still need a binding before init(): externs the function uses and parameters.
   std::vector<std::string> unbound() const;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "simit/executor.h"
+#include "simit/program.h"
 
 namespace simit::scene {
 
@@ -38,6 +39,12 @@ struct SceneOptions {
   bool progress_line = false;    // rewrite one progress line (a terminal) instead of plain lines
   // No output files and no timings (simit debug: its transcript must be reproducible).
   bool quiet = false;
+  // Build every set in its mesh's own order, whatever the scene's `reorder` key says (a host
+  // that indexes the sets by mesh numbers).
+  bool keep_mesh_order = false;
+  // While a run or a Stepper call runs, the first SIGINT (Ctrl-C) stops it at its next
+  // statement with an error that says so (Stepper: Interrupted) instead of ending the process.
+  bool stop_on_interrupt = false;
 };
 
 class Scene {
@@ -50,6 +57,8 @@ class Scene {
   Scene& operator=(const Scene&) = delete;
 
   const std::string& program_path() const;
+  // The frames a run makes: the options' when given (>= 0), else the scene file's.
+  int frames() const;
 
   // Builds the sets afresh, checks every binding and the output before the first frame, runs
   // `init` and `frames` frames (the scene's, or the options', when < 0) and writes the output.
@@ -59,8 +68,59 @@ class Scene {
 
  private:
   friend struct SceneAccess;  // the REPL and the debugger reach the program and sets inside
+  friend class Stepper;
   struct Impl;
   explicit Scene(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// One field of a set a Stepper built: its storage stays where it is for the Stepper's life.
+struct FieldView {
+  std::string name;
+  FieldType type;
+  void* data = nullptr;  // element after element, each type.dims components row-major
+};
+
+// One set of a scene as a Stepper built it.
+struct SetView {
+  std::string name;
+  int size = 0;
+  // Edge sets: the names of the endpoint sets and `arity` endpoint indices per element.
+  std::vector<std::string> endpoint_sets;
+  int arity = 0;
+  const int32_t* endpoints = nullptr;
+  std::vector<FieldView> fields;
+  // Element i's number in the mesh, when the scene renumbered the mesh; null: element i is
+  // number i.
+  const int32_t* mesh_numbers = nullptr;
+};
+
+// A scene run a frame at a time by its host (Python's Scene): the same checks, bindings,
+// output and errors as Scene::run, with the sets open to the host between frames. Errors throw:
+// simit::Error for the scene, its meshes and its output; RuntimeError for a run-time error
+// or a non-finite value (with the frame); Interrupted for Ctrl-C (stop_on_interrupt).
+class Stepper {
+ public:
+  // Builds the sets from the meshes (fields as the scene initialises them); runs nothing.
+  // Prints and messages go to `out`, which must outlive the Stepper.
+  Stepper(Scene& scene, std::ostream& out);
+  ~Stepper();
+  Stepper(const Stepper&) = delete;
+  Stepper& operator=(const Stepper&) = delete;
+
+  const std::vector<SetView>& sets() const;
+  // Checks the bindings and the output, runs the scene's `init` and writes frame 0. Once.
+  void init();
+  bool initialised() const;
+  // One frame (init() first when it has not run); the step's dense results by name.
+  std::vector<std::pair<std::string, DenseResult>> step();
+  int frame() const;  // frames run
+  // Writes what a run writes after its last frame (the picture, --final-csv). Again only
+  // after further frames.
+  void finish();
+
+ private:
+  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -176,6 +176,11 @@ class Set {
   }
   bool has_field(const std::string& name) const;
   void* field_data(const std::string& name);
+  // From now on the fields' arrays never move, so field_data pointers stay valid for the
+  // set's life (views a host keeps, Python's numpy arrays); the set can no longer grow
+  // (adding elements throws Error). Runs copy where they would otherwise share an array.
+  void pin_fields();
+  bool fields_pinned() const;
 
   // --- grids ---------------------------------------------------------------------------
   const std::vector<int>& grid_extents() const;

@@ -1,9 +1,11 @@
 // Functions: bindings by name, checks at bind and init time, and runs through the engine.
 #include <cstring>
 #include <map>
+#include <optional>
 
 #include "api/engine.h"
 #include "api/set_access.h"
+#include "api/stop_on_sigint.h"
 #include "binding_check.h"
 #include "runtime/fault.h"
 #include "simit/program.h"
@@ -125,6 +127,7 @@ struct Function::Impl {
   std::vector<std::pair<const runtime::Set*, uint64_t>> topology;  // at init
   std::vector<Value> results;
   RunStats stats;
+  interp::Trap trap;  // Ctrl-C's switch (Options::stop_on_interrupt)
 
   Slot& slot(const std::string& name) {
     auto it = slots.find(name);
@@ -222,6 +225,15 @@ void Function::bind(const std::string& name, const TensorSlot& tensor) {
   im.engine.reset();
 }
 
+std::optional<FieldType> Function::tensor_type(const std::string& name) const {
+  Impl& im = impl();
+  const Slot& s = im.slot(name);
+  if (s.is_set()) return std::nullopt;
+  const auto t = api::field_type_for(*s.var->type, im.options.float_size);
+  if (!t) return std::nullopt;
+  return FieldType{api::host_kind(t->kind), t->dims, t->single};
+}
+
 std::vector<std::string> Function::unbound() const {
   std::vector<std::string> out;
   for (const std::string& n : impl().needed)
@@ -252,6 +264,7 @@ void Function::Impl::init() {
   eo.float32 = options.float_size == 4;
   eo.check_finite = options.check_finite;
   eo.out = options.out;
+  if (options.stop_on_interrupt) eo.trap = &trap;
   engine = std::make_unique<api::Engine>(loaded, eo);
   topology.clear();
   try {
@@ -286,7 +299,16 @@ void Function::Impl::run() {
     stats.assemblies += engine->stats().maps;
   };
   try {
+    std::optional<api::StopOnSigint> stop_on_sigint;
+    if (options.stop_on_interrupt) {
+      trap.take_interrupt();  // one that came after the previous run had finished
+      stop_on_sigint.emplace(trap);
+    }
     results = engine->call(*func, std::move(args));
+  } catch (const interp::Interrupted& e) {
+    account();
+    trap.take_interrupt();  // the next run starts afresh
+    throw Interrupted(e.render(), e.line());
   } catch (const interp::RuntimeError& e) {
     account();
     throw RuntimeError(e.render(), e.line());

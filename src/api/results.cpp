@@ -8,6 +8,12 @@ namespace simit {
 
 ComponentKind DenseResult::kind() const { return api::host_kind(t_->kind()); }
 size_t DenseResult::size() const { return t_->size(); }
+std::vector<int> DenseResult::dims() const {
+  const runtime::Shape& shape = t_->shape();
+  std::vector<int> out;
+  for (int i = 0; i < shape.rank(); ++i) out.push_back(shape.dim(i));
+  return out;
+}
 const int32_t* DenseResult::ints() const { return t_->ints(); }
 const double* DenseResult::floats() const { return t_->floats(); }
 const bool* DenseResult::bools() const { return t_->bools(); }

@@ -158,6 +158,9 @@ void* Set::field_data(const std::string& name) {
   return guarded([&] { return static_cast<void*>(impl_->field(name).bytes()); });
 }
 
+void Set::pin_fields() { impl_->pin_fields(); }
+bool Set::fields_pinned() const { return impl_->fields_pinned(); }
+
 ElementRef Set::grid_point(std::span<const int> coords) const {
   return guarded([&] { return ElementRef(impl_->grid_point(coords)); });
 }

@@ -168,12 +168,22 @@ bool Set::homogeneous() const {
 // Elements
 
 void Set::grow(int count) {
+  if (pinned_)
+    throw Fault(describe() + " cannot grow: its fields are pinned (a host holds views of them)");
   size_ += count;
   ++version_;
   for (auto& f : fields_) f->resize(static_cast<size_t>(size_));
 }
 
+void Set::pin_fields() {
+  // An array a tensor still shares would move at the field's next write: unshare it now.
+  for (auto& f : fields_)
+    if (f->shared()) f->mutable_bytes();
+  pinned_ = true;
+}
+
 void Set::reserve(int elements) {
+  if (pinned_) return;  // it cannot grow
   for (auto& f : fields_) f->reserve(static_cast<size_t>(elements));
   endpoints_.reserve(static_cast<size_t>(elements) * arity());
 }
@@ -340,8 +350,13 @@ Tensor Set::field_tensor(int field_number) const {
   const Field& f = *fields_[field_number];
   const FieldType& t = f.type();
   const Shape shape = Shape::blocked(std::vector<int>{size_}, Shape::of(t.dims));
-  if (!t.single) return Tensor(t.kind, shape, f.buffer());
+  if (!t.single && !pinned_) return Tensor(t.kind, shape, f.buffer());
   Tensor out(t.kind, shape);
+  if (!t.single) {  // pinned: a copy, so that later writes to the field stay in place
+    const size_t bytes = out.size() * t.component_bytes();
+    if (bytes) std::memcpy(out.mutable_ints(), f.buffer().get(), bytes);
+    return out;
+  }
   const size_t n = out.size();
   if (t.kind == ComponentKind::Float) {
     const float* src = f.data<float>();
@@ -379,7 +394,7 @@ void Set::assign_field(int field_number, const Tensor& value) {
     return;
   }
   const size_t bytes = n * t.component_bytes();
-  if (value.shared_buffer()) {  // adopt: the value's heap block becomes the array
+  if (value.shared_buffer() && !pinned_) {  // adopt: the value's heap block becomes the array
     if (value.shared_buffer() == f.buffer_) return;  // `S.f = S.f`
     f.buffer_ = value.shared_buffer();
     f.bytes_ = f.capacity_ = bytes;
@@ -392,7 +407,7 @@ void Set::assign_field(int field_number, const Tensor& value) {
 Tensor Set::take_field(int field_number) {
   Tensor out = field_tensor(field_number);
   Field& f = *fields_[field_number];
-  if (!f.type().single) {
+  if (!f.type().single && !pinned_) {
     f.buffer_.reset();
     f.bytes_ = f.capacity_ = 0;
     ++f.write_version_;

@@ -154,6 +154,14 @@ class Set {
   // `numbers[e]`: element e's number in the mesh; a permutation of 0..size()-1 (Fault if not).
   void set_mesh_numbers(std::vector<int32_t> numbers);
 
+  // --- pinned storage ---------------------------------------------------------------------
+  // From now on every field's array stays where it is, for hosts that hold views of it
+  // (Python's numpy arrays): reading a whole field as a tensor copies it instead of sharing
+  // it, storing a whole field copies into the array instead of adopting the value's, and the
+  // set refuses to grow (Fault). Fields added later are pinned too.
+  void pin_fields();
+  bool fields_pinned() const { return pinned_; }
+
   // --- fields ---------------------------------------------------------------------------
   int add_field(const std::string& name, FieldType type);  // zero for every element
   int field_count() const { return static_cast<int>(fields_.size()); }
@@ -229,6 +237,7 @@ class Set {
   std::vector<int32_t> endpoints_;
   std::vector<int> extents_;
   std::vector<int32_t> mesh_numbers_;  // empty: every element is its own mesh number
+  bool pinned_ = false;
 };
 
 }  // namespace simit::runtime

@@ -408,8 +408,12 @@ void OutputSeries::write_frame(const MeshCache& meshes, int frame, bool last) {
     for (const std::string& f : cell_fields_)
       cell_data.push_back(store.add(*cells_->set, f, cell_rows_));
   pvd_->write_frame(frame * file_.frame_time, m, point_data, cell_data);
+  if (last) write_picture();
+}
+
+void OutputSeries::write_picture() {
   std::string png_error;
-  if (last && !png_path_.empty() && !runtime::write_quicklook(m, png_path_, png_error))
+  if (pvd_ && !png_path_.empty() && !runtime::write_quicklook(frame_, png_path_, png_error))
     throw SceneError(file_.path + ": error: writing the quick-look picture: " + png_error);
 }
 

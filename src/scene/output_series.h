@@ -32,6 +32,9 @@ class OutputSeries {
   // Writes frame `frame` (0: the state after init) at time frame * frame_time; the picture
   // too when it is `last`.
   void write_frame(const MeshCache& meshes, int frame, bool last);
+  // The picture of the frame written last, when one is asked for (a run that did not know
+  // which frame would be its last when it wrote it).
+  void write_picture();
   // One row of the stats CSV, when there is one.
   void write_stats(int frame, double ms, const std::vector<double>& stats, double assembly_ms);
   // --final-csv: the last frame's positions as x,y,z lines (under a temporary name, renamed

@@ -7,17 +7,11 @@
 
 #include "runtime/mesh/atomic_file.h"
 #include "runtime/mesh/mesh.h"
+#include "scene/scene_impl.h"
 #include "scene/scene_run.h"
 #include "scene/scene_sets.h"
 
 namespace simit::scene {
-
-struct Scene::Impl {
-  SceneOptions options;
-  std::unique_ptr<SceneFile> file;
-  MeshCache meshes;  // read once, shared by every run
-  interp::Trap* trap = nullptr;
-};
 
 Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Scene::~Scene() = default;
@@ -56,6 +50,10 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
 
 const std::string& Scene::program_path() const { return impl_->file->program_path; }
 
+int Scene::frames() const {
+  return impl_->options.frames >= 0 ? impl_->options.frames : impl_->file->frames;
+}
+
 std::unique_ptr<Scene> SceneAccess::open(const SceneOptions& options, interp::Trap* trap,
                                          std::ostream& err) {
   std::unique_ptr<Scene> scene = Scene::open(options, err);
@@ -73,13 +71,10 @@ const frontend::ast::Program& SceneAccess::program(const Scene& scene) {
 
 int Scene::run(std::ostream& out, std::ostream& err, int frames) {
   const SceneOptions& o = impl_->options;
-  const int count = frames >= 0 ? frames : o.frames >= 0 ? o.frames : impl_->file->frames;
+  const int count = frames >= 0 ? frames : this->frames();
   std::unique_ptr<SceneRun> run;  // outlives the try: --jit-stats prints after the error
   try {
-    // The step debugger takes and shows element indices (breakpoints, watches, frames): its
-    // runs keep each mesh's own order, so that they are the mesh's numbers.
-    const Reorder reorder = impl_->trap ? Reorder::Off : impl_->file->reorder;
-    run = std::make_unique<SceneRun>(*impl_->file, o, impl_->meshes, reorder, impl_->trap);
+    run = std::make_unique<SceneRun>(*impl_->file, o, impl_->meshes, impl_->reorder(), impl_->trap);
     run->build();
     run->run(count, out);
   } catch (const SceneError& e) {

@@ -49,9 +49,18 @@ void SceneRun::bind(api::Engine& engine) const {
 // Runs the procedure `name`; a run-time error becomes a RunFailure with its full message.
 std::vector<interp::Value> SceneRun::call(api::Engine& engine, const std::string& name) {
   try {
+    // SceneOptions::stop_on_interrupt: Ctrl-C stops this call (the host goes on after it).
+    std::optional<api::StopOnSigint> stop_on_sigint;
+    if (options_.stop_on_interrupt && !trap_ && !options_.jit_stats) {
+      own_trap_.take_interrupt();  // one that came between two calls
+      stop_on_sigint.emplace(own_trap_);
+    }
     return engine.call(*file_.program->find_func(name), {});
+  } catch (const interp::Interrupted& e) {
+    own_trap_.take_interrupt();
+    throw RunFailure(e.render(), e.line(), true);
   } catch (const interp::RuntimeError& e) {
-    throw RunFailure(e.render());
+    throw RunFailure(e.render(), e.line());
   } catch (const runtime::Fault& e) {
     throw RunFailure(std::string("runtime error: ") + e.what());
   }
@@ -152,34 +161,71 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.check_finite = options_.check_finite;
   eo.out = &out;
   eo.trap = trap_;
+  if (!trap_ && (options_.jit_stats || options_.stop_on_interrupt)) eo.trap = &own_trap_;
   eo.executor =
       options_.executor;  // resolved with the scene file's keys and checked by Scene::open
   eo.dump = &out;
   return eo;
 }
 
-void SceneRun::run(int frames, std::ostream& out) {
+void SceneRun::prepare(std::ostream& out) {
   if (!options_.quiet) output_.configure(sets_);
   if (!file_.init_name.empty()) check_needs("init", file_.init_name);
   check_needs("step", file_.step_name);
-  api::EngineOptions eo = engine_options(out);
+  engine_ = std::make_unique<api::Engine>(file_.program, engine_options(out));
+  bind(*engine_);
+  output_.open(file_.stat_names);
+}
+
+void SceneRun::initialise(bool last) {
+  if (!file_.init_name.empty()) call(*engine_, file_.init_name);
+  check_finite_state(0, {});
+  output_.write_frame(meshes_, 0, last);
+  last_written_ = 0;
+}
+
+FrameResult SceneRun::frame(int frame, bool last) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  engine_->reset_stats();
+  FrameResult r;
+  r.results = call(*engine_, file_.step_name);
+  r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  r.assembly_ms = std::min(r.ms, 1e3 * engine_->stats().assembly_seconds);
+  r.stats = step_stats(r.results);
+  check_finite_state(frame, r.results);
+  if (output_.every_frame(frame) || last) {
+    output_.write_frame(meshes_, frame, last);
+    last_written_ = frame;
+  }
+  output_.write_stats(frame, r.ms, r.stats, r.assembly_ms);
+  return r;
+}
+
+void SceneRun::finish(int last_frame) {
+  // A run that stops where it likes: its last frame joins the series unless it is there.
+  if (last_written_ != last_frame)
+    output_.write_frame(meshes_, last_frame, true);
+  else
+    output_.write_picture();
+  last_written_ = last_frame;
+  output_.write_final_csv();
+}
+
+const ast::FuncDecl& SceneRun::step_function() const {
+  return *file_.program->find_func(file_.step_name);
+}
+
+void SceneRun::run(int frames, std::ostream& out) {
   // --jit-stats: Ctrl-C stops the run with an error instead of ending the process, so that
   // the stats still print (the debugger's trap stops it its own way).
   std::optional<api::StopOnSigint> stop_on_sigint;
-  if (options_.jit_stats && !trap_) {
-    eo.trap = &own_trap_;
-    stop_on_sigint.emplace(own_trap_);
-  }
-  engine_ = std::make_unique<api::Engine>(file_.program, eo);
-  api::Engine& engine = *engine_;
-  bind(engine);
-  output_.open(file_.stat_names);
+  if (options_.jit_stats && !trap_) stop_on_sigint.emplace(own_trap_);
+  prepare(out);
   print_sizes(out, frames);
   // Everything is checked: run.
-  if (!file_.init_name.empty()) call(engine, file_.init_name);
-  check_finite_state(0, {});
-  output_.write_frame(meshes_, 0, frames == 0);
-  const double total_ms = run_frames(engine, frames, out);
+  initialise(frames == 0);
+  const double total_ms = run_frames(frames, out);
   if (options_.progress_line && frames > 0) out << '\n';
   print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
   print_jit_stats(out);
@@ -193,26 +239,17 @@ void SceneRun::print_jit_stats(std::ostream& out) {
 }
 
 // Frames 1 .. frames: step, the output, the progress. Returns the frames' total ms.
-double SceneRun::run_frames(api::Engine& engine, int frames, std::ostream& out) {
+double SceneRun::run_frames(int frames, std::ostream& out) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   double total_ms = 0.0;
-  for (int frame = 1; frame <= frames; ++frame) {
-    const auto t0 = Clock::now();
-    engine.reset_stats();
-    const std::vector<interp::Value> results = call(engine, file_.step_name);
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    const double assembly_ms = std::min(ms, 1e3 * engine.stats().assembly_seconds);
-    total_ms += ms;
-    const std::vector<double> stats = step_stats(results);
-    check_finite_state(frame, results);
-    if (output_.every_frame(frame) || frame == frames)
-      output_.write_frame(meshes_, frame, frame == frames);
-    output_.write_stats(frame, ms, stats, assembly_ms);
+  for (int n = 1; n <= frames; ++n) {
+    const FrameResult r = frame(n, n == frames);
+    total_ms += r.ms;
     if (options_.quiet) continue;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     print_progress(out,
-                   FrameReport{frame, frames, ms, total_ms, elapsed, &file_.stat_names, &stats},
+                   FrameReport{n, frames, r.ms, total_ms, elapsed, &file_.stat_names, &r.stats},
                    options_.progress_line);
   }
   return total_ms;

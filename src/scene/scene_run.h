@@ -21,9 +21,19 @@
 namespace simit::scene {
 
 // The program stopped with a run-time error; the message is complete (file:line:col and the
-// active calls).
+// active calls). `line`: the program's line (0 when none); `interrupted`: Ctrl-C stopped it.
 struct RunFailure : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  explicit RunFailure(const std::string& message, int line = 0, bool interrupted = false)
+      : std::runtime_error(message), line(line), interrupted(interrupted) {}
+  int line;
+  bool interrupted;
+};
+
+// What one frame gave: the step's results, its time and the results the scene's stats name.
+struct FrameResult {
+  std::vector<interp::Value> results;
+  double ms = 0.0, assembly_ms = 0.0;
+  std::vector<double> stats;
 };
 
 class SceneRun {
@@ -44,6 +54,15 @@ class SceneRun {
   // Checks the output and what init and step need, opens the output, runs `frames` frames
   // and prints the progress to `out`. Throws SceneError, RunFailure, runtime::MeshError.
   void run(int frames, std::ostream& out);
+
+  // The same run a frame at a time (scene::Stepper), after build(): prepare() checks and
+  // binds (print goes to `out`), initialise() runs init and writes frame 0, frame() runs and
+  // writes one frame, finish() writes what a run writes after its last frame. Same errors.
+  void prepare(std::ostream& out);
+  void initialise(bool last);
+  FrameResult frame(int frame, bool last);
+  void finish(int last_frame);
+  const frontend::ast::FuncDecl& step_function() const;
   // --jit-stats: what the JIT made of the run, once; also after run() threw (a run-time
   // error, a NaN stop, Ctrl-C), when it is needed most. Nothing without the option or before
   // the engine exists.
@@ -55,7 +74,7 @@ class SceneRun {
  private:
   void check_needs(const std::string& key, const std::string& name) const;
   api::EngineOptions engine_options(std::ostream& out) const;
-  double run_frames(api::Engine& engine, int frames, std::ostream& out);
+  double run_frames(int frames, std::ostream& out);
   void bind(api::Engine& engine) const;
   std::vector<interp::Value> call(api::Engine& engine, const std::string& name);
   std::vector<double> step_stats(const std::vector<interp::Value>& results) const;
@@ -71,10 +90,11 @@ class SceneRun {
   std::map<std::string, SceneTensor> tensors_;
   OutputSeries output_;
   // --jit-stats without a debugger's trap: Ctrl-C stops the run through this one.
-  interp::Trap own_trap_;
+  mutable interp::Trap own_trap_;
   // Declared after the sets and tensors it is bound to: destroyed before them.
   std::unique_ptr<api::Engine> engine_;
   bool jit_stats_printed_ = false;
+  int last_written_ = -1;  // the last frame written to the series
 };
 
 }  // namespace simit::scene
