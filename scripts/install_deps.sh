@@ -4,6 +4,7 @@
 # also LLVM 19, which the JIT needs (a build configured with -DSIMIT_WITH_LLVM=ON; setup.sh and
 # test.sh pass it) and zstd, which LLVM's static libraries link; with --bench also matplotlib,
 # which bench/accuracy.py draws its plots with (Debian's python3-matplotlib, for /usr/bin/python3).
+# The Python module (python/) builds with pybind11 for Debian's /usr/bin/python3 and needs numpy.
 set -euo pipefail
 
 packages=(
@@ -11,10 +12,11 @@ packages=(
   libeigen3-dev libsuitesparse-dev libreadline-dev
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
   libpng-dev libtinyobjloader-dev clang libclang-rt-14-dev tmux python3
-  clang-format
+  clang-format pybind11-dev python3-dev python3-numpy
 )
-# Test-only: VTK's Python reader, which the scene tests open the .vtu frames with.
-test_packages=(python3-vtk9)
+# Test-only: VTK's Python reader, which the scene tests open the .vtu frames with; pytest for
+# the Python module's tests, scipy and matplotlib for the ones of its matrices and example.
+test_packages=(python3-vtk9 python3-pytest python3-scipy python3-matplotlib)
 # Benchmark-only: the plots of bench/accuracy.py.
 bench_packages=(python3-matplotlib)
 for arg in "$@"; do
