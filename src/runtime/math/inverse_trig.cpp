@@ -84,9 +84,9 @@ DD sqrt_one_minus_square(double ax) {
 
 int biased_exponent(double x) { return static_cast<int>((bits_of(x) & kAbsMask) >> 52); }
 
-}  // namespace
+// ---- The accurate path: the double-double evaluation above, about 2^-67 ----
 
-double atan2(double y, double x) {
+[[gnu::noinline]] double atan2_accurate(double y, double x) {
   if (is_nan(x) || is_nan(y)) return x + y;
   const bool left = sign_of(x);  // -0 counts as left of the axis, as Annex F says
   double ay = abs_of(y), ax = abs_of(x);
@@ -126,7 +126,7 @@ double atan2(double y, double x) {
   return with_sign(a.hi + a.lo, sign_of(y));
 }
 
-double asin(double x) {
+[[gnu::noinline]] double asin_accurate(double x) {
   if (is_nan(x)) return x + x;
   const double ax = abs_of(x);
   if (ax > 1.0) return nan_of(x);
@@ -135,13 +135,174 @@ double asin(double x) {
   return with_sign(a.hi + a.lo, sign_of(x));
 }
 
-double acos(double x) {
+[[gnu::noinline]] double acos_accurate(double x) {
   if (is_nan(x)) return x + x;
   const double ax = abs_of(x);
   if (ax > 1.0) return nan_of(x);
   DD a = atan_ratio(sqrt_one_minus_square(ax), {ax, 0.0});
   if (sign_of(x)) a = minus(kPi, a);
   return a.hi + a.lo;
+}
+
+// ---- The fast path (Ziv's strategy): the same reduction in plain doubles, an error bound,
+// and a rounding test; the few results it cannot round go to the accurate path above ----
+
+// x with the low kBits bits of its significand cleared: for a normal x, x - truncated(x)
+// is exact and has at most kBits significant bits, and |truncated(x)| <= |x|.
+template <int kBits>
+double truncated(double x) {
+  return from_bits(bits_of(x) & ~((uint64_t{1} << kBits) - 1));
+}
+
+// The result is K + s atan(n/d) with n <= d: octant bit 0 says that n/d is the reciprocal
+// of the ratio asked for (pi/2 - atan), bit 1 that the angle is pi minus that.
+struct Octant {
+  double k_hi, k_lo, s;
+};
+constexpr Octant kOctants[4] = {{0.0, 0.0, 1.0},
+                                {tb::kPio2Hi, tb::kPio2Lo, -1.0},
+                                {tb::kPiHi, tb::kPiLo, -1.0},
+                                {tb::kPio2Hi, tb::kPio2Lo, 1.0}};
+
+// The fast path's error bound relative to its result. Its error is below 2^-64.2: the
+// polynomial's, from v rounded to 5 ulp and the Horner steps (20 ulp of v^3/3, at most
+// 2^-64.3 |v|, with |v| <= 2^-7 and |v| <= 1.0001 atan(n/d)); the rest (v to about 2^-76, the
+// table, the sums of the low parts) stays below 2^-70.
+constexpr double kFastError = 0x1p-62;
+
+// K + s atan((n + n_lo)/(d + d_lo)) (kOctants[octant]) correctly rounded, into out, or
+// false when the rounding test cannot tell. Needs 0 <= n <= d with n/d >= 2^-62,
+// 2^-900 <= d < 2^901, |n_lo| <= 2^-52 n and |d_lo| <= 2^-52 d (zero unless kWithLo), and
+// q, n/d to within 8 ulp.
+template <bool kWithLo>
+[[gnu::always_inline]] inline bool atan_fast(double q, double n, double d, double n_lo, double d_lo,
+                                             int octant, double& out) {
+  // j = round(64 q (1 - 2^-40)) (the low bits of the shifted sum) and c = j/64: then
+  // |n/d - c| <= 1/128 + 2^-40, and j >= 1 only where n/d > 1/128, so c d < 2n.
+  constexpr double kShift = 0x1.8p52;
+  const double shifted = q * (64.0 - 0x1p-34) + kShift;
+  const int j = static_cast<int>(bits_of(shifted) & 127);
+  const double c = (shifted - kShift) * 0x1p-6;
+  // v = (n - c d)/(d + c n). With the last 7 bits of d and n cleared (dh, nh), c dh and
+  // c nh are exact (c has 7 bits), and so are c (d - dh) and c (n - nh), products of numbers
+  // of 7 bits; n - c dh cancels exactly (0 <= c dh < 2n).
+  const double dh = truncated<7>(d), nh = truncated<7>(n);
+  DD num;
+  two_sum(n - c * dh, -(c * (d - dh)), num.hi, num.lo);
+  double den, den_lo;
+  fast_two_sum(d, c * nh, den, den_lo);  // d >= c nh
+  den_lo += c * (n - nh);
+  // v = vh + vl: vh is v to 27 bits and denh is den to 26, so vh denh is exact and
+  // num - vh den, at most 2^-25 num, comes out within a few of its ulps; over den it is vl.
+  // The parts that do not wait for vh are summed first: the low parts of num (with the
+  // inputs' own, n_lo - c d_lo) and of den (d_lo + c n_lo).
+  const double vd = num.hi / den;  // v within 4 ulp (the inputs' low parts left out)
+  const double r = 1.0 / den;
+  const double denh = truncated<27>(den);
+  double den_rest = (den - denh) + den_lo, num_rest = num.lo;
+  if constexpr (kWithLo) {
+    den_rest += d_lo + c * n_lo;
+    num_rest += n_lo - c * d_lo;
+  }
+  const double vh = truncated<26>(vd);
+  const double rest = (num.hi - vh * denh) + (num_rest - vh * den_rest);
+  // atan v - v = v^3 (-1/3 + v^2/5 - v^4/7 + v^6/9), below 2^-22.6 |v|; the next term is
+  // below 2^-80 |v|.
+  const double v2 = vd * vd;
+  const double* a = tb::kAtanPoly;
+  const double tail = vd * v2 * (a[0] + v2 * (a[1] + v2 * (a[2] + v2 * a[3])));
+  // K + s (atan c + vh + vl + tail) with vl = rest / den. K + s atan c = k0 + e0 exactly
+  // (K is 0 or above pi/2 >= 2 atan c), before v is known; k0 + s vh is exact too (k0 is 0
+  // or above 2^-6 > |vh|). The low parts gather apart from vl, which comes last, and so does
+  // the error bound.
+  const Octant& o = kOctants[octant];
+  double k0, e0, hi, e1;
+  fast_two_sum(o.k_hi, o.s * tb::kAtan[2 * j], k0, e0);
+  fast_two_sum(k0, o.s * vh, hi, e1);
+  const double lo = ((o.k_lo + e0) + o.s * (tail + tb::kAtan[2 * j + 1])) + e1;
+  const double vl = rest * (o.s * r);
+  // The true value lies within err of hi + lo + vl (|lo + vl| < 2^-20 hi): if both ends
+  // round alike, so does it (the two roundings of each end move it by under 2^-72 hi).
+  const double err = hi * kFastError;
+  const double result = hi + ((lo + err) + vl);
+  if (result != hi + ((lo - err) + vl)) return false;
+  out = result;
+  return true;
+}
+
+// a where c holds, else b, by bits: the selections of the fast paths of asin and acos depend
+// on the argument, and as branches they are mispredicted for most argument sequences.
+inline double pick(bool c, double a, double b) {
+  const uint64_t m = uint64_t{0} - static_cast<uint64_t>(c);
+  return from_bits((bits_of(a) & m) | (bits_of(b) & ~m));
+}
+
+// For 2^-30 <= ax < 1: s + s_lo = sqrt(1 - ax^2) to about 2^-100, and q = min(ax, s) /
+// max(ax, s) to a few ulp. 1 - ax^2 is 1 - u^2 with u = ax, or 2u - u^2 with u = 1 - ax
+// (exact) from 1/2 on, u^2 exact (Dekker's product) and the difference exact; then one
+// Newton step, with 1/s as s/(1 - ax^2). The divisions start early, beside the square root.
+[[gnu::always_inline]] inline void sqrt_one_minus_square_fast(double ax, double& s, double& s_lo,
+                                                              double& q) {
+  const double inv_ax = 1.0 / ax;
+  const bool near_one = ax >= 0.5;
+  const double u = pick(near_one, 1.0 - ax, ax);
+  const double base = pick(near_one, 2.0 * u, 1.0);
+  double p, pe, w, we;
+  two_prod(u, u, p, pe);
+  fast_two_sum(base, -p, w, we);  // base >= u^2
+  s = std::sqrt(w);
+  const double inv_w = 1.0 / w;
+  double sq, sqe;
+  two_prod(s, s, sq, sqe);
+  const double inv_s = s * inv_w;
+  s_lo = (((w - sq) - sqe) + (we - pe)) * (0.5 * inv_s);
+  q = pick(s <= ax, s * inv_ax, ax * inv_s);
+}
+
+}  // namespace
+
+double atan2(double y, double x) {
+  // Both finite, between 2^-900 and 2^901 in magnitude, within a factor 2^60 of each other:
+  // the fast path; everything else (and what it cannot round) on the accurate path.
+  const int ey = biased_exponent(y), ex = biased_exponent(x);
+  if (static_cast<unsigned>(ey - 123) <= 1800u && static_cast<unsigned>(ex - 123) <= 1800u &&
+      static_cast<unsigned>(ey - ex + 60) <= 120u) {
+    const double ay = abs_of(y), ax = abs_of(x);
+    const double n = ay < ax ? ay : ax, d = ay < ax ? ax : ay;
+    const int octant = static_cast<int>(ay > ax) | (static_cast<int>(sign_of(x)) << 1);
+    double out;
+    if (atan_fast<false>(n / d, n, d, 0.0, 0.0, octant, out)) return with_sign(out, sign_of(y));
+  }
+  return atan2_accurate(y, x);
+}
+
+double asin(double x) {
+  const double ax = abs_of(x);
+  if (ax >= 0x1p-26 && ax < 1.0) {  // asin x = atan(ax / sqrt(1 - x^2)), signed
+    double s, s_lo, q, out;
+    sqrt_one_minus_square_fast(ax, s, s_lo, q);
+    const bool swap = ax > s;
+    if (atan_fast<true>(q, pick(swap, s, ax), pick(swap, ax, s), pick(swap, s_lo, 0.0),
+                        pick(swap, 0.0, s_lo), static_cast<int>(swap), out)) {
+      return with_sign(out, sign_of(x));
+    }
+  }
+  return asin_accurate(x);
+}
+
+double acos(double x) {
+  const double ax = abs_of(x);
+  if (ax >= 0x1p-30 && ax < 1.0) {  // acos x = atan(sqrt(1 - x^2) / ax), or pi minus it
+    double s, s_lo, q, out;
+    sqrt_one_minus_square_fast(ax, s, s_lo, q);
+    const bool swap = s > ax;
+    const int octant = static_cast<int>(swap) | (static_cast<int>(sign_of(x)) << 1);
+    if (atan_fast<true>(q, pick(swap, ax, s), pick(swap, s, ax), pick(swap, 0.0, s_lo),
+                        pick(swap, s_lo, 0.0), octant, out)) {
+      return out;
+    }
+  }
+  return acos_accurate(x);
 }
 
 }  // namespace simit::math
