@@ -31,9 +31,55 @@
 
 namespace simit::interp {
 class Interpreter;
-}
+class Value;
+}  // namespace simit::interp
 
 namespace simit::repl {
+
+// --- The structured interface: what a front end other than gdb's command loop uses ----------
+
+// Why a run stopped.
+struct StopInfo {
+  enum class Reason { Breakpoint, FunctionBreakpoint, Step, Pause, Watch, Nan, Entry };
+  Reason reason = Reason::Step;
+  std::string text;    // what the terminal prints for it ("Breakpoint 1, ", the watch values)
+  int breakpoint = 0;  // the breakpoint, watchpoint or NaN trap's number, 0 for none
+};
+
+// A breakpoint as a front end asks for it.
+struct BreakpointRequest {
+  enum class Kind { Line, Function, Watch, Nan };
+  Kind kind = Kind::Line;
+  int line = 0;               // Line: a line of the program's (first) file
+  std::string function;       // Function
+  std::string watch;          // Watch: SET.FIELD[i]
+  std::string condition;      // the debugger's expression language; empty for none
+  std::string hit_condition;  // "N" or "== N" (the Nth hit), ">= N", "> N", "% N" (every Nth)
+};
+
+struct BreakpointResult {
+  bool verified = false;
+  int number = 0;       // when verified
+  int line = 0;         // the file line it stops at (Line, Function)
+  std::string message;  // why not, when not verified
+};
+
+// One frame of a stop, innermost first.
+struct FrameInfo {
+  std::string function;
+  std::string element;  // a mapped call's "element 17 of tets", else empty
+  std::string map;      // "map tet_force to tets, element 17, endpoints verts[4 3 7 16] (...)"
+  std::string file;     // as the program was loaded
+  int line = 0;         // of the file
+  int column = 0;
+};
+
+// A variable visible at a stop: its name, value (null while it has none) and declared type.
+struct VariableInfo {
+  std::string name;
+  const interp::Value* value = nullptr;
+  const frontend::Type* type = nullptr;
+};
 
 class Debugger : public interp::StatementHook {
  public:
@@ -73,6 +119,44 @@ class Debugger : public interp::StatementHook {
     trap_.install(this);
   }
   bool quit_requested() const { return quit_; }
+
+  // --- The structured interface -------------------------------------------------------------
+  // A front end that takes the stops itself: stopped() is called on the running thread at
+  // each stop instead of the command loop; it inspects through the calls below and returns
+  // after resume() or kill() (returning without either continues). service() is called at
+  // the next statement after request_service(), for changes that must not race the run.
+  class StopHandler {
+   public:
+    virtual ~StopHandler() = default;
+    virtual void stopped(const StopInfo& stop) = 0;
+    virtual void service() = 0;
+  };
+  void set_stop_handler(StopHandler* handler) { handler_ = handler; }
+  // Async-signal-safe, as request_pause().
+  void request_service() {
+    service_requested_.store(true, std::memory_order_relaxed);
+    trap_.install(this);
+  }
+  // Stop at the run's first statement (reason Entry); before begin_run().
+  void stop_at_entry() { entry_pending_ = true; }
+
+  BreakpointResult add_breakpoint(const BreakpointRequest& request);
+  void delete_breakpoint(int number);
+  bool stopped() const { return stopped_; }
+  // While stopped: the frames, innermost first; the variables of frame `level`; the globals
+  // (externs and constants); an expression's value text in frame `level`.
+  std::vector<FrameInfo> frames() const;
+  std::vector<VariableInfo> locals(int level) const;
+  std::vector<VariableInfo> globals() const;
+  std::optional<std::string> evaluate(const std::string& text, int level, std::string& why) const;
+  // Evaluates to the value itself (for a front end that shows its parts).
+  std::optional<interp::Value> evaluate_value(const std::string& text, int level,
+                                              std::string& why) const;
+  enum class Resume { Continue, StepIn, StepOver, StepOut };
+  // While stopped: how the run goes on once stopped() returns; false with `why` when it
+  // cannot (StepOut from the outermost frame).
+  bool resume(Resume how, int level, std::string& why);
+  void kill() { killed_ = true; }
 
   void before_statement(const frontend::ast::Stmt& stmt, const frontend::ast::FuncDecl& func,
                         int depth, const interp::Interpreter& interpreter) override;
@@ -129,7 +213,10 @@ class Debugger : public interp::StatementHook {
   std::string breakpoint_hit(const Event& e);
   std::string watch_changes(const Event& e);
   std::string nan_written(const Event& e);
-  void stop(const Event& e, const std::string& reason);
+  void stop(const Event& e, const StopInfo& info);
+  void resumed(const Event& e);  // after a stop: what the resumed run needs
+  StopInfo::Reason hit_reason_ = StopInfo::Reason::Breakpoint;  // of breakpoint_hit's stop
+  int hit_number_ = 0;
   void update_hook();
   void print_stop_location(const std::string& reason);
   std::string frame_line(int level, bool element_note) const;
@@ -139,14 +226,15 @@ class Debugger : public interp::StatementHook {
   void show_source_line(int compiled_line) const;
   const frontend::SourceFile* source() const;  // the text stops and listings show
   void show_displays();
-  // Evaluates `text` in frame `level` of the stop; the value's text, or nullopt with `why`.
-  std::optional<std::string> evaluate(const std::string& text, int level, std::string& why) const;
 
   std::ostream& out_;
   std::ostream& err_;
   LineSource lines_;
   interp::Trap trap_;
   std::atomic<bool> pause_requested_{false};
+  std::atomic<bool> service_requested_{false};
+  StopHandler* handler_ = nullptr;
+  bool entry_pending_ = false;
   const frontend::ast::Program* program_ = nullptr;
   LineMap map_;
 

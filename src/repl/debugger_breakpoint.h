@@ -20,6 +20,18 @@ struct Debugger::Breakpoint {
   std::string func_name;   // Function
   std::string condition;   // the text after `if`; empty for none
   int hits = 0;
+  // Stop only on some hits (DAP's hitCondition): hits == n ('='), >= n, > n, every n-th ('%').
+  char hit_op = 0;  // 0: every hit
+  int hit_n = 0;
+  bool hit_allows() const {
+    switch (hit_op) {
+      case '=': return hits == hit_n;
+      case 'g': return hits >= hit_n;
+      case '>': return hits > hit_n;
+      case '%': return hit_n > 0 && hits % hit_n == 0;
+      default: return true;
+    }
+  }
 
   // Resolved against the running program (against the set program outside runs). The
   // pointers are cleared when a run ends (its program may go with it); `resolved_at`

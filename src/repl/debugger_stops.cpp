@@ -43,22 +43,41 @@ void Debugger::before_statement(const ast::Stmt& stmt, const ast::FuncDecl& func
                                 const interp::Interpreter& in) {
   if (&in != attached_) attach(in);
   Event e{&stmt, &func, depth, false, &in};
+  if (service_requested_.exchange(false, std::memory_order_relaxed)) {
+    if (handler_) handler_->service();
+    update_hook();
+  }
   if (pause_requested_.exchange(false, std::memory_order_relaxed)) {
-    stop(e, "Interrupted (Ctrl-C).\n");
+    stop(e, {StopInfo::Reason::Pause, "Interrupted (Ctrl-C).\n", 0});
+    return;
+  }
+  if (entry_pending_) {
+    entry_pending_ = false;
+    stop(e, {StopInfo::Reason::Entry, "", 0});
     return;
   }
   std::string reason = breakpoint_hit(e);
-  if (reason.empty() && !step_done(e)) return;
-  stop(e, reason);
+  if (!reason.empty()) {
+    stop(e, {hit_reason_, reason, hit_number_});
+    return;
+  }
+  if (step_done(e)) stop(e, {StopInfo::Reason::Step, "", 0});
 }
 
 void Debugger::after_statement(const ast::Stmt& stmt, const ast::FuncDecl& func, int depth,
                                const interp::Interpreter& in) {
   if (&in != attached_) attach(in);
   Event e{&stmt, &func, depth, true, &in};
-  std::string reason = watch_changes(e) + nan_written(e);
-  if (reason.empty() && !step_done(e)) return;
-  stop(e, reason);
+  hit_number_ = 0;
+  std::string watch = watch_changes(e);
+  const int watch_number = hit_number_;
+  std::string nan = nan_written(e);
+  if (!watch.empty() || !nan.empty()) {
+    stop(e, {watch.empty() ? StopInfo::Reason::Nan : StopInfo::Reason::Watch, watch + nan,
+             watch.empty() ? hit_number_ : watch_number});
+    return;
+  }
+  if (step_done(e)) stop(e, {StopInfo::Reason::Step, "", 0});
 }
 
 // Whether a step, next or finish ends at this event. Depths are those of the frame that was
@@ -88,6 +107,9 @@ std::string Debugger::breakpoint_hit(const Event& e) {
   auto it = at_stmt_.find(e.stmt);
   if (it == at_stmt_.end()) return "";
   for (Breakpoint* b : it->second) {
+    hit_reason_ = b->kind == Breakpoint::Kind::Function ? StopInfo::Reason::FunctionBreakpoint
+                                                        : StopInfo::Reason::Breakpoint;
+    hit_number_ = b->number;
     if (b->cond) {
       try {
         interp::Value v = e.in->evaluate(*b->cond->expr, 0);
@@ -103,6 +125,7 @@ std::string Debugger::breakpoint_hit(const Event& e) {
       }
     }
     ++b->hits;
+    if (!b->hit_allows()) continue;
     return std::string(b->temporary ? "Temporary breakpoint " : "Breakpoint ") +
            std::to_string(b->number) + ", ";
   }
@@ -118,6 +141,7 @@ std::string Debugger::watch_changes(const Event& e) {
     runtime::Tensor now = b.set->get(b.field, b.index);
     if (same_bits(now, *b.last)) continue;
     ++b.hits;
+    if (!hit_number_) hit_number_ = b.number;
     out += "Watchpoint " + std::to_string(b.number) + ": " + b.set_name + "." + b.field_name + "[" +
            std::to_string(b.index) + "]\nOld value = " + tensor_text(*b.last) +
            "\nNew value = " + tensor_text(now) + "\n";
@@ -160,19 +184,25 @@ std::string Debugger::nan_written(const Event& e) {
     if (all_finite(value)) continue;
     trap->armed = false;
     ++trap->hits;
+    hit_number_ = trap->number;
     return "NaN trap (breakpoint " + std::to_string(trap->number) + "): " + name + " = " +
            value_text(value, nullptr) + "\n";
   }
   return "";
 }
 
-void Debugger::stop(const Event& e, const std::string& reason) {
+void Debugger::stop(const Event& e, const StopInfo& info) {
+  const std::string& reason = info.text;
   stopped_ = true;
   event_ = e;
   selected_ = 0;
   list_next_ = 0;
   mode_ = Mode::Continue;
   repeat_ = 0;
+  if (handler_) {
+    handler_->stopped(info);
+    return resumed(e);
+  }
   print_stop_location(reason);
   // A temporary breakpoint goes once it has stopped the run.
   if (reason.starts_with("Temporary breakpoint ")) {
@@ -190,6 +220,10 @@ void Debugger::stop(const Event& e, const std::string& reason) {
     Action a = execute(*line, run_args);
     if (a == Action::Resume || a == Action::Quit) break;
   }
+  resumed(e);
+}
+
+void Debugger::resumed(const Event& e) {
   stopped_ = false;
   // A Ctrl-C typed at the prompt neither ends nor pauses the resumed run.
   trap_.take_interrupt();
@@ -202,7 +236,9 @@ void Debugger::stop(const Event& e, const std::string& reason) {
 }
 
 void Debugger::update_hook() {
-  bool needed = running_ && mode_ != Mode::Continue;
+  bool needed = running_ && (mode_ != Mode::Continue || entry_pending_ ||
+                             service_requested_.load(std::memory_order_relaxed) ||
+                             pause_requested_.load(std::memory_order_relaxed));
   for (const auto& b : breakpoints_) needed = needed || (running_ && b->armed);
   trap_.install(needed ? this : nullptr);
 }
@@ -292,26 +328,6 @@ void Debugger::show_displays() {
     if (std::optional<std::string> text = evaluate(d.text, selected_, why))
       out_ << d.number << ": " << d.text << " = " << *text << "\n";
   }
-}
-
-std::optional<std::string> Debugger::evaluate(const std::string& text, int level,
-                                              std::string& why) const {
-  const interp::Interpreter& in = *event_.in;
-  interp::FrameView v = in.frame_view(level);
-  try {
-    frontend::DebugExpression e =
-        frontend::check_debug_expression(in.program(), v.func, frame_offset(level), text);
-    if (!e.ok()) {
-      why = e.error;
-      return std::nullopt;
-    }
-    return value_text(in.evaluate(*e.expr, level), e.expr->type.get());
-  } catch (const interp::RuntimeError& err) {
-    why = err.message();
-  } catch (const std::exception& err) {  // an internal failure must not end the paused run
-    why = err.what();
-  }
-  return std::nullopt;
 }
 
 }  // namespace simit::repl
