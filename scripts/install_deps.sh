@@ -16,7 +16,8 @@ packages=(
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with; pytest for
 # the Python module's tests, scipy and matplotlib for the ones of its matrices and example.
-test_packages=(python3-vtk9 python3-pytest python3-scipy python3-matplotlib)
+test_packages=(python3-vtk9 python3-pytest python3-scipy python3-matplotlib nodejs)
+command -v npm >/dev/null || test_packages+=(npm)  # tests/dap; NodeSource's nodejs bundles it
 # Benchmark-only: the plots of bench/accuracy.py.
 bench_packages=(python3-matplotlib)
 for arg in "$@"; do
