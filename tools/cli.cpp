@@ -18,6 +18,9 @@
 #include "simit/debug.h"
 #include "terminal.h"
 #endif
+#ifdef SIMIT_HAVE_DAP
+#include "simit/dap.h"
+#endif
 
 #ifndef SIMIT_VERSION
 #define SIMIT_VERSION "unknown"
@@ -46,6 +49,7 @@ struct Commands {
   std::string repl_file;
   CLI::App* debug = nullptr;
   DebugOptions debug_options;
+  CLI::App* dap = nullptr;
   CheckOptions check_options;
   std::vector<std::string> test_paths;
   TestCommandOptions test_options;  // how `simit test` runs %! tests and graph sections
@@ -287,6 +291,20 @@ void add_debug(CLI::App& app, Commands& c) {
 }
 #endif
 
+#ifdef SIMIT_HAVE_DAP
+void add_dap(CLI::App& app, Commands& c) {
+  c.dap = app.add_subcommand(
+      "dap", "Serve the step debugger over the Debug Adapter Protocol on stdin/stdout (editors)");
+  c.dap->footer(
+      "An editor starts it (editors/vscode: the 'simit' debug type) and sends the launch "
+      "arguments: program (a scene .toml or a .sim file), cwd, function and args (a .sim), "
+      "frames, stopOnEntry, float32. Line, conditional, hit-count and function breakpoints, "
+      "the exception filter 'nan' (break on nan), data breakpoints SET.FIELD[i] (watch), "
+      "stepping, pause, frames with the mapped element, variables and evaluate (the debugger's "
+      "expressions). Exit status 0 when the session ends.\n");
+}
+#endif
+
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -331,7 +349,11 @@ void add_commands(CLI::App& app, Commands& c) {
   add_repl(app, c);
   add_debug(app, c);
   app.footer("With no command, simit starts the REPL.\n");
-#else
+#endif
+#ifdef SIMIT_HAVE_DAP
+  add_dap(app, c);
+#endif
+#ifndef SIMIT_HAVE_REPL
   app.require_subcommand(1);
 #endif
 }
@@ -389,6 +411,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   } catch (const CLI::ParseError& e) {
     return usage_error(app, e.what(), err);
   }
+#ifdef SIMIT_HAVE_DAP
+  if (c.dap->parsed()) return run_dap(0, 1, err);
+#endif
 #ifdef SIMIT_HAVE_REPL
   if (c.debug->parsed()) return run_debug(c.debug_options, std::cin, out, err);
   if (c.repl->parsed()) return repl::run_repl(c.repl_file);
