@@ -4,12 +4,12 @@
 # other target (mesh readers, scenes, literals, debugger commands) for SECONDS/6, at least 10,
 # seeded with tests/fuzz/seeds/TARGET and tests/fuzz/regressions/TARGET.
 # `fuzz.sh SECONDS TARGET...` runs only the targets named (frontend, tetgen, gmsh, obj, scene,
-# literal, debugger), each for SECONDS. Inputs that crash are written to BUILD/fuzz-findings
-# and listed at the end; the script then fails.
+# literal, debugger, dap), each for SECONDS. Inputs that crash are written to
+# BUILD/fuzz-findings and listed at the end; the script then fails.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-all_targets=(frontend tetgen gmsh obj scene literal debugger)
+all_targets=(frontend tetgen gmsh obj scene literal debugger dap)
 seconds="${1:-60}"
 shift || true
 targets=("$@")
