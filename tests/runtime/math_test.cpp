@@ -559,6 +559,31 @@ TEST(MathSpecialValues, InverseTrig) {
                 {1.0, 0x1p-1074, kPio2}});
 }
 
+// Arguments whose exact results lie within 2^-22 ulp of a halfway point between two doubles
+// (found by a search against binary128; the expected values are mpmath's at 300 bits, rounded
+// once). The fast paths of atan2, asin and acos are good to about 2^-66 and cannot round
+// these: their rounding test must pass them on to the double-double path. With an error
+// bound of zero instead, the fast path alone gets 11 of these 14 wrong.
+TEST(MathAccuracy, InverseTrigNearHalfway) {
+  expect_cases("atan2", simit::math::atan2,
+               {{-0x1.c2af397e0adb6p-1, -0x1.53e002c53397cp-1, -0x1.1bc48e54176ddp+1},
+                {-0x1.ab9a1eda7e06cp-1, 0x1.fdc636564fd6cp-1, -0x1.655afa714c556p-1},
+                {-0x1.d2284ab775932p-1, -0x1.aff6c3fac69dp-2, -0x1.009932489d21ep+1},
+                {-0x1.a58080a89bf3cp-2, -0x1.d6b377ecc30a2p-1, -0x1.5c3d4ef1f9bb7p+1},
+                {0x1.255fedcd9e7f2p+13, 0x1.5c3c1ff3a59cfp+0, 0x1.9216364c13951p+0},
+                {0x1.ce666035fd089p-19, 0x1.cf70e4a95086ep+0, 0x1.fed98e9f33942p-20}});
+  expect_cases("asin", simit::math::asin,
+               {{-0x1.d019d0b60a4fp-4, -0x1.d11983559af58p-4},
+                {-0x1.f467c7f307c78p-3, -0x1.f985f496d9359p-3},
+                {0x1.ae948f2499406p-1, 0x1.ff884a26a327cp-1},
+                {0x1.94427061e89dap-1, 0x1.d1f98a8866ca7p-1},
+                {-0x1.ecf17a6d36562p-1, -0x1.4c0f1889b34c3p+0}});
+  expect_cases("acos", simit::math::acos,
+               {{-0x1.7de93185be29cp-2, 0x1.f3f75f5cbfeb6p+0},
+                {-0x1.8b13600a4a68p-3, 0x1.c3d1e2675d37bp+0},
+                {0x1.068702fa81bf4p-1, 0x1.084c358829e87p+0}});
+}
+
 TEST(MathSpecialValues, Cbrt) {
   expect_cases("cbrt", simit::math::cbrt,
                {{0.0, 0.0},
