@@ -113,10 +113,50 @@ void Server::run_program() {
   program_out_->flush();
   running_ = false;
   ran_ = true;
-  if (!killed && !errors.str().empty())
+  if (!killed && !errors.str().empty()) {
     event("output", {{"category", "stderr"}, {"output", errors.str()}});
+    if (!disconnect_) stop_on_error(errors.str());
+  }
   event("exited", {{"exitCode", killed ? 0 : rc}});
   event("terminated");
+}
+
+// A run-time error ends the run where it happened: the client sees it as a stop on an
+// exception, with the message and one frame at the error's line, until it goes on.
+void Server::stop_on_error(const std::string& message) {
+  ErrorStop stop;
+  stop.message = message;
+  while (!stop.message.empty() && stop.message.back() == '\n') stop.message.pop_back();
+  // "FILE:LINE:COL: runtime error: ..." on the first line, the calls after it.
+  const std::string first = stop.message.substr(0, stop.message.find('\n'));
+  if (size_t at = first.find(": runtime error"); at != std::string::npos) {
+    const std::string where = first.substr(0, at);
+    const size_t c2 = where.rfind(':');
+    const size_t c1 =
+        c2 == std::string::npos || c2 == 0 ? std::string::npos : where.rfind(':', c2 - 1);
+    if (c1 != std::string::npos) {
+      stop.line = std::atoi(where.substr(c1 + 1, c2 - c1 - 1).c_str());
+      stop.column = std::atoi(where.substr(c2 + 1).c_str());
+      stop.function = "runtime error";
+      if (size_t in = stop.message.find("\n  in "); in != std::string::npos) {
+        const std::string call = stop.message.substr(in + 6);
+        stop.function = call.substr(0, call.find(' '));
+      }
+    }
+  }
+  error_stop_ = stop;
+  resume_ = false;
+  event("stopped", {{"reason", "exception"},
+                    {"threadId", 1},
+                    {"allThreadsStopped", true},
+                    {"description", first},
+                    {"text", stop.message}});
+  while (!resume_ && !disconnect_) {
+    std::optional<json> request = take(true);
+    if (!request) break;
+    handle(*request);
+  }
+  error_stop_.reset();
 }
 
 }  // namespace simit::dap

@@ -95,12 +95,7 @@ void Server::handle(const json& request) {
     if (command == "setExceptionBreakpoints") return on_set_exception_breakpoints(request);
     if (command == "dataBreakpointInfo") return on_data_breakpoint_info(request);
     if (command == "setDataBreakpoints") return on_set_data_breakpoints(request);
-    if (command == "pause") {
-      // The reader thread asked the debugger to pause already; answer once it was asked.
-      if (!running_) return fail(request, "the program is not running");
-      respond(request);
-      return;
-    }
+    if (error_stop_) return on_error_stop(request);
     const bool stopped = debugger_.stopped();
     const bool needs_stop = command == "stackTrace" || command == "scopes" ||
                             command == "variables" || command == "continue" || command == "next" ||
@@ -222,6 +217,33 @@ void Server::on_set_data_breakpoints(const json& request) {
     requests.push_back(r);
   }
   respond(request, {{"breakpoints", replace_breakpoints(data_breakpoints_, requests)}});
+}
+
+// The requests a client makes at the stop after a run-time error: one frame, no variables.
+void Server::on_error_stop(const json& request) {
+  const std::string command = request.value("command", "");
+  if (command == "stackTrace") {
+    json frame = {{"id", 1},
+                  {"name", error_stop_->function.empty() ? "runtime error" : error_stop_->function},
+                  {"line", error_stop_->line},
+                  {"column", error_stop_->column}};
+    if (error_stop_->line > 0)
+      frame["source"] = {{"name", fs::path(source_path_).filename().string()},
+                         {"path", source_path_}};
+    return respond(request, {{"stackFrames", json::array({frame})}, {"totalFrames", 1}});
+  }
+  if (command == "scopes") return respond(request, {{"scopes", json::array()}});
+  if (command == "exceptionInfo")
+    return respond(request, {{"exceptionId", "runtime error"},
+                             {"description", error_stop_->message},
+                             {"breakMode", "always"}});
+  if (command == "continue" || command == "next" || command == "stepIn" || command == "stepOut") {
+    respond(request, {{"allThreadsContinued", true}});
+    resume_ = true;
+    return;
+  }
+  fail(request, "the run has ended with a run-time error: " +
+                    error_stop_->message.substr(0, error_stop_->message.find('\n')));
 }
 
 void Server::on_stack_trace(const json& request) {

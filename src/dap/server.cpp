@@ -127,16 +127,23 @@ void Server::read_loop() {
             {"body", {{"threads", json::array({{{"id", 1}, {"name", "simit"}}})}}}});
       continue;
     }
+    if (command == "pause") {  // answered before the stop it causes is reported
+      const bool running = running_.load();
+      if (running) debugger_.request_pause();
+      send({{"type", "response"},
+            {"request_seq", message.value("seq", 0)},
+            {"success", running},
+            {"command", command},
+            {"message", running ? "" : "the program is not running"}});
+      continue;
+    }
     {
       std::lock_guard<std::mutex> lock(queue_mutex_);
       queue_.push_back(std::move(message));
     }
     queue_cv_.notify_all();
-    // A running program takes requests at its next statement; pause stops it there.
-    if (command == "pause")
-      debugger_.request_pause();
-    else
-      debugger_.request_service();
+    // A running program takes requests at its next statement.
+    debugger_.request_service();
   }
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -194,7 +201,7 @@ void Server::stopped(const repl::StopInfo& stop) {
     return;
   }
   json body = {{"reason", reason}, {"threadId", 1}, {"allThreadsStopped", true}};
-  if (!stop.text.empty()) {
+  if (!stop.text.empty() && stop.reason != Reason::Pause) {
     std::string text = stop.text;
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ' || text.back() == ','))
       text.pop_back();

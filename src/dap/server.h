@@ -6,6 +6,7 @@
 // one at a time.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <memory>
@@ -61,6 +62,7 @@ class Server : public repl::Debugger::StopHandler {
   void on_data_breakpoint_info(const json& request);
   void on_set_data_breakpoints(const json& request);
   void on_stack_trace(const json& request);
+  void on_error_stop(const json& request);
   void on_scopes(const json& request);
   void on_variables(const json& request);
   void on_evaluate(const json& request);
@@ -75,6 +77,13 @@ class Server : public repl::Debugger::StopHandler {
   // The run (launch.cpp).
   bool open_program(const json& args, std::string& why);
   void run_program();
+  void stop_on_error(const std::string& message);
+  // After a run-time error, until the client goes on: where it happened.
+  struct ErrorStop {
+    std::string message, function;
+    int line = 0, column = 0;
+  };
+  std::optional<ErrorStop> error_stop_;
 
   int in_fd_, out_fd_;
   std::ostream& log_;
@@ -93,14 +102,14 @@ class Server : public repl::Debugger::StopHandler {
 
   // The session's state.
   bool initialised_ = false, launched_ = false, configured_ = false;
-  bool running_ = false;      // between configurationDone and the run's end
-  bool resume_ = false;       // at a stop: a resume request came
-  bool disconnect_ = false;   // the client asked to end the session
-  bool end_run_ = false;      // the run is to end at its next statement
-  bool ran_ = false;          // the run has ended
-  std::string program_file_;  // launch's `program`, absolute
-  std::string source_path_;   // the .sim file breakpoints are set in, absolute
-  std::string function_;      // a .sim: the function to call, with its arguments
+  std::atomic<bool> running_{false};  // the run is on (read by the reader thread too)
+  bool resume_ = false;               // at a stop: a resume request came
+  bool disconnect_ = false;           // the client asked to end the session
+  bool end_run_ = false;              // the run is to end at its next statement
+  bool ran_ = false;                  // the run has ended
+  std::string program_file_;          // launch's `program`, absolute
+  std::string source_path_;           // the .sim file breakpoints are set in, absolute
+  std::string function_;              // a .sim: the function to call, with its arguments
   std::vector<std::string> args_;
   int frames_ = -1;
   bool float32_ = false;
