@@ -249,7 +249,8 @@ export function terminal(target, commands, {cwd = debugger_dir, flags = []} = {}
     encoding: 'utf8',
     timeout: 120000,
   });
-  assert.equal(run.status, 0, `simit debug ${target} failed: ${run.stdout}${run.stderr}`);
+  assert.equal(
+      run.status, 0, `simit debug ${target} failed: ${run.error ?? ''}${run.stdout}${run.stderr}`);
   const blocks = [];  // {command, lines}
   for (const line of run.stdout.split('\n')) {
     if (line.startsWith('(sdb) ')) {
