@@ -164,16 +164,17 @@ constexpr Octant kOctants[4] = {{0.0, 0.0, 1.0},
                                 {tb::kPiHi, tb::kPiLo, -1.0},
                                 {tb::kPio2Hi, tb::kPio2Lo, 1.0}};
 
-// The fast path's error bound relative to its result. Its error is below 2^-64.2: the
-// polynomial's, from v rounded to 5 ulp and the Horner steps (20 ulp of v^3/3, at most
-// 2^-64.3 |v|, with |v| <= 2^-7 and |v| <= 1.0001 atan(n/d)); the rest (v to about 2^-76, the
-// table, the sums of the low parts) stays below 2^-70.
+// The fast path's error bound relative to its result. Its error stays below 2^-63.7 of the
+// result: mostly the polynomial's, at most 9.2 ulp of |v|^3 <= 2^-14 |v| (7.5 ulp from v
+// rounded, the rest from the rounding of the polynomial), with |v| <= 1.0001 atan(n/d); v
+// itself comes out within 2^-75 and the table within 2^-106, and each of the four roundings
+// of the low parts costs at most 2^-73.
 constexpr double kFastError = 0x1p-62;
 
 // K + s atan((n + n_lo)/(d + d_lo)) (kOctants[octant]) correctly rounded, into out, or
 // false when the rounding test cannot tell. Needs 0 <= n <= d with n/d >= 2^-62,
-// 2^-900 <= d < 2^901, |n_lo| <= 2^-52 n and |d_lo| <= 2^-52 d (zero unless kWithLo), and
-// q, n/d to within 8 ulp.
+// 2^-900 <= d < 2^901, |n_lo| <= 2.5 2^-53 n and |d_lo| <= 2.5 2^-53 d (zero unless
+// kWithLo), and q, n/d to within 8 ulp.
 template <bool kWithLo>
 [[gnu::always_inline]] inline bool atan_fast(double q, double n, double d, double n_lo, double d_lo,
                                              int octant, double& out) {
@@ -183,49 +184,49 @@ template <bool kWithLo>
   const double shifted = q * (64.0 - 0x1p-34) + kShift;
   const int j = static_cast<int>(bits_of(shifted) & 127);
   const double c = (shifted - kShift) * 0x1p-6;
-  // v = (n - c d)/(d + c n). With the last 7 bits of d and n cleared (dh, nh), c dh and
-  // c nh are exact (c has 7 bits), and so are c (d - dh) and c (n - nh), products of numbers
-  // of 7 bits; n - c dh cancels exactly (0 <= c dh < 2n).
+  // v = (n - c d)/(d + c n), |v| <= 2^-7 (1 + 2^-33). With the last 7 bits of d and n cleared
+  // (dh, nh), c dh and c nh are exact (c has 7 bits), and so are c (d - dh) and c (n - nh),
+  // products of numbers of 7 bits; n - c dh cancels exactly (0 <= c dh < 2n). So num and
+  // den are unevaluated sums of exact parts and parts below 2^-44 of them.
   const double dh = truncated<7>(d), nh = truncated<7>(n);
+  double num_small = -(c * (d - dh)), den_small = c * (n - nh);
+  if constexpr (kWithLo) {
+    num_small += n_lo - c * d_lo;
+    den_small += d_lo + c * n_lo;
+  }
   DD num;
-  two_sum(n - c * dh, -(c * (d - dh)), num.hi, num.lo);
+  two_sum(n - c * dh, num_small, num.hi, num.lo);
   double den, den_lo;
   fast_two_sum(d, c * nh, den, den_lo);  // d >= c nh
-  den_lo += c * (n - nh);
-  // v = vh + vl: vh is v to 27 bits and denh is den to 26, so vh denh is exact and
-  // num - vh den, at most 2^-25 num, comes out within a few of its ulps; over den it is vl.
-  // The parts that do not wait for vh are summed first: the low parts of num (with the
-  // inputs' own, n_lo - c d_lo) and of den (d_lo + c n_lo).
-  const double vd = num.hi / den;  // v within 4 ulp (the inputs' low parts left out)
-  const double r = 1.0 / den;
-  const double denh = truncated<27>(den);
-  double den_rest = (den - denh) + den_lo, num_rest = num.lo;
-  if constexpr (kWithLo) {
-    den_rest += d_lo + c * n_lo;
-    num_rest += n_lo - c * d_lo;
-  }
+  den_lo += den_small;
+  // v = vh + vl: vd is v within 7.5 ulp (den rounded apart, without waiting for the exact
+  // sum), vh is vd to 27 bits and denh is den to 26, so vh denh is exact and num - vh den,
+  // at most 2^-25 num, comes out within a few of its ulps; over den it is vl.
+  const double r = 1.0 / (d + c * n);
+  const double vd = num.hi * r;
   const double vh = truncated<26>(vd);
-  const double rest = (num.hi - vh * denh) + (num_rest - vh * den_rest);
+  const double denh = truncated<27>(den);
+  const double rest = (num.hi - vh * denh) + (num.lo - vh * ((den - denh) + den_lo));
   // atan v - v = v^3 (-1/3 + v^2/5 - v^4/7 + v^6/9), below 2^-22.6 |v|; the next term is
-  // below 2^-80 |v|.
-  const double v2 = vd * vd;
-  const double* a = tb::kAtanPoly;
-  const double tail = vd * v2 * (a[0] + v2 * (a[1] + v2 * (a[2] + v2 * a[3])));
-  // K + s (atan c + vh + vl + tail) with vl = rest / den. K + s atan c = k0 + e0 exactly
-  // (K is 0 or above pi/2 >= 2 atan c), before v is known; k0 + s vh is exact too (k0 is 0
-  // or above 2^-6 > |vh|). The low parts gather apart from vl, which comes last, and so does
-  // the error bound.
+  // below 2^-73 |v|. Estrin's scheme, for a shorter chain of dependent operations.
   const Octant& o = kOctants[octant];
+  const double* a = tb::kAtanPoly;
+  const double v2 = vd * vd, v4 = v2 * v2;
+  const double poly = (a[0] + v2 * a[1]) + v4 * (a[2] + v2 * a[3]);
+  const double tail = ((o.s * vd) * v2) * poly;  // s (atan v - v)
+  // K + s (atan c + vh + vl) + tail. K + s atan c = k0 + e0 exactly (K is 0 or above
+  // pi/2 >= 2 atan c), before v is known; k0 + s vh = hi + e1 exactly too (k0 is 0 or above
+  // 2^-6 > |vh|). The low parts, below 2^-20 hi, are summed in the order they come.
   double k0, e0, hi, e1;
   fast_two_sum(o.k_hi, o.s * tb::kAtan[2 * j], k0, e0);
   fast_two_sum(k0, o.s * vh, hi, e1);
-  const double lo = ((o.k_lo + e0) + o.s * (tail + tb::kAtan[2 * j + 1])) + e1;
-  const double vl = rest * (o.s * r);
-  // The true value lies within err of hi + lo + vl (|lo + vl| < 2^-20 hi): if both ends
-  // round alike, so does it (the two roundings of each end move it by under 2^-72 hi).
+  const double lo_first = (o.k_lo + e0) + o.s * tb::kAtan[2 * j + 1];
   const double err = hi * kFastError;
-  const double result = hi + ((lo + err) + vl);
-  if (result != hi + ((lo - err) + vl)) return false;
+  const double lo_last = (e1 + tail) + rest * (o.s * r);  // e1 + s vl + tail
+  // The true value lies within err of hi + lo_first + lo_last: if both ends round alike, so
+  // does it (the roundings of each end move it by under 2^-71 hi).
+  const double result = hi + ((lo_first + err) + lo_last);
+  if (result != hi + ((lo_first - err) + lo_last)) return false;
   out = result;
   return true;
 }
@@ -237,26 +238,27 @@ inline double pick(bool c, double a, double b) {
   return from_bits((bits_of(a) & m) | (bits_of(b) & ~m));
 }
 
-// For 2^-30 <= ax < 1: s + s_lo = sqrt(1 - ax^2) to about 2^-100, and q = min(ax, s) /
-// max(ax, s) to a few ulp. 1 - ax^2 is 1 - u^2 with u = ax, or 2u - u^2 with u = 1 - ax
-// (exact) from 1/2 on, u^2 exact (Dekker's product) and the difference exact; then one
-// Newton step, with 1/s as s/(1 - ax^2). The divisions start early, beside the square root.
+// For 2^-30 <= ax < 1: s + s_lo = sqrt(1 - ax^2) within 2^-78, |s_lo| <= 2.5 2^-53 s, and
+// q = min(ax, s) / max(ax, s) within a few ulp. s is the square root of (1 - ax)(1 + ax)
+// rounded (within 3 ulp of 1 - ax^2 even near 1, where 1 - ax is exact); the Newton step
+// takes the residual from 1 - ax^2 = (1 - p - t) - pe exactly, with p + pe = ax^2 (Dekker's
+// product) and 1 - p = w1 + t: w1 is within 2^-27 of s^2, so w1 - s^2 is exact. 1/s is s/w.
+// The divisions start early, beside the square root.
 [[gnu::always_inline]] inline void sqrt_one_minus_square_fast(double ax, double& s, double& s_lo,
                                                               double& q) {
   const double inv_ax = 1.0 / ax;
-  const bool near_one = ax >= 0.5;
-  const double u = pick(near_one, 1.0 - ax, ax);
-  const double base = pick(near_one, 2.0 * u, 1.0);
-  double p, pe, w, we;
-  two_prod(u, u, p, pe);
-  fast_two_sum(base, -p, w, we);  // base >= u^2
+  const double w = (1.0 - ax) * (1.0 + ax);
   s = std::sqrt(w);
   const double inv_w = 1.0 / w;
-  double sq, sqe;
+  double p, pe, w1, t, sq, sqe;
+  two_prod(ax, ax, p, pe);
+  fast_two_sum(1.0, -p, w1, t);  // 1 >= ax^2
   two_prod(s, s, sq, sqe);
   const double inv_s = s * inv_w;
-  s_lo = (((w - sq) - sqe) + (we - pe)) * (0.5 * inv_s);
-  q = pick(s <= ax, s * inv_ax, ax * inv_s);
+  s_lo = (((w1 - sq) + (t - pe)) - sqe) * (0.5 * inv_s);
+  // s/ax and ax/s: the one below 1 (or either, where both are about 1).
+  const double a = s * inv_ax, b = ax * inv_s;
+  q = a < b ? a : b;
 }
 
 }  // namespace
