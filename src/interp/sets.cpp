@@ -259,7 +259,9 @@ void Interpreter::write_field(const Place& p, Value value, const SourceSpan& at)
     return;
   }
   const runtime::Field& f = std::as_const(s).field(p.field);
-  const bool one = f.type().single && p.element >= 0;  // float32 storage: stage one element
+  // Stage one element for float32 storage, and for a pinned set, whose whole array would be
+  // copied out and back (take_field cannot move it) for every element written.
+  const bool one = (f.type().single || s.fields_pinned()) && p.element >= 0;
   const size_t base = one ? static_cast<size_t>(p.element) * f.components() : 0;
   Value staged = Value::of_tensor(one ? s.get(p.field, p.element) : s.take_field(p.field));
   Place q;
