@@ -67,6 +67,15 @@ class PySet {
   std::vector<Field> fields_;
 };
 
+// Where programs print: Python's sys.stdout, a line at a time (flush() after a run for the
+// text after the last newline).
+std::ostream& python_stdout();
+// Flushes python_stdout() when it goes out of scope (also when a run throws); construct it
+// while holding the GIL, before releasing it.
+struct FlushStdoutAtExit {
+  ~FlushStdoutAtExit() { python_stdout().flush(); }
+};
+
 // Dense results as Python values: a number for a scalar, else an array sharing the result.
 py::object to_python(const DenseResult& result);
 

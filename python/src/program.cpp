@@ -177,6 +177,7 @@ void register_program(py::module_& m) {
       .def("run",
            [](PyFunction& p) {
              // Bound arrays stay alive (kept) and nothing else in Python is touched.
+             FlushStdoutAtExit flush;
              py::gil_scoped_release release;
              p.f.run();
            })
@@ -200,6 +201,7 @@ void register_program(py::module_& m) {
              o.float_size = float32 ? 4 : 8;
              o.check_finite = check_finite;
              o.stop_on_interrupt = true;
+             o.out = &python_stdout();
              auto p = std::make_unique<Program>(o);
              if (path)
                p->load_file(*path);

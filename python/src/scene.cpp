@@ -2,7 +2,6 @@
 // frame at a time without the GIL (scene.run, with its progress, is in simit/__init__.py).
 #include <pybind11/stl.h>
 
-#include <iostream>
 #include <sstream>
 
 #include "common.h"
@@ -64,7 +63,7 @@ void register_scene(py::module_& m) {
                while (!text.empty() && text.back() == '\n') text.pop_back();
                throw Error(text);
              }
-             s->stepper = std::make_unique<scene::Stepper>(*s->scene, std::cout);
+             s->stepper = std::make_unique<scene::Stepper>(*s->scene, python_stdout());
              return s;
            }),
            py::arg("path"), py::kw_only(), py::arg("backend") = py::none(),
@@ -87,6 +86,7 @@ void register_scene(py::module_& m) {
                              [](const PyScene& s) { return s.scene->program_path(); })
       .def("init",
            [](PyScene& s) {
+             FlushStdoutAtExit flush;
              py::gil_scoped_release release;
              s.stepper->init();
            })
@@ -94,6 +94,7 @@ void register_scene(py::module_& m) {
            [](PyScene& s) {
              std::vector<std::pair<std::string, DenseResult>> results;
              {
+               FlushStdoutAtExit flush;
                py::gil_scoped_release release;
                results = s.stepper->step();
              }

@@ -159,7 +159,7 @@ void register_sets(py::module_& m) {
 Set(endpoints=(a, b, ...), connectivity=array of shape (n, arity)) for edges. Its size is
 fixed: fields are numpy views of storage that never moves.)")
       .def(py::init([](std::optional<int> size, std::optional<py::tuple> endpoints,
-                       std::optional<py::array> connectivity, const std::string& name) {
+                       std::optional<py::object> connectivity, const std::string& name) {
              if (endpoints || connectivity) {
                if (size) throw Error("give a size (vertex set) or endpoints (edge set), not both");
                if (!endpoints || !connectivity)
@@ -173,7 +173,9 @@ fixed: fields are numpy views of storage that never moves.)")
                  sets.push_back(&e.cast<PySet&>());
                  objects.push_back(py::reinterpret_borrow<py::object>(e));
                }
-               return std::make_unique<PySet>(sets, objects, *connectivity, name);
+               // Any array-like (a list of rows too); its dtype is checked below.
+               const py::array rows = py::module_::import("numpy").attr("asarray")(*connectivity);
+               return std::make_unique<PySet>(sets, objects, rows, name);
              }
              if (!size) throw Error("Set(size) or Set(endpoints=..., connectivity=...)");
              return std::make_unique<PySet>(*size, name);

@@ -307,7 +307,6 @@ def test_run_releases_the_gil(backend):
     assert during > 1000, f"the thread counted {during} times in a {elapsed:.2f} s run"
 
 
-@pytest.mark.xfail(reason="the module writes print output to the C++ std::cout (fd 1), not sys.stdout")
 def test_print_goes_to_sys_stdout(capsys):
     fn = simit.Program(
         source='export func hello(n : int)\n  println "hello ", n;\n  print "bye";\nend\n'
