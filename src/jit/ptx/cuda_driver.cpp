@@ -1,0 +1,325 @@
+// The CUDA driver loaded at run time (dlopen + cuGetProcAddress) and the Device over its
+// table: primary context, memory with a dirty flag per side, modules, launches.
+#include "jit/ptx/cuda_driver.h"
+
+#include <dlfcn.h>
+
+#include <utility>
+
+namespace simit::jit::cuda {
+namespace {
+
+// Every entry of the table with its base name and the CUDA version of its ABI (the vNNNN of
+// its cudaTypedefs.h typedef). Table is DriverTable or const DriverTable.
+template <class Table, class Visit>
+void for_each_entry(Table& t, Visit&& visit) {
+  visit("cuInit", 2000, t.cuInit);
+  visit("cuDriverGetVersion", 2020, t.cuDriverGetVersion);
+  visit("cuGetErrorString", 6000, t.cuGetErrorString);
+  visit("cuDeviceGet", 2000, t.cuDeviceGet);
+  visit("cuDeviceGetCount", 2000, t.cuDeviceGetCount);
+  visit("cuDeviceGetName", 2000, t.cuDeviceGetName);
+  visit("cuDeviceGetAttribute", 2000, t.cuDeviceGetAttribute);
+  visit("cuDeviceTotalMem", 3020, t.cuDeviceTotalMem);
+  visit("cuDevicePrimaryCtxRetain", 7000, t.cuDevicePrimaryCtxRetain);
+  visit("cuDevicePrimaryCtxRelease", 11000, t.cuDevicePrimaryCtxRelease);
+  visit("cuCtxSetCurrent", 4000, t.cuCtxSetCurrent);
+  visit("cuCtxSynchronize", 2000, t.cuCtxSynchronize);
+  visit("cuModuleLoadDataEx", 2010, t.cuModuleLoadDataEx);
+  visit("cuModuleUnload", 2000, t.cuModuleUnload);
+  visit("cuModuleGetFunction", 2000, t.cuModuleGetFunction);
+  visit("cuMemAlloc", 3020, t.cuMemAlloc);
+  visit("cuMemFree", 3020, t.cuMemFree);
+  visit("cuMemcpyHtoD", 3020, t.cuMemcpyHtoD);
+  visit("cuMemcpyDtoH", 3020, t.cuMemcpyDtoH);
+  visit("cuLaunchKernel", 4000, t.cuLaunchKernel);
+}
+
+// 3020 -> "3.2" (the driver API's encoding: 1000 * major + 10 * minor).
+std::string cuda_version_text(int version) {
+  return std::to_string(version / 1000) + "." + std::to_string(version % 1000 / 10);
+}
+
+}  // namespace
+
+const char* missing_entry(const DriverTable& driver) {
+  const char* missing = nullptr;
+  for_each_entry(driver, [&](const char* name, int, const auto& slot) {
+    if (!missing && !slot) missing = name;
+  });
+  return missing;
+}
+
+std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why) {
+  DriverTable table;
+  bool ok = true;
+  for_each_entry(table, [&](const char* name, int version, auto& slot) {
+    if (!ok) return;
+    void* pfn = nullptr;
+    CUdriverProcAddressQueryResult status = CU_GET_PROC_ADDRESS_SUCCESS;
+    const CUresult r = get(name, &pfn, version, CU_GET_PROC_ADDRESS_DEFAULT, &status);
+    const std::string entry =
+        std::string(name) + " (the CUDA " + cuda_version_text(version) + " ABI)";
+    if (r != CUDA_SUCCESS) {
+      why = "cuGetProcAddress failed for " + entry + ": CUDA error " + std::to_string(r);
+      ok = false;
+    } else if (!pfn || status != CU_GET_PROC_ADDRESS_SUCCESS) {
+      why = "driver entry " + entry + " missing: " +
+            (status == CU_GET_PROC_ADDRESS_VERSION_NOT_SUFFICIENT
+                 ? "the driver has only an older version"
+                 : "the driver does not have it");
+      ok = false;
+    } else {
+      // A function pointer from void* (POSIX guarantees the round trip, as for dlsym).
+      slot = reinterpret_cast<std::remove_reference_t<decltype(slot)>>(pfn);
+    }
+  });
+  if (!ok) return std::nullopt;
+  return table;
+}
+
+std::optional<DriverTable> load_driver(std::string& why) {
+  // libcuda.so.1 is what the driver package installs; the unversioned libcuda.so may be the
+  // toolkit's link-time stub, which only fails every call.
+  void* lib = dlopen("libcuda.so.1", RTLD_NOW | RTLD_LOCAL);
+  if (!lib) {
+    const char* error = dlerror();
+    const std::string detail = error ? error : "dlopen failed";
+    if (detail.find("No such file") != std::string::npos)
+      why = "libcuda.so.1 not found: no NVIDIA driver on this machine";
+    else
+      why = "libcuda.so.1 could not be loaded: " + detail;
+    return std::nullopt;
+  }
+  GetProcAddress get;
+  if (void* v2 = dlsym(lib, "cuGetProcAddress_v2")) {
+    get = reinterpret_cast<PFN_cuGetProcAddress_v12000>(v2);
+  } else if (void* v1 = dlsym(lib, "cuGetProcAddress")) {
+    // A CUDA 11 driver: no status out; a null pointer means not found.
+    const auto legacy = reinterpret_cast<PFN_cuGetProcAddress_v11030>(v1);
+    get = [legacy](const char* symbol, void** pfn, int version, cuuint64_t flags,
+                   CUdriverProcAddressQueryResult* status) {
+      const CUresult r = legacy(symbol, pfn, version, flags);
+      if (status)
+        *status = r == CUDA_SUCCESS && *pfn ? CU_GET_PROC_ADDRESS_SUCCESS
+                                            : CU_GET_PROC_ADDRESS_SYMBOL_NOT_FOUND;
+      return r;
+    };
+  } else {
+    why = "cuGetProcAddress missing: driver too old (CUDA 11.3 or newer is needed)";
+    int version = 0;
+    if (auto driver_version =
+            reinterpret_cast<PFN_cuDriverGetVersion_v2020>(dlsym(lib, "cuDriverGetVersion"));
+        driver_version && driver_version(&version) == CUDA_SUCCESS)
+      why += "; this driver supports CUDA " + cuda_version_text(version);
+    dlclose(lib);
+    return std::nullopt;
+  }
+  auto table = resolve_driver(get, why);
+  // On success the library stays loaded for the process's life: the table points into it.
+  if (!table) dlclose(lib);
+  return table;
+}
+
+std::string error_message(const DriverTable& driver, const char* call, CUresult result,
+                          const std::string& what) {
+  const char* text = nullptr;
+  if (!driver.cuGetErrorString || driver.cuGetErrorString(result, &text) != CUDA_SUCCESS || !text)
+    text = "error not known to the driver";
+  std::string message = call;
+  if (!what.empty()) message += " " + what;
+  return message + " failed: " + text + " (CUDA error " + std::to_string(result) + ")";
+}
+
+// ---- Device
+
+Device::Device(const DriverTable& driver) : driver_(driver) {
+  if (const char* missing = missing_entry(driver))
+    throw std::invalid_argument(std::string("CUDA driver table without ") + missing);
+}
+
+Device::~Device() {
+  if (!context_) return;
+  // Errors are dropped here: a destructor cannot report them, and releasing the primary
+  // context frees whatever was left on the device anyway.
+  driver_.cuCtxSetCurrent(context_);
+  for (CUmodule m : modules_) driver_.cuModuleUnload(m);
+  driver_.cuDevicePrimaryCtxRelease(device_);
+}
+
+void Device::check(CUresult result, const char* call, const std::string& what) const {
+  if (result != CUDA_SUCCESS)
+    throw CudaError(call, result, error_message(driver_, call, result, what));
+}
+
+void Device::require_open(const char* what) const {
+  if (!context_) throw std::logic_error(std::string(what) + " on a CUDA device not opened");
+}
+
+void Device::open(int ordinal) {
+  if (context_) throw std::logic_error("CUDA device opened twice");
+  check(driver_.cuInit(0), "cuInit");
+  int count = 0;
+  check(driver_.cuDeviceGetCount(&count), "cuDeviceGetCount");
+  if (ordinal < 0 || ordinal >= count)
+    throw CudaError("cuDeviceGet", CUDA_ERROR_INVALID_DEVICE,
+                    "cuDeviceGet failed: no CUDA device " + std::to_string(ordinal) +
+                        " (the driver found " + std::to_string(count) + ")");
+  CUdevice device = 0;
+  check(driver_.cuDeviceGet(&device, ordinal), "cuDeviceGet");
+  CUcontext context = nullptr;
+  check(driver_.cuDevicePrimaryCtxRetain(&context, device), "cuDevicePrimaryCtxRetain");
+  // Retained: from here the destructor releases it, whatever fails below.
+  device_ = device;
+  context_ = context;
+  check(driver_.cuCtxSetCurrent(context_), "cuCtxSetCurrent");
+
+  char name[256] = {};
+  check(driver_.cuDeviceGetName(name, sizeof name, device_), "cuDeviceGetName");
+  name[sizeof name - 1] = '\0';
+  name_ = name;
+  check(driver_.cuDeviceGetAttribute(&compute_major_, CU_DEVICE_ATTRIBUTE_COMPUTE_CAPABILITY_MAJOR,
+                                     device_),
+        "cuDeviceGetAttribute", "(compute capability major)");
+  check(driver_.cuDeviceGetAttribute(&compute_minor_, CU_DEVICE_ATTRIBUTE_COMPUTE_CAPABILITY_MINOR,
+                                     device_),
+        "cuDeviceGetAttribute", "(compute capability minor)");
+  check(driver_.cuDeviceGetAttribute(&multiprocessors_, CU_DEVICE_ATTRIBUTE_MULTIPROCESSOR_COUNT,
+                                     device_),
+        "cuDeviceGetAttribute", "(multiprocessor count)");
+  check(driver_.cuDeviceTotalMem(&total_memory_, device_), "cuDeviceTotalMem");
+}
+
+void Device::make_current() {
+  require_open("make_current");
+  check(driver_.cuCtxSetCurrent(context_), "cuCtxSetCurrent");
+}
+
+DeviceArray Device::alloc(void* host, std::size_t bytes) {
+  require_open("alloc");
+  DeviceArray array;
+  array.host = host;
+  array.bytes = bytes;
+  if (bytes == 0) return array;  // cuMemAlloc refuses 0 bytes; there is nothing to hold
+  check(driver_.cuMemAlloc(&array.device, bytes), "cuMemAlloc",
+        "of " + std::to_string(bytes) + " bytes");
+  array.host_dirty = host != nullptr;
+  return array;
+}
+
+void Device::free(DeviceArray& array) {
+  if (array.device != 0) {
+    require_open("free");
+    check(driver_.cuMemFree(array.device), "cuMemFree");
+  }
+  array.device = 0;
+  array.host_dirty = array.device_dirty = false;
+}
+
+namespace {
+void check_single_writer(const DeviceArray& array) {
+  if (array.host_dirty && array.device_dirty)
+    throw std::logic_error(
+        "array written on both the host and the device since they last agreed (" +
+        std::to_string(array.bytes) + " bytes)");
+}
+}  // namespace
+
+void Device::to_device(DeviceArray& array) {
+  check_single_writer(array);
+  if (!array.host_dirty) return;
+  if (array.bytes != 0) {
+    require_open("to_device");
+    if (!array.host) throw std::logic_error("to_device of an array without a host copy");
+    check(driver_.cuMemcpyHtoD(array.device, array.host, array.bytes), "cuMemcpyHtoD",
+          "of " + std::to_string(array.bytes) + " bytes");
+  }
+  array.host_dirty = false;
+}
+
+void Device::to_host(DeviceArray& array) {
+  check_single_writer(array);
+  if (!array.device_dirty) return;
+  if (array.bytes != 0) {
+    require_open("to_host");
+    if (!array.host) throw std::logic_error("to_host of a device-only array");
+    check(driver_.cuMemcpyDtoH(array.host, array.device, array.bytes), "cuMemcpyDtoH",
+          "of " + std::to_string(array.bytes) + " bytes");
+  }
+  array.device_dirty = false;
+}
+
+CUmodule Device::load_module(const std::string& ptx) {
+  require_open("load_module");
+  // The driver's JIT writes why a PTX does not load into this buffer (NUL-terminated).
+  std::string log(16384, '\0');
+  CUjit_option options[] = {CU_JIT_ERROR_LOG_BUFFER, CU_JIT_ERROR_LOG_BUFFER_SIZE_BYTES};
+  void* values[] = {log.data(), reinterpret_cast<void*>(static_cast<std::uintptr_t>(log.size()))};
+  CUmodule module = nullptr;
+  const CUresult r = driver_.cuModuleLoadDataEx(&module, ptx.c_str(), 2, options, values);
+  if (r != CUDA_SUCCESS) {
+    log.resize(log.find('\0') == std::string::npos ? log.size() : log.find('\0'));
+    while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
+    std::string message = error_message(driver_, "cuModuleLoadDataEx", r, "of a PTX module");
+    if (!log.empty()) message += ": " + log;
+    throw CudaError("cuModuleLoadDataEx", r, message);
+  }
+  modules_.push_back(module);
+  return module;
+}
+
+void Device::unload_module(CUmodule module) {
+  require_open("unload_module");
+  std::erase(modules_, module);
+  check(driver_.cuModuleUnload(module), "cuModuleUnload");
+}
+
+CUfunction Device::function(CUmodule module, const std::string& name) {
+  require_open("function");
+  CUfunction function = nullptr;
+  check(driver_.cuModuleGetFunction(&function, module, name.c_str()), "cuModuleGetFunction",
+        "of '" + name + "'");
+  return function;
+}
+
+void Device::launch(CUfunction function, Dim3 grid, Dim3 block, std::span<const KernelArg> args,
+                    unsigned int shared_bytes) {
+  require_open("launch");
+  // kernelParams: one pointer per parameter, to a value of the parameter's type; the driver
+  // copies the values before cuLaunchKernel returns, so `args` need not outlive the launch.
+  std::vector<void*> params;
+  params.reserve(args.size());
+  for (const KernelArg& a : args) params.push_back(const_cast<void*>(a.address()));
+  check(driver_.cuLaunchKernel(function, grid.x, grid.y, grid.z, block.x, block.y, block.z,
+                               shared_bytes, nullptr, params.empty() ? nullptr : params.data(),
+                               nullptr),
+        "cuLaunchKernel");
+}
+
+void Device::synchronize() {
+  require_open("synchronize");
+  check(driver_.cuCtxSynchronize(), "cuCtxSynchronize");
+}
+
+// ---- Availability
+
+std::string device_unavailable_reason(const DriverTable& driver, int ordinal) {
+  try {
+    Device device(driver);
+    device.open(ordinal);
+    return "";
+  } catch (const CudaError& e) {
+    return std::string("no usable CUDA device: ") + e.what();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+std::string gpu_unavailable_reason() {
+  std::string why;
+  const auto driver = load_driver(why);
+  if (!driver) return why;
+  return device_unavailable_reason(*driver, 0);
+}
+
+}  // namespace simit::jit::cuda
