@@ -263,7 +263,7 @@ const char* missing_entry(const DriverTable& driver);
 // "" when device `ordinal` opens through `driver`, else why not.
 std::string device_unavailable_reason(const DriverTable& driver, int ordinal = 0);
 // "" when this machine's driver opens a GPU, else why not (no driver, a driver too old, no
-// device): what `--executor gpu` says when it cannot run.
+// device): what running on the GPU says when it cannot.
 std::string gpu_unavailable_reason();
 
 }  // namespace simit::jit::cuda
