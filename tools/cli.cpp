@@ -134,6 +134,13 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
                "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
                "the first result, field or variable that differs (bit for bit), naming it; needs "
                "--executor jit");
+  sub.add_flag("--check-ptx", x.check_ptx,
+               "Compile every trace the run compiles for the CPU for the GPU as well (PTX for "
+               "sm_90, through LLVM's NVPTX back end) and assemble it with the CUDA toolkit's "
+               "ptxas ($SIMIT_PTXAS, else ptxas on PATH, else /usr/local/cuda/bin/ptxas; no GPU "
+               "needed); stop at the first PTX ptxas rejects, naming the trace. At the end, on "
+               "stderr: how many traces were assembled and which were not compiled for the GPU, "
+               "and why. Traces are compiled under --executor jit");
 }
 
 // --jit-stats and --check-jit say something about the JIT only: without it they would do
@@ -235,7 +242,7 @@ void add_run(CLI::App& app, Commands& c) {
                 throw CLI::ValidationError("--dump", error);
           },
           "jit: print each compiled trace: loop-ir (as compiled), passes (as traced and after each "
-          "lowering pass), llvm")
+          "lowering pass), llvm, ptx (its PTX for the GPU, or why it has none)")
       ->type_name("KIND")
       ->delimiter(',');
   c.run->add_option("--frames", so.frames, "Scenes: run this many frames instead of the scene's")
@@ -426,6 +433,16 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (sub->parsed())
       if (std::string bad = jit_options_misused(*flags, scene); !bad.empty())
         return usage_error(app, sub->get_name() + ": " + bad, err);
+  // --check-ptx: what was checked, on stderr after the run (a choice this build cannot run
+  // has already been reported).
+  const ExecutorChoice& choice = c.run->parsed() ? c.run_options.executor : c.test_options.executor;
+  auto checked = [&](int status) {
+    if (choice.check_ptx && executor_unavailable(choice).empty()) {
+      out.flush();
+      err << check_ptx_summary() << "\n";
+    }
+    return status;
+  };
   if (c.run->parsed()) {
     if (ends_with(c.run_options.file, ".toml")) {
       if (!c.run_options.func.empty() || !c.run->remaining().empty())
@@ -433,14 +450,14 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       SceneOptions so = scene_options(c);
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
-      return run_scene(so, out, err);
+      return checked(run_scene(so, out, err));
     }
     if (c.run_options.func.empty())
       return usage_error(app, "run: a .sim file needs --call NAME (or give a .toml scene)", err);
     c.run_options.args = c.run->remaining();
-    return run_function(c.run_options, out, err);
+    return checked(run_function(c.run_options, out, err));
   }
-  return run_test_command(c.test_paths, c.test_options, out, err);
+  return checked(run_test_command(c.test_paths, c.test_options, out, err));
 }
 
 }  // namespace simit::tools

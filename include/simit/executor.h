@@ -34,11 +34,17 @@ struct ExecutorChoice {
   // jit (`--check-jit`): every compiled call also runs interpreted on the same inputs, and the
   // first result, field or variable that differs stops the run, naming it.
   bool check = false;
-  // jit (`--dump=loop-ir,passes,llvm`): print each compiled trace's loop IR, its loop IR as
-  // traced and after each pass of the lowering, and/or its optimised LLVM IR.
+  // `--check-ptx` (any executor; a build with the JIT and the CUDA toolkit's ptxas): every
+  // trace the run compiles for the CPU is also compiled for the GPU (PTX for sm_90) and
+  // assembled by ptxas; the first PTX ptxas rejects stops the run, naming the trace.
+  // check_ptx_summary() then says what was checked.
+  bool check_ptx = false;
+  // jit (`--dump=loop-ir,passes,llvm,ptx`): print each compiled trace's loop IR, its loop IR
+  // as traced and after each pass of the lowering, its optimised LLVM IR, and/or its PTX.
   bool dump_loop_ir = false;
   bool dump_passes = false;
   bool dump_llvm = false;
+  bool dump_ptx = false;
   // jit: where compiled kernels are cached between runs: "" the user's cache folder
   // ($XDG_CACHE_HOME/simit/kernels, else $HOME/.cache/simit/kernels), "off" none, or a folder.
   std::string jit_cache{};
@@ -54,7 +60,7 @@ const char* executor_name(ExecutorKind kind);
 // bad value and listing the valid ones, e.g. "unknown executor 'jti': valid executors are
 // interpreter, jit".
 std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error);
-// One dump kind, "loop-ir", "passes" or "llvm", switched on in `choice`.
+// One dump kind, "loop-ir", "passes", "llvm" or "ptx", switched on in `choice`.
 bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string& error);
 // A whole number of executions from 0.
 std::optional<long> parse_jit_threshold(std::string_view text, std::string& error);
@@ -67,7 +73,12 @@ std::optional<int> parse_threads(std::string_view text, std::string& error);
 // Whether this build has the JIT (configured with -DSIMIT_WITH_LLVM=ON).
 bool jit_available();
 // "" when this build can run `choice`, otherwise why not (a JIT asked of a build without one,
-// a thread count outside 1..kMaxThreads, which no parser gives but a program may set).
+// a thread count outside 1..kMaxThreads, which no parser gives but a program may set,
+// check_ptx without the JIT or without ptxas).
 std::string executor_unavailable(const ExecutorChoice& choice);
+
+// What `--check-ptx` checked in this process so far: "check-ptx: N traces assembled by
+// ptxas, M not compiled for the GPU (K: reason; ...)" ("" in a build without the JIT).
+std::string check_ptx_summary();
 
 }  // namespace simit

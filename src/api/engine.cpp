@@ -65,6 +65,8 @@ void Engine::install_jit() {
   j.dump_llvm = x.dump_llvm;
   j.dump_passes = x.dump_passes;
   j.check = x.check;
+  j.check_ptx = x.check_ptx;
+  j.dump_ptx = x.dump_ptx;
   j.corrupt_for_test = options_.corrupt_for_test;
   j.shuffle_seed = options_.shuffle_seed_for_test;
   j.threads = x.threads;

@@ -11,6 +11,10 @@
 #include <sched.h>
 #endif
 
+#ifdef SIMIT_HAS_JIT
+#include "jit/ptx/ptx_check.h"
+#endif
+
 namespace simit {
 
 const char* executor_name(ExecutorKind kind) {
@@ -31,9 +35,11 @@ bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string&
     choice.dump_llvm = true;
   } else if (text == "passes") {
     choice.dump_passes = true;
+  } else if (text == "ptx") {
+    choice.dump_ptx = true;
   } else {
-    error =
-        "unknown dump kind '" + std::string(text) + "': valid dump kinds are loop-ir, passes, llvm";
+    error = "unknown dump kind '" + std::string(text) +
+            "': valid dump kinds are loop-ir, passes, llvm, ptx";
     return false;
   }
   return true;
@@ -99,7 +105,24 @@ std::string executor_unavailable(const ExecutorChoice& choice) {
     return "bad thread count " + std::to_string(choice.threads) +
            ": expected a whole number from 1 to " + std::to_string(kMaxThreads) +
            " (default_threads(): every core this process may use)";
+  if (choice.check_ptx) {
+#ifdef SIMIT_HAS_JIT
+    std::string why;
+    if (jit::ptx::find_ptxas(why).empty()) return why;
+#else
+    return "--check-ptx needs the JIT, which this build has not: configure with "
+           "-DSIMIT_WITH_LLVM=ON (LLVM 19)";
+#endif
+  }
   return "";
+}
+
+std::string check_ptx_summary() {
+#ifdef SIMIT_HAS_JIT
+  return jit::ptx::tally_summary();
+#else
+  return "";
+#endif
 }
 
 }  // namespace simit

@@ -14,6 +14,7 @@
 #include "jit/lower.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
+#include "jit/ptx/ptx_check.h"
 #include "jit/specialise.h"
 #include "jit/thread_pool.h"
 #include "jit/write_guard.h"
@@ -46,6 +47,19 @@ std::string key_of(const interp::SiteCall& call, const JitOptions& o) {
   if (call.plan.reduce) k << " reduce";
   if (o.float32) k << " float32";
   return k.str();
+}
+
+// --check-ptx and --dump=ptx: a trace compiled for the CPU compiled for the GPU as well
+// (jit/ptx/ptx_check.h); PTX that ptxas rejects stops the run at `at`.
+template <class T>
+void check_gpu(const T& t, const std::string& site, const JitOptions& o,
+               const frontend::SourceSpan& at) {
+  if (!o.check_ptx && !(o.dump_ptx && o.dump)) return;
+  ptx::CheckOptions c;
+  c.assemble = o.check_ptx;
+  c.dump = o.dump_ptx ? o.dump : nullptr;
+  if (std::string bad = ptx::check_trace(t, site, c); !bad.empty())
+    throw interp::RuntimeError(at, bad);
 }
 
 }  // namespace
@@ -132,6 +146,7 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
   }
   Entry* out = e.get();
   s.kernels[key] = std::move(e);
+  if (out->kernel) check_gpu(*out->traced.trace, out->stats.site, options_, call.at);
   return out;
 }
 
@@ -217,7 +232,9 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
   e->run = std::move(run);
   LoopEntry* out = e.get();
   s.entries.push_back(std::move(e));
-  return out && out->kernel ? out : nullptr;
+  if (!out->kernel) return nullptr;
+  check_gpu(*out->traced.trace, out->stats.site, options_, first.span);
+  return out;
 }
 
 bool TraceController::run_statement(const ast::Stmt& stmt, interp::ExecState& in) {

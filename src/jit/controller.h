@@ -30,7 +30,7 @@ struct JitOptions {
   std::string cache_dir;
   bool float32 = false;       // the interpreter's float32 mode
   bool check_finite = false;  // the interpreter's check-finite mode
-  // Where `--dump=loop-ir,llvm` prints each compiled trace; null prints nothing.
+  // Where `--dump=loop-ir,llvm,ptx` prints each compiled trace; null prints nothing.
   std::ostream* dump = nullptr;
   bool dump_loop_ir = false;
   bool dump_llvm = false;
@@ -38,6 +38,11 @@ struct JitOptions {
   // Differential mode (`--check-jit`): each compiled call also runs interpreted on the same
   // inputs; the first result, field or variable that differs stops the run naming it.
   bool check = false;
+  // `--check-ptx`: each trace compiled for the CPU is also compiled for the GPU and its PTX
+  // assembled by ptxas (jit/ptx/ptx_check.h); PTX that ptxas rejects stops the run.
+  // `--dump=ptx`: that PTX printed where the other dumps print.
+  bool check_ptx = false;
+  bool dump_ptx = false;
   // For the tests of the check alone: the lowest bit of a compiled map's first matrix or
   // vector value is flipped after the kernel runs.
   bool corrupt_for_test = false;
