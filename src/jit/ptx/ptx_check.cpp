@@ -38,6 +38,7 @@ bool executable(const std::string& path) {
 struct Tally {
   std::mutex mu;
   long assembled = 0;
+  long rejected = 0;                    // by ptxas (the run stops at the first)
   std::map<std::string, long> refused;  // by reason
 };
 
@@ -111,9 +112,12 @@ std::string check(const T& t, const std::string& site, const CheckOptions& o) {
   const std::string ptxas = find_ptxas(why);
   if (ptxas.empty()) return "--check-ptx: " + why;
   std::string message;
-  if (!assemble(ptxas, kernel->ptx, arch, message))
-    return "--check-ptx: ptxas rejected the PTX of " + site + ": " + message;
+  const bool accepted = assemble(ptxas, kernel->ptx, arch, message);
   std::lock_guard<std::mutex> lock(tally().mu);
+  if (!accepted) {
+    ++tally().rejected;
+    return "--check-ptx: ptxas rejected the PTX of " + site + ": " + message;
+  }
   ++tally().assembled;
   return "";
 }
@@ -207,7 +211,8 @@ std::string tally_summary() {
                   (tally().assembled == 1 ? "" : "s") + " assembled by ptxas, " +
                   std::to_string(refused) + " not compiled for the GPU";
   if (!reasons.empty()) s += " (" + reasons + ")";
-  if (tally().assembled == 0 && refused == 0)
+  if (tally().rejected > 0) s += ", " + std::to_string(tally().rejected) + " rejected by ptxas";
+  if (tally().assembled == 0 && refused == 0 && tally().rejected == 0)
     s += " (the run compiled no trace: the JIT compiles them under --executor jit)";
   return s;
 }
@@ -215,6 +220,7 @@ std::string tally_summary() {
 void reset_tally() {
   std::lock_guard<std::mutex> lock(tally().mu);
   tally().assembled = 0;
+  tally().rejected = 0;
   tally().refused.clear();
 }
 

@@ -34,7 +34,8 @@ struct CheckOptions {
 std::string check_trace(const Trace& t, const std::string& site, const CheckOptions& o);
 std::string check_trace(const SystemTrace& t, const std::string& site, const CheckOptions& o);
 
-// "check-ptx: N traces assembled by ptxas, M not compiled for the GPU (K: reason; ...)".
+// "check-ptx: N traces assembled by ptxas, M not compiled for the GPU (K: reason; ...)", and
+// ", R rejected by ptxas" when ptxas rejected any.
 std::string tally_summary();
 // Zeroes the tally (for tests that run several programs in one process).
 void reset_tally();

@@ -174,7 +174,10 @@ std::string gpu_refusal(const SystemTrace&) {
 std::unique_ptr<Target> make_ptx_target(const std::string& gpu_arch, std::string& error) {
   const llvm::Target* t = nvptx(error);
   if (!t) return nullptr;
-  std::unique_ptr<llvm::MCSubtargetInfo> sti(t->createMCSubtargetInfo(kTriple, gpu_arch, ""));
+  // Asked of a subtarget of a known architecture: one of an unknown one would print LLVM's
+  // warning about it.
+  std::unique_ptr<llvm::MCSubtargetInfo> sti(
+      t->createMCSubtargetInfo(kTriple, kDefaultGpuArch, ""));
   if (!sti || !sti->isCPUStringValid(gpu_arch)) {
     error = "unknown GPU architecture '" + gpu_arch +
             "' (LLVM's NVPTX back end knows sm_XX, e.g. " + kDefaultGpuArch + ")";

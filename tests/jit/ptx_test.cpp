@@ -1,0 +1,334 @@
+// The GPU target: traces compiled to PTX through LLVM's NVPTX back end (an `.entry` per map
+// kernel, every multiplication and addition its own correctly rounded instruction, no fma),
+// what it refuses and why, and the PTX assembled by the CUDA toolkit's ptxas where it is
+// installed (no GPU is needed). Programs run through the engine with --check-ptx and
+// --dump=ptx.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "api/engine.h"
+#include "interp/runtime_error.h"
+#include "jit/ptx/ptx_check.h"
+#include "jit/ptx/ptx_target.h"
+
+namespace simit::jit {
+namespace {
+
+using api::CompiledProgram;
+using api::Engine;
+using api::EngineOptions;
+using api::ExecutorKind;
+
+ExprRef node(ExprKind kind, Ty ty, uint8_t op, std::vector<ExprRef> ops, int slot = 0) {
+  Expr e;
+  e.kind = kind;
+  e.ty = ty;
+  e.op = op;
+  e.slot = slot;
+  e.ops = std::move(ops);
+  return std::make_shared<const Expr>(std::move(e));
+}
+ExprRef element() { return node(ExprKind::Element, Ty::I32, 0, {}); }
+ExprRef load(int slot) { return node(ExprKind::Load, Ty::F64, 0, {element()}, slot); }
+ExprRef scalar(int slot) { return node(ExprKind::Scalar, Ty::F64, 0, {}, slot); }
+ExprRef binary(BinOp op, ExprRef a, ExprRef b) {
+  return node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(op), {std::move(a), std::move(b)});
+}
+ExprRef constant(double v) {
+  Expr e;
+  e.f = v;
+  return std::make_shared<const Expr>(std::move(e));
+}
+
+ArraySlot field(const std::string& name) {
+  ArraySlot a;
+  a.kind = ArraySlot::Kind::Field;
+  a.name = name;
+  return a;
+}
+
+// r(e) += a(e) * b(e) + c over a set's elements: the multiply-add a contracting compiler
+// would fuse.
+Trace multiply_add() {
+  Trace t;
+  t.name = "multiply_add";
+  t.reduce = true;
+  ArraySlot r;
+  r.kind = ArraySlot::Kind::Result;
+  r.written = true;
+  r.name = "r";
+  t.arrays = {field("a"), field("b"), r};
+  t.scalars = {Ty::F64};
+  Stmt s;
+  s.kind = StmtKind::Assemble;
+  s.slot = 2;
+  s.index = element();
+  s.value = binary(BinOp::Add, binary(BinOp::Mul, load(0), load(1)), scalar(0));
+  t.body.push_back(std::move(s));
+  return t;
+}
+
+// The same, with sin(a) added, a quotient and a square root, and a check that a > 0.
+Trace with_math_and_check() {
+  Trace t = multiply_add();
+  t.name = "with_math_and_check";
+  Stmt check;
+  check.kind = StmtKind::Check;
+  check.error = 0;
+  check.value =
+      node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Gt), {load(0), constant(0.0)});
+  t.errors.push_back(ErrorSite{{}, "a must be positive"});
+  ExprRef sine = node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sin), {load(0)});
+  ExprRef root = node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(MathFn::Sqrt), {load(1)});
+  Stmt& add = t.body[0];
+  add.value = binary(BinOp::Add, add.value, binary(BinOp::Div, sine, root));
+  t.body.insert(t.body.begin(), std::move(check));
+  return t;
+}
+
+std::unique_ptr<Target> gpu() {
+  std::string error;
+  auto t = ptx::make_ptx_target(ptx::kDefaultGpuArch, error);
+  EXPECT_TRUE(t) << error;
+  return t;
+}
+
+std::string ptx_of(const Trace& trace) {
+  auto target = gpu();
+  if (!target) return "";
+  std::string error;
+  std::unique_ptr<Kernel> k = target->compile(trace, false, error);
+  const auto* p = dynamic_cast<const ptx::PtxKernel*>(k.get());
+  EXPECT_TRUE(p) << error;
+  return p ? p->ptx : "";
+}
+
+bool has(const std::string& text, const std::string& what) {
+  return text.find(what) != std::string::npos;
+}
+
+// ptxas's path, or "" (the test that needs it skips, saying why).
+std::string ptxas() {
+  std::string why;
+  return ptx::find_ptxas(why);
+}
+
+TEST(Ptx, AMapKernelIsAnEntryWithCorrectlyRoundedMultiplicationsAndAdditions) {
+  const std::string p = ptx_of(multiply_add());
+  EXPECT_TRUE(has(p, ".version ")) << p;
+  EXPECT_TRUE(has(p, ".target sm_90")) << p;
+  EXPECT_TRUE(has(p, ".entry simit_map(")) << p;
+  EXPECT_TRUE(has(p, "mul.rn.f64")) << p;
+  EXPECT_TRUE(has(p, "add.rn.f64")) << p;
+  EXPECT_FALSE(has(p, "fma")) << p;
+  // One element per thread: the block and thread indices; the assembly's addition is a plain
+  // load and store (no atomic add).
+  EXPECT_TRUE(has(p, "%ctaid.x")) << p;
+  EXPECT_TRUE(has(p, "%ntid.x")) << p;
+  EXPECT_TRUE(has(p, "%tid.x")) << p;
+  EXPECT_FALSE(has(p, "atom")) << p;
+}
+
+TEST(Ptx, MathFunctionsAreExternalCallsAndAFailureKeepsTheLowestElement) {
+  const std::string p = ptx_of(with_math_and_check());
+  EXPECT_TRUE(has(p, ".extern .func  (.param .b64 func_retval0) simit_math_sin")) << p;
+  EXPECT_TRUE(has(p, "div.rn.f64")) << p;
+  EXPECT_TRUE(has(p, "sqrt.rn.f64")) << p;
+  EXPECT_TRUE(has(p, "atom.global.min.u64")) << p;  // the failure word, an integer minimum
+  EXPECT_FALSE(has(p, "fma")) << p;
+  // The failure word's encoding.
+  const uint64_t word = (uint64_t{41} << 32) | 3u;
+  EXPECT_EQ(ptx::failed_element(word), 41);
+  EXPECT_EQ(ptx::failed_check(word), 3);
+  EXPECT_LT(word, ptx::kNoFailure);
+}
+
+TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesAreRefusedWithTheirReason) {
+  Trace t = multiply_add();
+  Stmt d;
+  d.kind = StmtKind::Decompose;
+  d.fn = static_cast<int>(Decomposition::Svd);
+  d.n = 1;
+  d.args = {load(0)};
+  d.error = 0;
+  t.errors.push_back(ErrorSite{{}, "svd failed"});
+  t.locals = {Ty::F64, Ty::F64, Ty::F64};
+  d.outs = {0, 1, 2};
+  Stmt branch;
+  branch.kind = StmtKind::If;
+  branch.value =
+      node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Gt), {load(0), constant(0.0)});
+  branch.body.push_back(std::move(d));  // nested: the refusal looks inside branches
+  t.body.push_back(std::move(branch));
+  const std::string why =
+      "calls the runtime's simit_jit_decompose, which has no device version yet";
+  EXPECT_EQ(ptx::gpu_refusal(t), why);
+  auto target = gpu();
+  ASSERT_TRUE(target);
+  std::string error;
+  EXPECT_FALSE(target->compile(t, false, error));
+  EXPECT_EQ(error, why);
+  SystemTrace s;
+  EXPECT_FALSE(target->compile(s, false, error));
+  EXPECT_TRUE(has(error, "not compiled for the GPU yet")) << error;
+  EXPECT_EQ(error, ptx::gpu_refusal(s));
+}
+
+TEST(Ptx, AnUnknownArchitectureIsAClearError) {
+  std::string error;
+  EXPECT_FALSE(ptx::make_ptx_target("sm_9000", error));
+  EXPECT_EQ(error,
+            "unknown GPU architecture 'sm_9000' (LLVM's NVPTX back end knows sm_XX, e.g. sm_90)");
+  EXPECT_TRUE(ptx::make_ptx_target("sm_80", error)) << error;
+}
+
+TEST(Ptx, PtxasAssemblesTheKernelsAndRejectsBrokenPtx) {
+  const std::string path = ptxas();
+  if (path.empty()) GTEST_SKIP() << "ptxas not found ($SIMIT_PTXAS, PATH, /usr/local/cuda/bin)";
+  std::string message;
+  for (const Trace& t : {multiply_add(), with_math_and_check()})
+    EXPECT_TRUE(ptx::assemble(path, ptx_of(t), ptx::kDefaultGpuArch, message))
+        << t.name << ": " << message;
+  std::string broken = ptx_of(multiply_add());
+  broken.replace(broken.find("mul.rn.f64"), 10, "mul.xx.f64");
+  EXPECT_FALSE(ptx::assemble(path, broken, ptx::kDefaultGpuArch, message));
+  EXPECT_TRUE(has(message, "mul.xx.f64") || has(message, "error")) << message;
+}
+
+TEST(Ptx, AMissingPtxasIsNamedWhereItWasLookedFor) {
+  const char* old = std::getenv("SIMIT_PTXAS");
+  const std::string saved = old ? old : "";
+  setenv("SIMIT_PTXAS", "/nonexistent/ptxas", 1);
+  std::string why;
+  EXPECT_EQ(ptx::find_ptxas(why), "");
+  EXPECT_EQ(why, "SIMIT_PTXAS=/nonexistent/ptxas is not an executable file");
+  ExecutorChoice choice;
+  choice.check_ptx = true;
+  EXPECT_EQ(executor_unavailable(choice), why);
+  if (old)
+    setenv("SIMIT_PTXAS", saved.c_str(), 1);
+  else
+    unsetenv("SIMIT_PTXAS");
+}
+
+// A map with a math function, a map that calls a decomposition and a vector update, run
+// through the engine with --check-ptx and --dump=ptx.
+const char* kProgram = R"(
+element Vertex
+  x : float;
+  y : vector[3](float);
+end
+element Spring
+  k : float;
+end
+extern verts : set{Vertex};
+extern springs : set{Spring}(verts, verts);
+
+func force(s : Spring, v : (Vertex * 2)) -> f : vector[verts](float)
+  d = v(1).x - v(0).x;
+  f(v(0)) = s.k * d + exp(d);
+  f(v(1)) = -s.k * d;
+end
+
+func singular(s : Spring, v : (Vertex * 2)) -> g : vector[verts](vector[3](float))
+  U, w, V = svd(v(0).y * v(1).y');
+  g(v(0)) = w;
+end
+
+export func step() -> (f : vector[verts](float), g : vector[verts](vector[3](float)))
+  f = map force to springs reduce +;
+  g = map singular to springs reduce +;
+  verts.x = verts.x + 0.5 * f;
+end
+)";
+
+// The program's sets: four vertices on a chain of three springs.
+struct Springs {
+  runtime::Set verts{"verts"};
+  runtime::Set springs{"springs", {&verts, &verts}};
+  Springs() {
+    verts.add_many(4);
+    verts.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+    verts.add_field("y", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+    for (int i = 0; i < 4; ++i) {
+      verts.field(0).at<double>(i)[0] = 0.25 * i * i;
+      for (int c = 0; c < 3; ++c) verts.field(1).at<double>(i)[c] = 1.0 + i - 0.5 * c;
+    }
+    const int32_t ends[] = {0, 1, 1, 2, 2, 3};
+    springs.add_edges(ends);
+    springs.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  }
+};
+
+// Runs step() under the JIT with --check-ptx (when `check`) and --dump=ptx into `dump`.
+void run_step(bool check, std::ostream& dump) {
+  auto compiled = CompiledProgram::from_source("ptx.sim", kProgram);
+  ASSERT_TRUE(compiled->ok());
+  Springs sets;
+  EngineOptions o;
+  o.executor.kind = ExecutorKind::Jit;
+  o.executor.threshold = 0;
+  o.executor.check_ptx = check;
+  o.executor.dump_ptx = true;
+  o.dump = &dump;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("verts"), sets.verts);
+  engine.bind_set(*compiled->find_extern("springs"), sets.springs);
+  engine.call(*compiled->find_func("step"), {});
+}
+
+TEST(Ptx, ARunChecksEveryCompiledTraceAndDumpsItsPtx) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const bool assemble = !ptxas().empty();
+  ptx::reset_tally();
+  std::ostringstream dump;
+  run_step(assemble, dump);
+  const std::string d = dump.str();
+  EXPECT_TRUE(has(d, "// PTX of force (line 24)\n")) << d;
+  EXPECT_TRUE(has(d, ".entry simit_map(")) << d;
+  EXPECT_TRUE(has(d, "simit_math_exp")) << d;
+  EXPECT_FALSE(has(d, "fma")) << d;
+  EXPECT_TRUE(has(d,
+                  "// singular (line 25): not compiled for the GPU: calls the runtime's "
+                  "simit_jit_decompose, which has no device version yet\n"))
+      << d;
+  EXPECT_TRUE(has(d, "// statement (line 26): not compiled for the GPU: system statements")) << d;
+  if (!assemble) GTEST_SKIP() << "ptxas not found: the PTX was dumped, not assembled";
+  EXPECT_EQ(check_ptx_summary(),
+            "check-ptx: 1 trace assembled by ptxas, 2 not compiled for the GPU (1: calls the "
+            "runtime's simit_jit_decompose, which has no device version yet; 1: system "
+            "statements (solver loops, vector updates): their passes, sparse products and "
+            "blocked sums are not compiled for the GPU yet)");
+}
+
+// An assembler that rejects everything (false(1)): the run stops at the first trace, naming
+// it, and the tally counts the rejection.
+TEST(Ptx, TheFirstPtxTheAssemblerRejectsStopsTheRun) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const char* old = std::getenv("SIMIT_PTXAS");
+  const std::string saved = old ? old : "";
+  setenv("SIMIT_PTXAS", "/bin/false", 1);
+  ptx::reset_tally();
+  std::ostringstream dump;
+  try {
+    run_step(true, dump);
+    ADD_FAILURE() << "the run did not stop";
+  } catch (const interp::RuntimeError& e) {
+    EXPECT_EQ(e.message(),
+              "--check-ptx: ptxas rejected the PTX of force (line 24): ptxas exited with status 1");
+  }
+  EXPECT_EQ(check_ptx_summary(),
+            "check-ptx: 0 traces assembled by ptxas, 0 not compiled for the GPU, 1 rejected by "
+            "ptxas");
+  if (old)
+    setenv("SIMIT_PTXAS", saved.c_str(), 1);
+  else
+    unsetenv("SIMIT_PTXAS");
+}
+
+}  // namespace
+}  // namespace simit::jit
