@@ -44,7 +44,7 @@ TEST(ExecutorChoice, ParsesDumpKindsThresholdsAndCaches) {
   EXPECT_TRUE(simit::parse_dump_kind("loop-ir", c, error));
   EXPECT_TRUE(c.dump_loop_ir);
   EXPECT_FALSE(simit::parse_dump_kind("asm", c, error));
-  EXPECT_EQ(error, "unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm");
+  EXPECT_EQ(error, "unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm, ptx");
 
   EXPECT_EQ(simit::parse_jit_threshold("0", error), 0L);
   EXPECT_EQ(simit::parse_jit_threshold("17", error), 17L);

@@ -143,7 +143,7 @@ TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
        "--jit-threshold: bad JIT threshold '-1': expected a whole number of executions from 0 "
        "(0: compile at once)"},
       {{"--dump", "loop-ir,asm"},
-       "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm"},
+       "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm, ptx"},
       {{"--jit-cache", ""}, "--jit-cache: empty JIT cache: expected 'off' or a folder"},
       {{"--threads", "1025"},
        "--threads: bad thread count '1025': expected a whole number from 1 to 1024, or all (or "
