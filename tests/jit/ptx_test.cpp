@@ -5,13 +5,18 @@
 // --dump=ptx.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
 
 #include "api/engine.h"
 #include "interp/runtime_error.h"
+#include "jit/ptx/device_math.h"
 #include "jit/ptx/ptx_check.h"
 #include "jit/ptx/ptx_target.h"
 
@@ -90,6 +95,19 @@ Trace with_math_and_check() {
   return t;
 }
 
+// r(e) += exp(a) + log(b) + atan2(a, b): three of the project's math functions.
+Trace with_exp_log_atan2() {
+  Trace t = multiply_add();
+  t.name = "with_exp_log_atan2";
+  auto math = [](MathFn f, std::vector<ExprRef> args) {
+    return node(ExprKind::Math, Ty::F64, static_cast<uint8_t>(f), std::move(args));
+  };
+  t.body[0].value = binary(
+      BinOp::Add, binary(BinOp::Add, math(MathFn::Exp, {load(0)}), math(MathFn::Log, {load(1)})),
+      math(MathFn::Atan2, {load(0), load(1)}));
+  return t;
+}
+
 std::unique_ptr<Target> gpu() {
   std::string error;
   auto t = ptx::make_ptx_target(ptx::kDefaultGpuArch, error);
@@ -133,9 +151,13 @@ TEST(Ptx, AMapKernelIsAnEntryWithCorrectlyRoundedMultiplicationsAndAdditions) {
   EXPECT_FALSE(has(p, "atom")) << p;
 }
 
-TEST(Ptx, MathFunctionsAreExternalCallsAndAFailureKeepsTheLowestElement) {
+TEST(Ptx, MathFunctionsAreLinkedInAndAFailureKeepsTheLowestElement) {
   const std::string p = ptx_of(with_math_and_check());
-  EXPECT_TRUE(has(p, ".extern .func  (.param .b64 func_retval0) simit_math_sin")) << p;
+  // With the device bitcode, sin is part of the module; without it, an external call.
+  if (ptx::device_math_available())
+    EXPECT_FALSE(has(p, ".extern .func")) << p;
+  else
+    EXPECT_TRUE(has(p, ".extern .func  (.param .b64 func_retval0) simit_math_sin")) << p;
   EXPECT_TRUE(has(p, "div.rn.f64")) << p;
   EXPECT_TRUE(has(p, "sqrt.rn.f64")) << p;
   EXPECT_TRUE(has(p, "atom.global.min.u64")) << p;  // the failure word, an integer minimum
@@ -145,6 +167,57 @@ TEST(Ptx, MathFunctionsAreExternalCallsAndAFailureKeepsTheLowestElement) {
   EXPECT_EQ(ptx::failed_element(word), 41);
   EXPECT_EQ(ptx::failed_check(word), 3);
   EXPECT_LT(word, ptx::kNoFailure);
+}
+
+// The device bitcode (the project's math sources compiled for nvptx) linked into the module:
+// exp, log and atan2 are defined in it (inlined into the kernel, or `.func`s of its own: the
+// accurate paths the sources keep out of line), never external, and still without an fma, so
+// ptxas assembles the module as a whole program (no -c).
+TEST(Ptx, TheMathFunctionsDeviceBitcodeMakesAWholeModule) {
+  if (!ptx::device_math_available())
+    GTEST_SKIP() << "this build has no device math bitcode (clang++ or llvm-link not found)";
+  const std::string p = ptx_of(with_exp_log_atan2());
+  EXPECT_TRUE(has(p, ".entry simit_map(")) << p;
+  EXPECT_FALSE(has(p, ".extern")) << p;
+  EXPECT_FALSE(has(p, "simit_math_")) << p;  // no call left by name
+  EXPECT_TRUE(has(p, ".func ")) << p;        // atan2's accurate path, out of line
+  EXPECT_TRUE(has(p, "atan2_accurate")) << p;
+  EXPECT_TRUE(has(p, ".global .align 8 .b8 ")) << p;  // the tables, in the module
+  EXPECT_FALSE(has(p, "fma")) << p;
+  EXPECT_TRUE(has(p, "mul.rn.f64")) << p;
+  const std::string path = ptxas();
+  if (path.empty()) GTEST_SKIP() << "ptxas not found ($SIMIT_PTXAS, PATH, /usr/local/cuda/bin)";
+  std::string message;
+  EXPECT_TRUE(ptx::assemble(path, p, ptx::kDefaultGpuArch, message)) << message;
+}
+
+// ptxas's arguments: a whole module is assembled as a program, one that calls an external
+// function as relocatable code (-c), which ptxas without -c would refuse to link. An
+// "assembler" that writes its arguments down shows which.
+TEST(Ptx, OnlyAModuleWithExternalFunctionsIsAssembledAsRelocatableCode) {
+  char dir[] = "/tmp/simit_ptx_test_XXXXXX";
+  ASSERT_TRUE(::mkdtemp(dir));
+  const std::string script = std::string(dir) + "/ptxas", log = std::string(dir) + "/args";
+  {
+    std::ofstream f(script);
+    f << "#!/bin/sh\necho \"$@\" > " << log << "\n";
+  }
+  ASSERT_EQ(::chmod(script.c_str(), 0755), 0);
+  auto args_for = [&](const std::string& ptx) {
+    std::string message;
+    EXPECT_TRUE(ptx::assemble(script, ptx, "sm_90", message)) << message;
+    std::ifstream in(log);
+    std::string line;
+    std::getline(in, line);
+    return line;
+  };
+  const std::string whole = ".version 8.5\n.target sm_90\n.address_size 64\n";
+  const std::string calls = whole + ".extern .func  (.param .b64 func_retval0) simit_math_exp\n";
+  const std::string a = args_for(whole), b = args_for(calls);
+  EXPECT_TRUE(has(a, "--gpu-name sm_90 ")) << a;
+  EXPECT_FALSE(has(a, " -c ")) << a;
+  EXPECT_TRUE(has(b, "--gpu-name sm_90 -c ")) << b;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesAreRefusedWithTheirReason) {
@@ -290,7 +363,8 @@ TEST(Ptx, ARunChecksEveryCompiledTraceAndDumpsItsPtx) {
   const std::string d = dump.str();
   EXPECT_TRUE(has(d, "// PTX of force (line 24)\n")) << d;
   EXPECT_TRUE(has(d, ".entry simit_map(")) << d;
-  EXPECT_TRUE(has(d, "simit_math_exp")) << d;
+  // exp: linked in from the device bitcode, or called by name where the build has none.
+  EXPECT_EQ(has(d, "simit_math_exp"), !ptx::device_math_available()) << d;
   EXPECT_FALSE(has(d, "fma")) << d;
   EXPECT_TRUE(has(d,
                   "// singular (line 25): not compiled for the GPU: calls the runtime's "

@@ -160,7 +160,10 @@ bool assemble(const std::string& ptxas, const std::string& ptx, const std::strin
       return false;
     }
   }
-  std::vector<std::string> args = {ptxas, "--gpu-name", gpu_arch, "-c", in, "-o", out};
+  // A whole module (the math functions linked in, jit/ptx/device_math.h) is assembled as a
+  // program; one that still calls an external function only as relocatable code (-c).
+  std::vector<std::string> args = {ptxas, "--gpu-name", gpu_arch, in, "-o", out};
+  if (ptx.find(".extern .func") != std::string::npos) args.insert(args.begin() + 3, "-c");
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);

@@ -53,9 +53,10 @@ void PtxHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) 
 }
 
 // The project's own functions (runtime/math/math_functions.h) by their C names, as on the
-// CPU: declared external here, so the PTX is relocatable code that calls them. Their device
-// versions (the same algorithms compiled for the GPU, so the bits stay the interpreter's) are
-// not built yet; a module that calls one cannot be linked until they are.
+// CPU: declared here, and defined by their device bitcode (the same sources compiled for the
+// GPU, so the bits stay the interpreter's), which the target links into the module
+// (jit/ptx/device_math.h). A build without that bitcode leaves them external, and its PTX is
+// relocatable code that calls them.
 llvm::Value* PtxHooks::math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) {
   std::vector<llvm::Type*> params(args.size(), b.getDoubleTy());
   auto* ft = llvm::FunctionType::get(b.getDoubleTy(), params, false);

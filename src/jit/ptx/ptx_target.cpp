@@ -21,6 +21,7 @@
 #include <llvm/Target/TargetMachine.h>
 #include <llvm/Target/TargetOptions.h>
 
+#include "jit/ptx/device_math.h"
 #include "jit/ptx/ptx_hooks.h"
 #include "jit/tunables.h"
 
@@ -108,6 +109,9 @@ class PtxTarget : public Target {
       error = "LLVM rejected the generated code: " + bs.str();
       return nullptr;
     }
+    // The project's math functions the kernel calls, from their device bitcode (the same
+    // sources as the host's), so the module is whole and computes the host's bits.
+    if (!link_device_math(m, error)) return nullptr;
     // Large traces skip the pipeline, as on the CPU (jit/tunables.h).
     optimise(m, *tm, node_count(trace) > kLargeTrace ? 0 : kOptLevel);
     auto k = std::make_unique<PtxKernel>();
