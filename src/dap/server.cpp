@@ -2,7 +2,10 @@
 // requests, and the debugger's stops handed to the client.
 #include "dap/server.h"
 
+#include <poll.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <streambuf>
 
@@ -74,10 +77,19 @@ Server::Server(int in_fd, int out_fd, std::ostream& log)
         return std::optional<std::string>();  // never asked: the stop handler takes the stops
       }) {
   debugger_.set_stop_handler(this);
+  if (::pipe(wake_) != 0) wake_[0] = wake_[1] = -1;
 }
 
 Server::~Server() {
-  if (reader_.joinable()) reader_.detach();  // blocked in read(2) on a client that stays
+  if (reader_.joinable()) {  // run() ended by an exception: wake the reader and wait for it
+    const char wake = 1;
+    if (::write(wake_[1], &wake, 1) == 1)
+      reader_.join();
+    else
+      reader_.detach();
+  }
+  for (int fd : wake_)
+    if (fd >= 0) ::close(fd);
 }
 
 void Server::send(json message) {
@@ -94,56 +106,29 @@ void Server::event(const std::string& name, json body) {
 
 void Server::read_loop() {
   FrameParser parser;
-  while (true) {
-    std::optional<std::string> body = read_message(in_fd_, parser);
-    if (!body) {
-      if (parser.malformed()) {
-        log_ << "simit dap: " << parser.error() << "\n";
-        event("output", {{"category", "console"},
-                         {"output", "simit dap: malformed input (" + parser.error() +
-                                        "); ending the session\n"}});
-      }
+  char buffer[1 << 16];
+  bool ok = true;
+  while (ok) {
+    while (std::optional<std::string> body = parser.next()) incoming(*body);
+    if (parser.malformed()) {
+      log_ << "simit dap: " << parser.error() << "\n";
+      event("output", {{"category", "console"},
+                       {"output", "simit dap: malformed input (" + parser.error() +
+                                      "); ending the session\n"}});
       break;
     }
-    json message = json::parse(*body, nullptr, false);
-    if (message.is_discarded() || !message.is_object() || message.value("type", "") != "request" ||
-        !message.contains("command") || !message["command"].is_string()) {
-      send({{"type", "response"},
-            {"request_seq",
-             message.is_object() && message.contains("seq") && message["seq"].is_number_integer()
-                 ? message["seq"]
-                 : json(0)},
-            {"success", false},
-            {"command", ""},
-            {"message", "not a DAP request (a JSON object with type \"request\" and a command)"}});
+    // The input, or the server's own wake-up when it ends first (after a disconnect, with a
+    // client that keeps its end open): the thread must not outlive the server.
+    pollfd fds[2] = {{in_fd_, POLLIN, 0}, {wake_[0], POLLIN, 0}};
+    if (::poll(fds, 2, -1) < 0) {
+      ok = errno == EINTR;
       continue;
     }
-    const std::string command = message["command"];
-    if (command == "threads") {  // the same answer in every state: no need to wait for a stop
-      send({{"type", "response"},
-            {"request_seq", message.value("seq", 0)},
-            {"success", true},
-            {"command", command},
-            {"body", {{"threads", json::array({{{"id", 1}, {"name", "simit"}}})}}}});
-      continue;
-    }
-    if (command == "pause") {  // answered before the stop it causes is reported
-      const bool running = running_.load();
-      if (running) debugger_.request_pause();
-      send({{"type", "response"},
-            {"request_seq", message.value("seq", 0)},
-            {"success", running},
-            {"command", command},
-            {"message", running ? "" : "the program is not running"}});
-      continue;
-    }
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      queue_.push_back(std::move(message));
-    }
-    queue_cv_.notify_all();
-    // A running program takes requests at its next statement.
-    debugger_.request_service();
+    if (fds[1].revents) break;
+    const ssize_t n = ::read(in_fd_, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;  // end of input (a read error counts as one)
+    parser.feed(std::string_view(buffer, static_cast<size_t>(n)));
   }
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -151,6 +136,55 @@ void Server::read_loop() {
   }
   queue_cv_.notify_all();
   debugger_.request_service();
+}
+
+// One message from the client: answered here when its answer needs nothing of the run
+// (threads, pause), else queued for the main thread.
+void Server::incoming(const std::string& body) {
+  json message = json::parse(body, nullptr, false);
+  if (message.is_discarded() || !message.is_object() || message.value("type", "") != "request" ||
+      !message.contains("command") || !message["command"].is_string()) {
+    send({{"type", "response"},
+          {"request_seq",
+           message.is_object() && message.contains("seq") && message["seq"].is_number_integer()
+               ? message["seq"]
+               : json(0)},
+          {"success", false},
+          {"command", ""},
+          {"message", "not a DAP request (a JSON object with type \"request\" and a command)"}});
+    return;
+  }
+  const std::string command = message["command"];
+  if (command == "threads") {  // the same answer in every state: no need to wait for a stop
+    send({{"type", "response"},
+          {"request_seq", message.value("seq", 0)},
+          {"success", true},
+          {"command", command},
+          {"body", {{"threads", json::array({{{"id", 1}, {"name", "simit"}}})}}}});
+    return;
+  }
+  if (command == "pause") {  // answered before the stop it causes is reported
+    const bool running = running_.load();
+    if (running) debugger_.request_pause();
+    send({{"type", "response"},
+          {"request_seq", message.value("seq", 0)},
+          {"success", running},
+          {"command", command},
+          {"message", running ? "" : "the program is not running"}});
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(std::move(message));
+  }
+  queue_cv_.notify_all();
+  // A running program takes requests at its next statement.
+  debugger_.request_service();
+}
+
+bool Server::input_ended() {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return input_closed_;
 }
 
 std::optional<json> Server::take(bool wait) {
@@ -174,12 +208,13 @@ int Server::run() {
     handle(*request);
   }
   program_out_->flush();
-  if (reader_.joinable()) {
-    // The reader ends with the input; a client that keeps it open after disconnect is left.
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (input_closed_) {
-      reader_.join();
-    }
+  // The reader ends with the input, or now, woken, when the session ended first.
+  const char wake = 1;
+  if (::write(wake_[1], &wake, 1) == 1 || input_ended()) {
+    reader_.join();
+  } else {  // no way to wake it (no pipe): leave it blocked in read(2) as the process ends
+    log_ << "simit dap: cannot wake the reader\n";
+    reader_.detach();
   }
   return 0;
 }

@@ -49,7 +49,9 @@ class Server : public repl::Debugger::StopHandler {
 
   // The reader thread and the queue of requests it fills.
   void read_loop();
+  void incoming(const std::string& body);
   std::optional<json> take(bool wait);
+  bool input_ended();
 
   // One request, on the main thread (requests.cpp).
   void handle(const json& request);
@@ -95,6 +97,7 @@ class Server : public repl::Debugger::StopHandler {
   std::deque<json> queue_;
   bool input_closed_ = false;
   std::thread reader_;
+  int wake_[2] = {-1, -1};  // a pipe: written when the session ends before the input does
 
   std::unique_ptr<std::ostream> program_out_;  // print and progress, as output events
   repl::Debugger debugger_;
