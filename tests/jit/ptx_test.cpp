@@ -7,6 +7,8 @@
 
 #include <sys/stat.h>
 
+#include <bit>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +21,7 @@
 #include "jit/ptx/device_math.h"
 #include "jit/ptx/ptx_check.h"
 #include "jit/ptx/ptx_target.h"
+#include "runtime/math/math_functions.h"
 
 namespace simit::jit {
 namespace {
@@ -218,6 +221,70 @@ TEST(Ptx, OnlyAModuleWithExternalFunctionsIsAssembledAsRelocatableCode) {
   EXPECT_FALSE(has(a, " -c ")) << a;
   EXPECT_TRUE(has(b, "--gpu-name sm_90 -c ")) << b;
   std::filesystem::remove_all(dir);
+}
+
+// Inputs for the math functions: the special values, bit patterns drawn at random (every
+// exponent, subnormals, infinities, NaNs) and values drawn at random in [-20, 20] and [-1, 1].
+std::vector<double> math_inputs() {
+  std::vector<double> xs = {
+      0.0,     -0.0,   1.0,   -1.0,     0.5,       -0.5,  2.0,     1e-310,
+      -1e-310, 1e-300, 1e300, -1e300,   1e22,      -1e22, 3.14159, 1.5707963267948966,
+      710.0,   -745.5, 1e-8,  INFINITY, -INFINITY, NAN};
+  uint64_t state = 0x243f6a8885a308d3u;
+  auto next = [&] { return state = state * 6364136223846793005u + 1442695040888963407u; };
+  for (int i = 0; i < 4000; ++i) xs.push_back(std::bit_cast<double>(next()));
+  for (int i = 0; i < 4000; ++i) xs.push_back(40.0 * ((next() >> 11) * 0x1p-53) - 20.0);
+  for (int i = 0; i < 4000; ++i) xs.push_back(2.0 * ((next() >> 11) * 0x1p-53) - 1.0);
+  return xs;
+}
+
+// The same bits, any NaN being as good as another.
+bool same(double a, double b) {
+  return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b) ||
+         (std::isnan(a) && std::isnan(b));
+}
+
+// The device bitcode compiled for this CPU computes the host's functions' bits: the device
+// compile (clang for nvptx, the std shim for the host's headers, no contraction) changes
+// nothing in the arithmetic. (On the GPU the same IR is lowered to the correctly rounded
+// add.rn/mul.rn/div.rn/sqrt.rn.f64.)
+TEST(Ptx, TheDeviceMathBitcodeComputesTheHostsBits) {
+  if (!ptx::device_math_available())
+    GTEST_SKIP() << "this build has no device math bitcode (clang++ or llvm-link not found)";
+  using Unary = double (*)(double);
+  using Binary = double (*)(double, double);
+  const std::pair<const char*, Unary> unary[] = {
+      {"exp", math::exp}, {"log", math::log},   {"sin", math::sin},   {"cos", math::cos},
+      {"tan", math::tan}, {"asin", math::asin}, {"acos", math::acos}, {"cbrt", math::cbrt}};
+  const std::pair<const char*, Binary> binary[] = {{"pow", math::pow}, {"atan2", math::atan2}};
+  const std::vector<double> xs = math_inputs();
+  std::string error;
+  for (const auto& [name, host] : unary) {
+    auto device =
+        reinterpret_cast<Unary>(ptx::device_math_on_host(std::string("simit_math_") + name, error));
+    ASSERT_TRUE(device) << error;
+    int wrong = 0;
+    for (double x : xs)
+      if (!same(device(x), host(x)) && ++wrong <= 3)
+        ADD_FAILURE() << name << "(" << x << "): " << device(x) << " on the device's code, "
+                      << host(x) << " on the host's";
+    EXPECT_EQ(wrong, 0) << name;
+  }
+  for (const auto& [name, host] : binary) {
+    auto device = reinterpret_cast<Binary>(
+        ptx::device_math_on_host(std::string("simit_math_") + name, error));
+    ASSERT_TRUE(device) << error;
+    int wrong = 0;
+    for (size_t i = 0; i + 1 < xs.size(); ++i) {
+      const double x = xs[i], y = xs[xs.size() - 1 - i];
+      if (!same(device(x, y), host(x, y)) && ++wrong <= 3)
+        ADD_FAILURE() << name << "(" << x << ", " << y << "): " << device(x, y)
+                      << " on the device's code, " << host(x, y) << " on the host's";
+    }
+    EXPECT_EQ(wrong, 0) << name;
+  }
+  EXPECT_FALSE(ptx::device_math_on_host("simit_math_none", error));
+  EXPECT_TRUE(has(error, "has no simit_math_none")) << error;
 }
 
 TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesAreRefusedWithTheirReason) {

@@ -20,4 +20,10 @@ bool device_math_available();
 // linked.
 bool link_device_math(llvm::Module& m, std::string& error);
 
+// The device bitcode compiled for this CPU instead (its own LLJIT, made once, no fma): the
+// address of `name` (simit_math_exp, ...), a `double(double)` or, for pow and atan2,
+// `double(double, double)`; null with `error` without the bitcode or the function. This is how
+// the tests show that the device compile (clang, the std shim) computes the host's bits.
+void* device_math_on_host(const std::string& name, std::string& error);
+
 }  // namespace simit::jit::ptx
