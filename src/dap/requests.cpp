@@ -31,6 +31,24 @@ std::string endpoints_of(const std::string& map) {
   return rest;
 }
 
+// The protocol's breakpoints (SourceBreakpoint, FunctionBreakpoint, DataBreakpoint) as the
+// debugger's requests of `kind`: each names its place by its own key.
+std::vector<repl::BreakpointRequest> breakpoint_requests(const json& list,
+                                                         repl::BreakpointRequest::Kind kind) {
+  std::vector<repl::BreakpointRequest> out;
+  for (const json& b : list) {
+    repl::BreakpointRequest r;
+    r.kind = kind;
+    r.line = b.value("line", 0);
+    r.function = b.value("name", "");
+    r.watch = b.value("dataId", "");
+    r.condition = b.value("condition", "");
+    r.hit_condition = b.value("hitCondition", "");
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
 }  // namespace
 
 void Server::respond(const json& request, json body) {
@@ -142,7 +160,6 @@ json Server::replace_breakpoints(std::vector<int>& numbers,
 void Server::on_set_breakpoints(const json& request) {
   const json& args = request["arguments"];
   const std::string path = args.contains("source") ? args["source"].value("path", "") : "";
-  std::vector<repl::BreakpointRequest> requests;
   const json lines = args.value("breakpoints", json::array());
   const bool ours = !path.empty() && canonical(path) == source_path_;
   json list = json::array();
@@ -153,28 +170,19 @@ void Server::on_set_breakpoints(const json& request) {
            {"message", "'" + path + "' is not the program's source (" + source_path_ + ")"}});
     return respond(request, {{"breakpoints", list}});
   }
-  for (const json& b : lines) {
-    repl::BreakpointRequest r;
-    r.kind = repl::BreakpointRequest::Kind::Line;
-    r.line = b.value("line", 0);
-    r.condition = b.value("condition", "");
-    r.hit_condition = b.value("hitCondition", "");
-    requests.push_back(r);
-  }
-  respond(request, {{"breakpoints", replace_breakpoints(line_breakpoints_, requests)}});
+  respond(request,
+          {{"breakpoints",
+            replace_breakpoints(line_breakpoints_,
+                                breakpoint_requests(lines, repl::BreakpointRequest::Kind::Line))}});
 }
 
 void Server::on_set_function_breakpoints(const json& request) {
-  std::vector<repl::BreakpointRequest> requests;
-  for (const json& b : request["arguments"].value("breakpoints", json::array())) {
-    repl::BreakpointRequest r;
-    r.kind = repl::BreakpointRequest::Kind::Function;
-    r.function = b.value("name", "");
-    r.condition = b.value("condition", "");
-    r.hit_condition = b.value("hitCondition", "");
-    requests.push_back(r);
-  }
-  respond(request, {{"breakpoints", replace_breakpoints(function_breakpoints_, requests)}});
+  const json list = request["arguments"].value("breakpoints", json::array());
+  respond(
+      request,
+      {{"breakpoints",
+        replace_breakpoints(function_breakpoints_,
+                            breakpoint_requests(list, repl::BreakpointRequest::Kind::Function))}});
 }
 
 void Server::on_set_exception_breakpoints(const json& request) {
@@ -207,16 +215,11 @@ void Server::on_data_breakpoint_info(const json& request) {
 }
 
 void Server::on_set_data_breakpoints(const json& request) {
-  std::vector<repl::BreakpointRequest> requests;
-  for (const json& b : request["arguments"].value("breakpoints", json::array())) {
-    repl::BreakpointRequest r;
-    r.kind = repl::BreakpointRequest::Kind::Watch;
-    r.watch = b.value("dataId", "");
-    r.condition = b.value("condition", "");
-    r.hit_condition = b.value("hitCondition", "");
-    requests.push_back(r);
-  }
-  respond(request, {{"breakpoints", replace_breakpoints(data_breakpoints_, requests)}});
+  const json list = request["arguments"].value("breakpoints", json::array());
+  respond(request,
+          {{"breakpoints",
+            replace_breakpoints(data_breakpoints_,
+                                breakpoint_requests(list, repl::BreakpointRequest::Kind::Watch))}});
 }
 
 // The requests a client makes at the stop after a run-time error: one frame, no variables.
@@ -304,11 +307,10 @@ void Server::on_evaluate(const json& request) {
                                   : "the program is not running: expressions need a stop");
   std::string why;
   const int level = level_of(args);
-  std::optional<interp::Value> value = debugger_.evaluate_value(text, level, why);
-  std::optional<std::string> shown = value ? debugger_.evaluate(text, level, why) : std::nullopt;
-  if (!value || !shown) return fail(request, why);
-  json v = variables_.variable(text, &*value, nullptr);
-  respond(request, {{"result", *shown}, {"variablesReference", v["variablesReference"]}});
+  std::optional<repl::Debugger::Evaluated> e = debugger_.evaluate_value(text, level, why);
+  if (!e) return fail(request, why);
+  json v = variables_.variable(text, &e->value, nullptr);
+  respond(request, {{"result", e->text}, {"variablesReference", v["variablesReference"]}});
 }
 
 void Server::on_resume(const json& request, repl::Debugger::Resume how) {

@@ -58,11 +58,6 @@ Parts parts_of(const Tensor& t) {
   return {s.size(), 1, Shape()};
 }
 
-std::string text_of(const Tensor& t) {
-  if (t.shape().is_scalar()) return repl::value_text(Value::component(t, 0), nullptr);
-  return repl::value_text(Value::of_tensor(t), nullptr);
-}
-
 }  // namespace
 
 int64_t VariableStore::add_scope(const std::vector<repl::VariableInfo>& vars) {

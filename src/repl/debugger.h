@@ -27,12 +27,12 @@
 
 #include "frontend/ast.h"
 #include "interp/hook.h"
+#include "interp/value.h"
 #include "line_map.h"
 
 namespace simit::interp {
 class Interpreter;
-class Value;
-}  // namespace simit::interp
+}
 
 namespace simit::repl {
 
@@ -148,10 +148,18 @@ class Debugger : public interp::StatementHook {
   std::vector<FrameInfo> frames() const;
   std::vector<VariableInfo> locals(int level) const;
   std::vector<VariableInfo> globals() const;
-  std::optional<std::string> evaluate(const std::string& text, int level, std::string& why) const;
-  // Evaluates to the value itself (for a front end that shows its parts).
-  std::optional<interp::Value> evaluate_value(const std::string& text, int level,
-                                              std::string& why) const;
+  // An expression's value in frame `level` and its text as `print` shows it (a front end
+  // shows the parts of the value); nullopt with `why`.
+  struct Evaluated {
+    interp::Value value;
+    std::string text;
+  };
+  std::optional<Evaluated> evaluate_value(const std::string& text, int level,
+                                          std::string& why) const;
+  std::optional<std::string> evaluate(const std::string& text, int level, std::string& why) const {
+    std::optional<Evaluated> e = evaluate_value(text, level, why);
+    return e ? std::optional<std::string>(std::move(e->text)) : std::nullopt;
+  }
   enum class Resume { Continue, StepIn, StepOver, StepOut };
   // While stopped: how the run goes on once stopped() returns; false with `why` when it
   // cannot (StepOut from the outermost frame).

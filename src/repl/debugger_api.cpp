@@ -154,8 +154,8 @@ std::vector<VariableInfo> Debugger::globals() const {
   return out;
 }
 
-std::optional<interp::Value> Debugger::evaluate_value(const std::string& text, int level,
-                                                      std::string& why) const {
+std::optional<Debugger::Evaluated> Debugger::evaluate_value(const std::string& text, int level,
+                                                            std::string& why) const {
   if (!stopped_) {
     why = "the program is not stopped";
     return std::nullopt;
@@ -169,7 +169,9 @@ std::optional<interp::Value> Debugger::evaluate_value(const std::string& text, i
       why = e.error;
       return std::nullopt;
     }
-    return in.evaluate(*e.expr, level);
+    interp::Value value = in.evaluate(*e.expr, level);
+    std::string shown = value_text(value, e.expr->type.get());
+    return Evaluated{std::move(value), std::move(shown)};
   } catch (const interp::RuntimeError& err) {
     why = err.message();
   } catch (const std::exception& err) {  // an internal failure must not end the paused run
@@ -198,26 +200,6 @@ bool Debugger::resume(Resume how, int level, std::string& why) {
   mode_depth_ = v.depth;
   mode_activation_ = v.activation;
   return true;
-}
-
-std::optional<std::string> Debugger::evaluate(const std::string& text, int level,
-                                              std::string& why) const {
-  const interp::Interpreter& in = *event_.in;
-  interp::FrameView v = in.frame_view(level);
-  try {
-    frontend::DebugExpression e =
-        frontend::check_debug_expression(in.program(), v.func, frame_offset(level), text);
-    if (!e.ok()) {
-      why = e.error;
-      return std::nullopt;
-    }
-    return value_text(in.evaluate(*e.expr, level), e.expr->type.get());
-  } catch (const interp::RuntimeError& err) {
-    why = err.message();
-  } catch (const std::exception& err) {  // an internal failure must not end the paused run
-    why = err.what();
-  }
-  return std::nullopt;
 }
 
 }  // namespace simit::repl

@@ -38,31 +38,6 @@ void CpuHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) 
   b.CreateRet(b.getInt32(0));
 }
 
-// The project's own functions (runtime/math/math_functions.h), the interpreter's bits, by
-// their C names: simit_math_sin and so on, which the linker resolves to this process's
-// (jit/cpu/llvm_backend.cpp). LLVM knows nothing of these names, so it folds no call.
-llvm::Value* CpuHooks::math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) {
-  std::vector<llvm::Type*> params(args.size(), b.getDoubleTy());
-  auto* ft = llvm::FunctionType::get(b.getDoubleTy(), params, false);
-  const std::string name = std::string("simit_math_") + math_name(f);
-  llvm::FunctionCallee callee = b.GetInsertBlock()->getModule()->getOrInsertFunction(name, ft);
-  if (auto* fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
-    fn->setDoesNotThrow();
-    fn->setDoesNotAccessMemory();  // pure: no errno, no state
-    fn->setWillReturn();
-  }
-  llvm::CallInst* c = b.CreateCall(callee, args);
-  c->addFnAttr(llvm::Attribute::NoBuiltin);
-  return c;
-}
-
-void CpuHooks::assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                        const llvm::AAMDNodes& aa) {
-  llvm::LoadInst* old = b.CreateAlignedLoad(value->getType(), at, llvm::Align(8));
-  old->setAAMetadata(aa);
-  b.CreateAlignedStore(b.CreateFAdd(old, value), at, llvm::Align(8))->setAAMetadata(aa);
-}
-
 void CpuHooks::fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) {
   if (failed_ && element) b.CreateStore(element, failed_);
   b.CreateRet(b.getInt32(static_cast<uint32_t>(error + 1)));

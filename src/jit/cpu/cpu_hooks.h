@@ -22,9 +22,6 @@ class CpuHooks : public codegen::TargetHooks {
  public:
   codegen::MapEntry map_kernel(llvm::Module& m, const std::string& name) override;
   void elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) override;
-  llvm::Value* math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) override;
-  void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                const llvm::AAMDNodes& aa) override;
   void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) override;
   llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                     llvm::FunctionType* type) override;

@@ -42,13 +42,17 @@ class TargetHooks {
   // successful return.
   virtual void elements(MapEmitter& k, const MapEntry& entry) = 0;
   // C library function `f` of scalar binary64 arguments (the ones computed exactly, sqrt,
-  // fabs, fmax and fmin, are emitted inline for every target).
-  virtual llvm::Value* math(llvm::IRBuilder<>& b, MathFn f,
-                            const std::vector<llvm::Value*>& args) = 0;
+  // fabs, fmax and fmin, are emitted inline for every target). By default a call of the
+  // project's own function (runtime/math/math_functions.h, the interpreter's bits) by its C
+  // name, simit_math_sin and so on, which each target defines for its code (the CPU links
+  // this process's, the GPU links their device bitcode). LLVM knows nothing of these names,
+  // so it folds no call.
+  virtual llvm::Value* math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args);
   // *at += value (a double, or a vector of doubles at 8-byte alignment): an assembly write
-  // with `reduce +`. `aa`: the alias metadata of the accesses to the result.
+  // with `reduce +`. `aa`: the alias metadata of the accesses to the result. By default a
+  // plain load, add and store: right where one thread writes each block at a time.
   virtual void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                        const llvm::AAMDNodes& aa) = 0;
+                        const llvm::AAMDNodes& aa);
   // Leaves the kernel reporting the failure of Trace::errors[error] (or SystemTrace's), at
   // `element` (an i32; null in a system kernel). Ends the current block.
   virtual void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) = 0;

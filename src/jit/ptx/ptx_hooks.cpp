@@ -52,40 +52,6 @@ void PtxHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) 
   b.CreateRetVoid();
 }
 
-// The project's own functions (runtime/math/math_functions.h) by their C names, as on the
-// CPU: declared here, and defined by their device bitcode (the same sources compiled for the
-// GPU, so the bits stay the interpreter's), which the target links into the module
-// (jit/ptx/device_math.h). A build without that bitcode leaves them external, and its PTX is
-// relocatable code that calls them.
-llvm::Value* PtxHooks::math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) {
-  std::vector<llvm::Type*> params(args.size(), b.getDoubleTy());
-  auto* ft = llvm::FunctionType::get(b.getDoubleTy(), params, false);
-  const std::string name = std::string("simit_math_") + math_name(f);
-  llvm::FunctionCallee callee = b.GetInsertBlock()->getModule()->getOrInsertFunction(name, ft);
-  if (auto* fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
-    fn->setDoesNotThrow();
-    fn->setDoesNotAccessMemory();  // pure: no errno, no state
-    fn->setWillReturn();
-  }
-  llvm::CallInst* c = b.CreateCall(callee, args);
-  c->addFnAttr(llvm::Attribute::NoBuiltin);
-  return c;
-}
-
-// A plain load, add and store. This is right only while one thread writes each block at a
-// time, which a GPU's threads do not guarantee: elements that share a block race. The
-// arithmetic contract forbids the usual cure, floating-point atomics (their order, and so the
-// sum's bits, change from run to run); what makes it correct on the GPU is the deferred
-// assembly still to be built: each element's contributions into a scratch array, then one
-// thread per block summing them in element order. Until then these kernels are only compiled
-// and assembled (`--check-ptx`), never run.
-void PtxHooks::assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                        const llvm::AAMDNodes& aa) {
-  llvm::LoadInst* old = b.CreateAlignedLoad(value->getType(), at, llvm::Align(8));
-  old->setAAMetadata(aa);
-  b.CreateAlignedStore(b.CreateFAdd(old, value), at, llvm::Align(8))->setAAMetadata(aa);
-}
-
 // The failure word keeps the lowest (element, error) any thread reported: an integer minimum,
 // whose result does not depend on the threads' order, so the element reported is the one
 // the CPU's executors report (the lowest). A system kernel (element null) reports element 0.

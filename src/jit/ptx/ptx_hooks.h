@@ -16,13 +16,18 @@ namespace simit::jit::ptx {
 //                      int32_t begin, int32_t end, uint64_t* failure)
 // (jit/ptx/ptx_target.h: the failure word's encoding). Thread t of the grid visits element
 // begin + t when it lies below end.
+// The math functions are TargetHooks' calls by C name, defined by their device bitcode (the
+// same sources compiled for the GPU, linked into the module: jit/ptx/device_math.h; a build
+// without it leaves them external and its PTX relocatable). Assembly is TargetHooks' plain
+// load, add and store, which races where a GPU's elements share a block: the arithmetic
+// contract forbids floating-point atomics (their order, and so the sum's bits, change from
+// run to run), and what will make it correct is the deferred assembly still to be built
+// (contributions into a scratch array, then one thread per block summing them in element
+// order). Until then these kernels are only compiled and assembled (`--check-ptx`).
 class PtxHooks : public codegen::TargetHooks {
  public:
   codegen::MapEntry map_kernel(llvm::Module& m, const std::string& name) override;
   void elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) override;
-  llvm::Value* math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) override;
-  void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                const llvm::AAMDNodes& aa) override;
   void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) override;
   llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                     llvm::FunctionType* type) override;
