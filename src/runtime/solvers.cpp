@@ -31,11 +31,23 @@ void check_rhs(size_t b, size_t x, int64_t n) {
                 " components, not " + std::to_string(b) + " and " + std::to_string(x));
 }
 
-// "row i (element e, component c)" for messages about scalar row i of a blocked matrix.
-std::string row_str(int64_t i, int block_rows) {
-  if (block_rows == 1) return "row " + std::to_string(i);
-  return "row " + std::to_string(i) + " (element " + std::to_string(i / block_rows) +
-         ", component " + std::to_string(i % block_rows) + ")";
+// Scalar row (column) i of a matrix with `block` rows (columns) per block, for messages:
+// "row 7 (element 2, component 1)". Where the blocks are the elements of a set a scene
+// renumbered (`axis`), the internal numbers mean nothing to the user: the element is named
+// by its mesh number instead, "the row of component 1 of element 12 of set 'verts'".
+std::string line_str(const char* line, int64_t i, int block, const MeshAxis* axis) {
+  if (axis) {
+    const std::string element = axis->element(static_cast<int>(i / block));
+    return std::string("the ") + line + " of " +
+           (block == 1 ? element : "component " + std::to_string(i % block) + " of " + element);
+  }
+  if (block == 1) return line + (" " + std::to_string(i));
+  return line + (" " + std::to_string(i)) + " (element " + std::to_string(i / block) +
+         ", component " + std::to_string(i % block) + ")";
+}
+
+std::string row_str(int64_t i, const SystemMatrix& a) {
+  return line_str("row", i, a.block_rows(), a.pattern().row_axis().get());
 }
 
 // The matrix a factorisation reads: the logical matrix without its zero entries. A block
@@ -53,6 +65,15 @@ EigenSparse solver_form(const SystemMatrix& a) {
 constexpr const char* kSingularLu =
     "LU factorisation failed: the matrix is singular (elimination found no nonzero pivot for one "
     "of its columns)";
+
+// The singular LU's message for a matrix whose column c is empty: the column is named where it
+// is a renumbered set's element (the message is otherwise kSingularLu's).
+std::string empty_column_lu(int64_t c, const SystemMatrix& a) {
+  const MeshAxis* axis = a.pattern().col_axis().get();
+  if (!axis) return kSingularLu;
+  return "LU factorisation failed: the matrix is singular (" +
+         line_str("column", c, a.block_cols(), axis) + " has no nonzero entry)";
+}
 
 // The first column of m without an entry, or -1: the matrix is singular (SparseLU would not
 // return on such a matrix, and CHOLMOD would find its pivot zero).
@@ -163,8 +184,10 @@ void CholeskyFactor::Impl::factorize(const SystemMatrix& a) {
   EigenSparse m = solver_form(a);  // the one conversion; CHOLMOD reads its arrays in place
   if (const int64_t c = empty_column(m); c >= 0) {
     analysed.reset();
-    throw Fault("Cholesky factorisation failed: the matrix is not positive definite (the " +
-                row_str(c, a.block_rows()) + " pivot is not positive)");
+    throw Fault(
+        "Cholesky factorisation failed: the matrix is not positive definite (the pivot "
+        "of " +
+        row_str(c, a) + " is not positive)");
   }
   cholmod_sparse s{};
   s.nrow = s.ncol = static_cast<size_t>(m.rows());
@@ -194,8 +217,10 @@ void CholeskyFactor::Impl::factorize(const SystemMatrix& a) {
     const int* perm = static_cast<const int*>(factor->Perm);
     const int64_t row = perm ? perm[factor->minor] : static_cast<int64_t>(factor->minor);
     analysed.reset();  // the factor is unusable; analyse afresh next time
-    throw Fault("Cholesky factorisation failed: the matrix is not positive definite (the " +
-                row_str(row, a.block_rows()) + " pivot is not positive)");
+    throw Fault(
+        "Cholesky factorisation failed: the matrix is not positive definite (the pivot "
+        "of " +
+        row_str(row, a) + " is not positive)");
   }
   check_status("the numeric factorisation");
 }
@@ -258,9 +283,9 @@ struct LuFactor::Impl {
       return;
     }
     EigenSparse m = solver_form(a);
-    if (empty_column(m) >= 0) {
+    if (const int64_t c = empty_column(m); c >= 0) {
       analysed.reset();
-      throw Fault(kSingularLu);
+      throw Fault(empty_column_lu(c, a));
     }
     if (!(analysed == a.shared_pattern() && block_rows == a.block_rows() &&
           block_cols == a.block_cols() && structure.same(m))) {
@@ -333,7 +358,7 @@ void lower_triangular_solve(const SystemMatrix& a, std::span<const double> b, st
         }
       }
       if (diagonal == 0.0)
-        throw Fault("triangularSolve: the diagonal entry of " + row_str(row, br) + " is zero");
+        throw Fault("triangularSolve: the diagonal entry of " + row_str(row, a) + " is zero");
       x[row] = sum / diagonal;
     }
 }

@@ -91,7 +91,30 @@ int32_t position_in_row(const std::vector<int32_t>& row_ptr, const std::vector<i
   return it != last && *it == col ? static_cast<int32_t>(it - col_idx.begin()) : -1;
 }
 
+// An axis kept only where it fits the pattern's rows (columns).
+MeshAxisPtr fitting(MeshAxisPtr axis, int blocks) {
+  return axis && axis->mesh_numbers.size() == static_cast<size_t>(blocks) ? std::move(axis)
+                                                                          : nullptr;
+}
+
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// Mesh axes
+
+MeshAxisPtr MeshAxis::of(const Set& s) {
+  if (!s.has_mesh_numbers()) return nullptr;
+  auto axis = std::make_shared<MeshAxis>();
+  axis->set = s.describe();
+  axis->mesh_numbers.assign(s.mesh_numbers().begin(), s.mesh_numbers().end());
+  return axis;
+}
+
+std::string MeshAxis::element(int block) const {
+  const bool known = block >= 0 && static_cast<size_t>(block) < mesh_numbers.size();
+  return "element " + std::to_string(known ? mesh_numbers[static_cast<size_t>(block)] : block) +
+         " of " + set;
+}
 
 // ---------------------------------------------------------------------------
 // Construction
@@ -107,12 +130,16 @@ std::shared_ptr<const MatrixPattern> MatrixPattern::assembled(const Set& edges, 
   build_rows(edges, cm, row_incidences(edges, p->rows_, rm), p->cols_, p->row_ptr_, p->col_idx_,
              p->assembly_);
   p->edges_id_ = edges.id();
+  p->row_axis_ = MeshAxis::of(rows);
+  p->col_axis_ = &cols == &rows ? p->row_axis_ : MeshAxis::of(cols);
   return p;
 }
 
 std::shared_ptr<const MatrixPattern> MatrixPattern::from_csr(int rows, int cols,
                                                              std::vector<int32_t> row_ptr,
-                                                             std::vector<int32_t> col_idx) {
+                                                             std::vector<int32_t> col_idx,
+                                                             MeshAxisPtr row_axis,
+                                                             MeshAxisPtr col_axis) {
   if (rows < 0 || cols < 0 || row_ptr.size() != static_cast<size_t>(rows) + 1 ||
       row_ptr.front() != 0 || row_ptr.back() != static_cast<int32_t>(col_idx.size()))
     throw Fault("invalid sparse matrix: row pointers do not match the " + std::to_string(rows) +
@@ -130,6 +157,8 @@ std::shared_ptr<const MatrixPattern> MatrixPattern::from_csr(int rows, int cols,
   p->canonical_ = rows_canonical(row_ptr, col_idx);
   p->row_ptr_ = std::move(row_ptr);
   p->col_idx_ = std::move(col_idx);
+  p->row_axis_ = fitting(std::move(row_axis), rows);
+  p->col_axis_ = fitting(std::move(col_axis), cols);
   return p;
 }
 
@@ -145,7 +174,8 @@ std::shared_ptr<const MatrixPattern> MatrixPattern::stencil(
     for (const std::vector<int>& o : offsets) col_idx.push_back(grid.grid_point_at(p, o));
   }
   row_ptr[n] = checked_count(static_cast<int64_t>(n) * k, "blocks");
-  return from_csr(n, n, std::move(row_ptr), std::move(col_idx));
+  MeshAxisPtr points = MeshAxis::of(grid.points());
+  return from_csr(n, n, std::move(row_ptr), std::move(col_idx), points, points);
 }
 
 // ---------------------------------------------------------------------------
@@ -217,7 +247,9 @@ PatternUnion unite(const MatrixPattern& a, const MatrixPattern& b) {
     u.to_a[static_cast<size_t>(u.from_a[k])] = static_cast<int32_t>(k);
   for (size_t k = 0; k < u.from_b.size(); ++k)
     u.to_b[static_cast<size_t>(u.from_b[k])] = static_cast<int32_t>(k);
-  u.pattern = MatrixPattern::from_csr(a.rows(), a.cols(), std::move(row_ptr), std::move(col_idx));
+  u.pattern = MatrixPattern::from_csr(a.rows(), a.cols(), std::move(row_ptr), std::move(col_idx),
+                                      a.row_axis() ? a.row_axis() : b.row_axis(),
+                                      a.col_axis() ? a.col_axis() : b.col_axis());
   return u;
 }
 
@@ -234,7 +266,8 @@ PatternTranspose transpose(const MatrixPattern& p) {
       col_idx[at] = r;
       t.position[k] = at;
     }
-  t.pattern = MatrixPattern::from_csr(p.cols(), p.rows(), std::move(row_ptr), std::move(col_idx));
+  t.pattern = MatrixPattern::from_csr(p.cols(), p.rows(), std::move(row_ptr), std::move(col_idx),
+                                      p.col_axis(), p.row_axis());
   return t;
 }
 

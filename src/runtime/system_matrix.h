@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <span>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -43,6 +44,21 @@ inline const Set& member_set(const Set& s, int member) {
   return member == 0 ? s : s.endpoint_set(member - 1);
 }
 
+// The set whose elements are a pattern's block rows (or columns), kept where that set has mesh
+// numbers (Set::mesh_number: a scene renumbered it), so that a message about a row of the
+// matrix (a solver's) names the element as the mesh does. A copy, not the set: a matrix may
+// outlive the sets it was assembled over.
+struct MeshAxis {
+  std::string set;                    // Set::describe(), e.g. "set 'verts'"
+  std::vector<int32_t> mesh_numbers;  // per block row (column)
+
+  // Null unless `s` has mesh numbers.
+  static std::shared_ptr<const MeshAxis> of(const Set& s);
+  // "element 12 of set 'verts'" for block row (column) `block`, 12 its mesh number.
+  std::string element(int block) const;
+};
+using MeshAxisPtr = std::shared_ptr<const MeshAxis>;
+
 // The block structure of a matrix with rows() block rows and cols() block columns: row
 // pointers (rows() + 1 ints) and one column index per block. Columns are ascending and
 // distinct within each row ("canonical"), except in stencil patterns, whose rows follow the
@@ -53,10 +69,13 @@ class MatrixPattern {
   // endpoints(e) with x in `rows` and y in `cols`. A vertex set gives the diagonal.
   static std::shared_ptr<const MatrixPattern> assembled(const Set& edges, const Set& rows,
                                                         const Set& cols);
-  // From CSR arrays; canonical() tells whether the columns are ascending and distinct.
+  // From CSR arrays; canonical() tells whether the columns are ascending and distinct. A
+  // pattern derived from others passes on their axes (an axis of another length is dropped).
   static std::shared_ptr<const MatrixPattern> from_csr(int rows, int cols,
                                                        std::vector<int32_t> row_ptr,
-                                                       std::vector<int32_t> col_idx);
+                                                       std::vector<int32_t> col_idx,
+                                                       MeshAxisPtr row_axis = nullptr,
+                                                       MeshAxisPtr col_axis = nullptr);
   // LANGUAGE.md §8.7: one entry per point and per offset, the entry for offsets[j] in row p
   // at position row_ptr[p] + j, lying in the column of the (wrapped) point at that offset.
   static std::shared_ptr<const MatrixPattern> stencil(const Set& grid,
@@ -68,6 +87,11 @@ class MatrixPattern {
   const std::vector<int32_t>& row_ptr() const { return row_ptr_; }
   const std::vector<int32_t>& col_idx() const { return col_idx_; }
   bool canonical() const { return canonical_; }
+  // The sets of the block rows and columns where they have mesh numbers (else null):
+  // assembled and stencil patterns take them from their sets, unions, transposes and products
+  // from their operands.
+  const MeshAxisPtr& row_axis() const { return row_axis_; }
+  const MeshAxisPtr& col_axis() const { return col_axis_; }
 
   // Position of (the first) block (row, col), or -1 outside the pattern. A search: for
   // reads, not for assembly, which uses the precomputed index.
@@ -98,6 +122,7 @@ class MatrixPattern {
   std::vector<int32_t> col_idx_;
   AssemblyIndex assembly_;
   uint64_t edges_id_ = 0;  // the set the assembly index belongs to (0: none)
+  MeshAxisPtr row_axis_, col_axis_;
 };
 
 using PatternPtr = std::shared_ptr<const MatrixPattern>;

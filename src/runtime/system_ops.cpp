@@ -290,7 +290,8 @@ PatternPtr product_pattern(const MatrixPattern& a, const MatrixPattern& b) {
       throw Fault("a matrix product with more than 2^31 blocks");
     row_ptr[r + 1] = static_cast<int32_t>(col_idx.size());
   }
-  return MatrixPattern::from_csr(a.rows(), b.cols(), std::move(row_ptr), std::move(col_idx));
+  return MatrixPattern::from_csr(a.rows(), b.cols(), std::move(row_ptr), std::move(col_idx),
+                                 a.row_axis(), b.col_axis());
 }
 
 // out += A B, block by block, out having the product pattern.

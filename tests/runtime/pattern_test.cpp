@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "runtime/system_matrix.h"
+#include "runtime/system_ops.h"
 #include "runtime_fixtures.h"
 
 namespace simit::runtime {
@@ -310,6 +311,38 @@ TEST(Pattern, FromCsrValidates) {
   EXPECT_EQ(ok->find(0, 2), 1);
   EXPECT_THROW(ok->find(2, 0), Fault);
   EXPECT_FALSE(MatrixPattern::from_csr(1, 3, {0, 2}, {2, 1})->canonical());
+}
+
+// Mesh axes: a pattern over a set with mesh numbers keeps them (a copy) for its rows and
+// columns; unions, transposes and products pass them on; a set without them gives none.
+TEST(MeshAxes, FollowTheRowAndColumnSets) {
+  Set verts("verts"), tets("tets", {&verts, &verts, &verts, &verts});
+  build_cube_tets(1, verts, tets);  // 8 vertices, 6 tets
+  std::vector<int32_t> reversed(8);
+  for (int e = 0; e < 8; ++e) reversed[e] = 7 - e;
+  PatternRegistry registry;
+  const PatternPtr vt = registry.assembled(tets, verts, tets);
+  EXPECT_EQ(vt->row_axis(), nullptr);  // no mesh numbers yet
+  verts.set_mesh_numbers(reversed);
+  const PatternPtr p = MatrixPattern::assembled(tets, verts, tets);
+  ASSERT_NE(p->row_axis(), nullptr);
+  EXPECT_EQ(p->col_axis(), nullptr);  // tets keep their own numbers
+  EXPECT_EQ(p->row_axis()->mesh_numbers, reversed);
+  EXPECT_EQ(p->row_axis()->element(2), "element 5 of set 'verts'");
+  // The transpose swaps them; the product P Pᵀ has P's rows on both sides.
+  const PatternTranspose t = transpose(*p);
+  EXPECT_EQ(t.pattern->row_axis(), nullptr);
+  EXPECT_EQ(t.pattern->col_axis(), p->row_axis());
+  SystemMatrix a(p), at(t.pattern);
+  const SystemMatrix product = multiply(a, at);
+  EXPECT_EQ(product.pattern().row_axis(), p->row_axis());
+  EXPECT_EQ(product.pattern().col_axis(), p->row_axis());
+  // A union takes the first operand's, or the second's where the first has none.
+  const PatternPtr plain = MatrixPattern::from_csr(8, 8, std::vector<int32_t>(9, 0), {});
+  const PatternUnion u = unite(*plain, product.pattern());
+  EXPECT_EQ(u.pattern->row_axis(), p->row_axis());
+  // An axis of another length is dropped.
+  EXPECT_EQ(MatrixPattern::from_csr(2, 2, {0, 0, 0}, {}, p->row_axis())->row_axis(), nullptr);
 }
 
 }  // namespace

@@ -301,5 +301,94 @@ TEST_F(Systems, ConjugateGradientMatchesEigen) {
   EXPECT_LT(max_abs(as_eigen(ours) - to_dense(a).llt().solve(as_eigen(b))), kTol);
 }
 
+// A set a scene renumbered: the solvers' messages name the element by its mesh number (and
+// the set), never by the internal row.
+class RenumberedSystems : public Systems {
+ protected:
+  RenumberedSystems() {
+    // Mesh number of element e: (5 e + 3) mod n, a permutation (n = 27 is prime to 5).
+    std::vector<int32_t> numbers(static_cast<size_t>(verts.size()));
+    for (int e = 0; e < verts.size(); ++e) numbers[e] = (5 * e + 3) % verts.size();
+    verts.set_mesh_numbers(numbers);
+  }
+  // "element M of set 'verts'", M worked out here from the permutation above.
+  std::string element(int e) const {
+    return "element " + std::to_string((5 * e + 3) % verts.size()) + " of set 'verts'";
+  }
+  // The identity with a b x b block per vertex, but `value` at component (c, c) of vertex v.
+  SystemMatrix diagonal(int b, int v, int c, double value) {
+    SystemMatrix m(registry.assembled(verts, verts, verts), b, b);
+    assemble(m, verts, [b](int) { return Eigen::MatrixXd(Eigen::MatrixXd::Identity(b, b)); });
+    m.block(m.pattern().find(v, v))[c * b + c] = value;
+    return m;
+  }
+};
+
+TEST_F(RenumberedSystems, TriangularSolveNamesTheElement) {
+  ASSERT_EQ(verts.size(), 27);
+  SystemMatrix a = general(3, 17);
+  a.block(a.pattern().find(2, 2))[4] = 0.0;  // scalar row 7: component 1 of vertex 2
+  const std::vector<double> b = random_vector(a.scalar_rows(), 18);
+  std::vector<double> x(b.size());
+  EXPECT_EQ(fault_message([&] { lower_triangular_solve(a, b, x); }),
+            "triangularSolve: the diagonal entry of the row of component 1 of " + element(2) +
+                " is zero");
+  // Unblocked: the row is the element's.
+  SystemMatrix u = general(1, 19);
+  u.block(u.pattern().find(11, 11))[0] = 0.0;
+  x.resize(static_cast<size_t>(u.scalar_rows()));
+  EXPECT_EQ(
+      fault_message([&] { lower_triangular_solve(u, std::vector<double>(x.size(), 1.0), x); }),
+      "triangularSolve: the diagonal entry of the row of " + element(11) + " is zero");
+}
+
+TEST_F(RenumberedSystems, CholeskyNamesTheElementWhosePivotFails) {
+  // One negative diagonal entry: whatever the ordering, the pivot that fails is that row's.
+  EXPECT_EQ(fault_message([&] { CholeskyFactor chol(diagonal(2, 13, 1, -4.0)); }),
+            "Cholesky factorisation failed: the matrix is not positive definite (the pivot of the "
+            "row of component 1 of " +
+                element(13) + " is not positive)");
+  // A zero diagonal entry leaves its column empty.
+  EXPECT_EQ(fault_message([&] { CholeskyFactor chol(diagonal(1, 20, 0, 0.0)); }),
+            "Cholesky factorisation failed: the matrix is not positive definite (the pivot of the "
+            "row of " +
+                element(20) + " is not positive)");
+  // Through a sum (the union of two patterns keeps the rows' set): spd() adds two matrices.
+  SystemMatrix s = spd(1, 1.0, 9);
+  ASSERT_NE(s.pattern().row_axis(), nullptr);
+  s.block(s.pattern().find(7, 7))[0] = -1e3;
+  const std::string msg = fault_message([&] { CholeskyFactor chol(s); });
+  EXPECT_NE(msg.find("of set 'verts'"), std::string::npos) << msg;
+}
+
+TEST_F(RenumberedSystems, SingularLuNamesTheEmptyColumn) {
+  EXPECT_EQ(fault_message([&] { LuFactor lu(diagonal(3, 4, 2, 0.0)); }),
+            "LU factorisation failed: the matrix is singular (the column of component 2 of " +
+                element(4) + " has no nonzero entry)");
+  // `A \ b`: symmetric, so Cholesky first; LU's message is the one reported.
+  EXPECT_EQ(fault_message([&] {
+              solve(diagonal(1, 0, 0, 0.0), std::vector<double>(static_cast<size_t>(27), 1.0));
+            }),
+            "LU factorisation failed: the matrix is singular (the column of " + element(0) +
+                " has no nonzero entry)");
+}
+
+// Rows that are not a renumbered set keep the plain row numbers, also next to columns that are.
+TEST(PlainSystems, KeepTheirRowNumbers) {
+  Set verts("verts"), tets("tets", {&verts, &verts, &verts, &verts});
+  build_cube_tets(2, verts, tets);
+  PatternRegistry registry;
+  SystemMatrix m(registry.assembled(verts, verts, verts));
+  assemble(m, verts, [](int) { return Eigen::MatrixXd(Eigen::MatrixXd::Identity(1, 1)); });
+  m.block(m.pattern().find(5, 5))[0] = 0.0;
+  std::vector<double> x(static_cast<size_t>(m.scalar_rows()));
+  EXPECT_EQ(
+      fault_message([&] { lower_triangular_solve(m, std::vector<double>(x.size(), 1.0), x); }),
+      "triangularSolve: the diagonal entry of row 5 is zero");
+  EXPECT_EQ(fault_message([&] { CholeskyFactor chol(m); }),
+            "Cholesky factorisation failed: the matrix is not positive definite (the pivot of row "
+            "5 is not positive)");
+}
+
 }  // namespace
 }  // namespace simit::runtime
