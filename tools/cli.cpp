@@ -88,10 +88,12 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
                  return k.has_value();
                },
                "What runs " + runs +
-                   ": interpreter (default) or jit (hot map and apply sites, solver loops and "
+                   ": interpreter (default), jit (hot map and apply sites, solver loops and "
                    "other system statements compiled to native code with LLVM; the rest "
-                   "interpreted). --backend is another name of this option")
-               ->type_name("interpreter|jit");
+                   "interpreted) or gpu (as jit, with the compiled maps run on an NVIDIA GPU "
+                   "through the CUDA driver, their data copied there and back at each call; "
+                   "solver loops stay on the CPU). --backend is another name of this option")
+               ->type_name("interpreter|jit|gpu");
   t.threads = add_parsed(
                   sub, "--threads",
                   [&x](const std::string& s, std::string& error) {
@@ -147,7 +149,7 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
 // nothing, silently. "" or the usage error. A scene's own `executor` key may choose the JIT
 // when the command line does not: Scene::open checks those.
 std::string jit_options_misused(const ExecutorFlags& t, bool scene) {
-  if (t.choice->kind == ExecutorKind::Jit || (scene && t.kind->count() == 0)) return "";
+  if (compiles(t.choice->kind) || (scene && t.kind->count() == 0)) return "";
   if (t.choice->check) return "--check-jit needs --executor jit";
   if (*t.stats) return "--jit-stats needs --executor jit";
   return "";

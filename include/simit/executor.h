@@ -10,9 +10,14 @@
 
 namespace simit {
 
-// The reference interpreter, or the tracing JIT (hot map and apply sites and runs of system
-// statements compiled to native code with LLVM; a build with -DSIMIT_WITH_LLVM=ON).
-enum class ExecutorKind { Interpreter, Jit };
+// The reference interpreter, the tracing JIT (hot map and apply sites and runs of system
+// statements compiled to native code with LLVM; a build with -DSIMIT_WITH_LLVM=ON), or the
+// JIT with its map kernels compiled to PTX and run on an NVIDIA GPU (gpu; the rest as jit).
+enum class ExecutorKind { Interpreter, Jit, Gpu };
+
+// Whether `kind` compiles (jit and gpu): what the JIT's options (--jit-stats, --check-jit,
+// threads, the kernel cache) apply to.
+inline bool compiles(ExecutorKind kind) { return kind != ExecutorKind::Interpreter; }
 
 // The most threads a choice may ask for.
 inline constexpr int kMaxThreads = 1024;
@@ -53,12 +58,12 @@ struct ExecutorChoice {
   bool eager = true;
 };
 
-// "interpreter" or "jit".
+// "interpreter", "jit" or "gpu".
 const char* executor_name(ExecutorKind kind);
 
 // The parsers of what a user writes. Each returns nullopt (or false) with `error` naming the
 // bad value and listing the valid ones, e.g. "unknown executor 'jti': valid executors are
-// interpreter, jit".
+// interpreter, jit, gpu".
 std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error);
 // One dump kind, "loop-ir", "passes", "llvm" or "ptx", switched on in `choice`.
 bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string& error);
@@ -69,6 +74,10 @@ std::optional<std::string> parse_jit_cache(std::string_view text, std::string& e
 // A whole number of threads from 1 to kMaxThreads, or "all" (or "0", as in other tools'
 // thread options): default_threads(), the count returned.
 std::optional<int> parse_threads(std::string_view text, std::string& error);
+
+// For the tests: the environment variable SIMIT_TEST_GPU_EMULATION is set (and not 0), so
+// `gpu` runs its data path over host memory with the CPU's kernels (jit/ptx/gpu_executor.h).
+bool gpu_emulated_for_test();
 
 // Whether this build has the JIT (configured with -DSIMIT_WITH_LLVM=ON).
 bool jit_available();

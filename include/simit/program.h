@@ -47,9 +47,9 @@ struct Options {
 };
 
 // Options from the original's `init(backend, floatSize)` spelling: "cpu" (the JIT),
-// "interpreter" or "jit"; 4 or 8. Throws Error on any other name, on "gpu" (no GPU executor is
-// built) and on "cpu" or "jit" in a build without the JIT. It sets nothing globally: pass the
-// result to Program.
+// "interpreter", "jit" or "gpu"; 4 or 8. Throws Error on any other name, on "cpu", "jit" or
+// "gpu" in a build without the JIT, and on "gpu" where no GPU opens (the reason given). It sets
+// nothing globally: pass the result to Program.
 [[nodiscard]] Options init(const std::string& backend = "cpu", int float_size = 8);
 
 // One compile diagnostic; `rendered` is `file:line:col: error: message`, the line and a caret.

@@ -27,7 +27,7 @@ Engine::Engine(std::shared_ptr<const CompiledProgram> program, EngineOptions opt
   if (std::string bad = executor_unavailable(options_.executor); !bad.empty())
     throw std::runtime_error(bad);
   executor_ = make_executor();
-  if (options_.executor.kind == ExecutorKind::Jit) install_jit();
+  if (compiles(options_.executor.kind)) install_jit();
 }
 
 Engine::Engine(const ast::Program& program, EngineOptions options)
@@ -70,6 +70,8 @@ void Engine::install_jit() {
   j.corrupt_for_test = options_.corrupt_for_test;
   j.shuffle_seed = options_.shuffle_seed_for_test;
   j.threads = x.threads;
+  j.gpu = x.kind == ExecutorKind::Gpu;
+  j.gpu_emulated = j.gpu && gpu_emulated_for_test();
   // The tests run the corpus and the random programs, whose sets are small, on threads in
   // chunks of a few elements.
   if (const char* chunk = std::getenv("SIMIT_TEST_THREAD_CHUNK"))
@@ -86,9 +88,19 @@ void Engine::install_jit() {
 
 void Engine::set_executor(ExecutorKind kind) {
   if (kind == options_.executor.kind) return;
-  if (kind == ExecutorKind::Jit) {
-    install_jit();  // throws, changing nothing, without a JIT
+  if (compiles(kind)) {
+    // install_jit reads the kind (gpu or jit); it throws, changing nothing, when the build
+    // or the machine cannot run it.
+    const ExecutorKind before = options_.executor.kind;
     options_.executor.kind = kind;
+    try {
+      if (std::string why = executor_unavailable(options_.executor); !why.empty())
+        throw std::runtime_error(why);
+      install_jit();
+    } catch (...) {
+      options_.executor.kind = before;
+      throw;
+    }
     return;
   }
   options_.executor.kind = kind;

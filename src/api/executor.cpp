@@ -11,20 +11,34 @@
 #include <sched.h>
 #endif
 
+#include <cstdlib>
+
 #ifdef SIMIT_HAS_JIT
+#include "jit/ptx/cuda_driver.h"
 #include "jit/ptx/ptx_check.h"
 #endif
 
 namespace simit {
 
+bool gpu_emulated_for_test() {
+  const char* e = std::getenv("SIMIT_TEST_GPU_EMULATION");
+  return e && *e && std::string_view(e) != "0";
+}
+
 const char* executor_name(ExecutorKind kind) {
-  return kind == ExecutorKind::Jit ? "jit" : "interpreter";
+  switch (kind) {
+    case ExecutorKind::Interpreter: return "interpreter";
+    case ExecutorKind::Jit: return "jit";
+    case ExecutorKind::Gpu: return "gpu";
+  }
+  return "interpreter";
 }
 
 std::optional<ExecutorKind> parse_executor_kind(std::string_view text, std::string& error) {
   if (text == "interpreter") return ExecutorKind::Interpreter;
   if (text == "jit") return ExecutorKind::Jit;
-  error = "unknown executor '" + std::string(text) + "': valid executors are interpreter, jit";
+  if (text == "gpu") return ExecutorKind::Gpu;
+  error = "unknown executor '" + std::string(text) + "': valid executors are interpreter, jit, gpu";
   return std::nullopt;
 }
 
@@ -99,8 +113,16 @@ bool jit_available() {
 }
 
 std::string executor_unavailable(const ExecutorChoice& choice) {
-  if (choice.kind == ExecutorKind::Jit && !jit_available())
+  if (compiles(choice.kind) && !jit_available())
     return "this build has no JIT: configure with -DSIMIT_WITH_LLVM=ON (LLVM 19)";
+  if (choice.kind == ExecutorKind::Gpu) {
+#ifdef SIMIT_HAS_JIT
+    // The tests of the GPU's data path run it over host memory where there is no GPU.
+    if (!gpu_emulated_for_test())
+      if (std::string why = jit::cuda::gpu_unavailable_reason(); !why.empty())
+        return "no GPU to run on: " + why;
+#endif
+  }
   if (choice.threads < 1 || choice.threads > kMaxThreads)
     return "bad thread count " + std::to_string(choice.threads) +
            ": expected a whole number from 1 to " + std::to_string(kMaxThreads) +

@@ -14,9 +14,6 @@ namespace ast = frontend::ast;
 
 Options init(const std::string& backend, int float_size) {
   Options o;
-  if (backend == "gpu")
-    throw Error(
-        "no GPU executor in this build: valid executors are cpu (the JIT), jit, interpreter");
   std::string error;
   if (backend == "cpu")  // the original's name of its JIT-compiled native code
     o.executor.kind = ExecutorKind::Jit;

@@ -32,6 +32,67 @@ int element_of_block(const runtime::MatrixPattern& p, int32_t pos) {
   return -1;
 }
 
+// Where component c of a value with `block` components per element of `set` lies, for a
+// message about a set a scene renumbered: "component 1 at element 12 of set 'verts'" (12 the
+// element's mesh number; no component for one per element).
+std::string mesh_place(const runtime::Set& set, size_t c, size_t block) {
+  const int element = static_cast<int>(c / block);
+  return (block > 1 ? "component " + std::to_string(c % block) + " " : std::string()) +
+         "at element " + std::to_string(set.mesh_number(element)) + " of " + set.describe();
+}
+
+// The set a value's elements are: `v` bound to a set (the variable an index set names).
+const runtime::Set* bound_set(const Value& v) {
+  return v.kind() == Value::Kind::Set && v.binding() ? v.binding()->set : nullptr;
+}
+
+// The set (of `elements` elements) whose elements are the blocks of a vector of `type`: the
+// one its dimension's variable (an extern, a parameter or a generic) holds, as `value` reads it.
+const runtime::Set* vector_set(const frontend::Type& type, size_t elements,
+                               const std::function<const Value*(const ast::Variable&)>& value) {
+  if (type.order() != 1 || type.dims[0].kind == frontend::IndexSet::Kind::Fixed ||
+      !type.dims[0].var)
+    return nullptr;
+  const Value* v = value(*type.dims[0].var);
+  const runtime::Set* set = v ? bound_set(*v) : nullptr;
+  return set && static_cast<size_t>(set->size()) == elements ? set : nullptr;
+}
+
+// The set whose elements are the blocks of a site's vector result of `type` (`elements`
+// blocks): the extern its type names, or the one a generic of the mapped function is bound to
+// by the site; else the one set of that size among the target and its endpoint sets.
+const runtime::Set* result_set(const interp::SiteCall& call, const frontend::Type& type,
+                               size_t elements) {
+  const ast::FuncDecl& f = *call.plan.func;
+  auto global = [&](const ast::Variable& var) -> const Value* {
+    return var.kind == ast::Variable::Kind::Extern ? &call.interpreter.global(var) : nullptr;
+  };
+  auto value = [&](const ast::Variable& var) -> const Value* {
+    if (var.kind == ast::Variable::Kind::Extern) return global(var);
+    const std::vector<frontend::IndexSet>& bound = call.plan.site->bindings;
+    for (size_t k = 0; k < f.generics.size() && k < bound.size(); ++k)
+      if (f.generics[k].var == &var && bound[k].var) return global(*bound[k].var);
+    return nullptr;
+  };
+  if (const runtime::Set* set = vector_set(type, elements, value)) return set;
+  const runtime::Set* found = nullptr;
+  for (int m = 0; m <= call.target.arity(); ++m) {
+    const runtime::Set& s = runtime::member_set(call.target, m);
+    if (static_cast<size_t>(s.size()) != elements) continue;
+    if (found && found != &s) return nullptr;  // two sets of that size: no telling which
+    found = &s;
+  }
+  return found;
+}
+
+// Flips the lowest bit of a double (--check-jit's test of itself, JitOptions::corrupt_for_test).
+void flip_lowest_bit(double& v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits ^= 1;
+  std::memcpy(&v, &bits, sizeof bits);
+}
+
 }  // namespace
 
 // Equal bits, or zeros of either sign (a folded product by a zero, jit/zero_fold.h).
@@ -63,16 +124,21 @@ bool TraceController::check_site(Entry& e, interp::SiteCall& call) {
   }
   if (!run_kernel(e, call)) return false;  // an error: the interpreter reports it
   ++e.stats.calls;
-  if (options_.corrupt_for_test && !call.results.empty()) {
-    Value& r = call.results[0];
-    double* v = r.kind() == Value::Kind::Matrix ? r.matrix()->values()
-                : r.is_tensor()                 ? r.tensor().mutable_floats()
-                                                : nullptr;
+  if (options_.corrupt_for_test) {
+    // The first result's first value, or for a site without results (an apply) the lowest
+    // bit of the first written field's array.
+    Value* r = call.results.empty() ? nullptr : &call.results[0];
+    double* v = !r                                 ? nullptr
+                : r->kind() == Value::Kind::Matrix ? r->matrix()->values()
+                : r->is_tensor()                   ? r->tensor().mutable_floats()
+                                                   : nullptr;
     if (v) {
-      uint64_t bits;
-      std::memcpy(&bits, v, sizeof bits);
-      bits ^= 1;
-      std::memcpy(v, &bits, sizeof bits);
+      flip_lowest_bit(*v);
+    } else if (!r && !before.empty() && !before.front().second.empty()) {
+      const ArraySlot& a = t.arrays[static_cast<size_t>(before.front().first)];
+      runtime::Field& f =
+          const_cast<runtime::Set&>(runtime::member_set(call.target, a.member)).field(a.index);
+      f.bytes()[0] ^= std::byte{1};
     }
   }
   p->specialised.resize(call.results.size());
@@ -111,14 +177,16 @@ void TraceController::site_done(interp::SiteCall& call) {
   if (!pending_ || pending_->at != call.plan.site) return;
   const std::unique_ptr<Pending> p = std::move(pending_);
   const ast::FuncDecl& f = *call.plan.func;
+  // `element` of `set` is named by its mesh number (the element itself without mesh numbers).
   auto differ = [&](const std::string& what, int element, const runtime::Set& set, double interp,
                     double jit) {
     throw interp::RuntimeError(
-        call.at,
-        "--check-jit: the compiled " + p->name + " differs from the interpreter in " + what +
-            (element >= 0 ? " at element " + std::to_string(element) + " of " + set.describe()
-                          : "") +
-            ": interpreted " + number(interp) + ", compiled " + number(jit));
+        call.at, "--check-jit: the compiled " + p->name + " differs from the interpreter in " +
+                     what +
+                     (element >= 0 ? " at element " + std::to_string(set.mesh_number(element)) +
+                                         " of " + set.describe()
+                                   : "") +
+                     ": interpreted " + number(interp) + ", compiled " + number(jit));
   };
   for (size_t r = 0; r < call.results.size() && r < p->results.size(); ++r) {
     const Value& v = call.results[r];
@@ -161,6 +229,13 @@ void TraceController::site_done(interp::SiteCall& call) {
                element_of_block(v.matrix()->pattern(), pos), call.target, in[c], jit[c]);
       }
       const size_t block = v.tensor().shape().block_size();
+      const runtime::Set* set =
+          f.results[r].var && f.results[r].var->type
+              ? result_set(call, *f.results[r].var->type, v.tensor().size() / block)
+              : nullptr;
+      if (set && set->has_mesh_numbers())
+        differ("result '" + f.results[r].name + "' " + mesh_place(*set, c, block), -1, *set, in[c],
+               jit[c]);
       differ(what + " (entry " + std::to_string(c / block) + " of the vector)", -1, call.target,
              in[c], jit[c]);
     }
@@ -219,6 +294,21 @@ bool TraceController::check_system(LoopEntry& e, interp::ExecState& in) {
     f.values = std::move(compiled);
     p->run_fields.push_back(std::move(f));
   }
+  if (options_.corrupt_for_test) {
+    // The first written field's first value, else the first written float vector's.
+    auto floats = [](Value& v) {
+      return v.is_tensor() && v.tensor().kind() == runtime::ComponentKind::Float &&
+             v.tensor().size() > 0;
+    };
+    if (!p->run_fields.empty() && !p->run_fields.front().values.empty())
+      flip_lowest_bit(p->run_fields.front().values.front());
+    else
+      for (auto& [var, value] : p->variables)
+        if (floats(value)) {
+          flip_lowest_bit(value.tensor().mutable_floats()[0]);
+          break;
+        }
+  }
   pending_ = std::move(p);
   if (e.run.size() > 1 || !e.run.front()->is<ast::While>()) checking_run_ = e.run.back();
   return true;
@@ -228,16 +318,38 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::ExecState& i
   if (!pending_ || pending_->at != &stmt) return;
   checking_run_ = nullptr;
   const std::unique_ptr<Pending> p = std::move(pending_);
+  // The set whose field `field` is, among those the compiled runs ending at this statement
+  // bind (looked for only when a field differs).
+  auto field_set = [&](const runtime::Field& field) -> const runtime::Set* {
+    for (const auto* states : {&loops_, &runs_, &alone_})
+      for (const auto& [key, state] : *states)
+        for (const std::unique_ptr<LoopEntry>& e : state->entries) {
+          if (e->run.empty() || e->run.back() != &stmt) continue;
+          for (const SystemBinding::Array& a : e->traced.binding.arrays) {
+            if (a.part != SystemBinding::Array::Part::Field || !a.var) continue;
+            if (const runtime::Set* set = bound_set(in.variable(*a.var)))
+              for (int k = 0; k < set->field_count(); ++k)
+                if (&set->field(k) == &field) return set;
+          }
+        }
+    return nullptr;
+  };
+  // Where component c of a value with `block` components per element of `set` lies: by the
+  // mesh's numbers where the set has them.
+  auto place = [](const runtime::Set* set, size_t c, size_t block) {
+    if (set && set->has_mesh_numbers()) return mesh_place(*set, c, block);
+    return "component " + std::to_string(c) + " (element " + std::to_string(c / block) + ")";
+  };
   for (const Pending::RunField& f : p->run_fields) {
     const std::vector<double> got = field_values(*f.field, f.values.size());
     const size_t per = std::max<size_t>(f.field->components(), 1);
     for (size_t c = 0; c < f.values.size(); ++c)
       if (!same_bits(got[c], f.values[c]))
-        throw interp::RuntimeError(
-            stmt.span,
-            "--check-jit: the compiled " + p->name + " differs from the interpreter in '" + f.name +
-                "' component " + std::to_string(c) + " (element " + std::to_string(c / per) +
-                "): interpreted " + number(got[c]) + ", compiled " + number(f.values[c]));
+        throw interp::RuntimeError(stmt.span, "--check-jit: the compiled " + p->name +
+                                                  " differs from the interpreter in '" + f.name +
+                                                  "' " + place(field_set(*f.field), c, per) +
+                                                  ": interpreted " + number(got[c]) +
+                                                  ", compiled " + number(f.values[c]));
   }
   for (const auto& [var, jit] : p->variables) {
     const Value& got = in.variable(*var);
@@ -251,9 +363,11 @@ void TraceController::statement_done(const ast::Stmt& stmt, interp::ExecState& i
       const runtime::Tensor &a = got.tensor(), &b = jit.tensor();
       if (a.kind() != runtime::ComponentKind::Float || a.size() != b.size()) continue;
       const size_t block = a.shape().block_size();
+      auto value = [&](const ast::Variable& v) -> const Value* { return &in.variable(v); };
       for (size_t c = 0; c < a.size(); ++c)
         if (!same_bits(a.floats()[c], b.floats()[c]))
-          differ(" component " + std::to_string(c) + " (element " + std::to_string(c / block) + ")",
+          differ(" " + place(var->type ? vector_set(*var->type, a.size() / block, value) : nullptr,
+                             c, block),
                  a.floats()[c], b.floats()[c]);
     } else if (got.kind() == Value::Kind::Float && jit.kind() == Value::Kind::Float) {
       if (!same_bits(got.as_float(), jit.as_float())) differ("", got.as_float(), jit.as_float());

@@ -14,7 +14,9 @@
 #include "jit/lower.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
+#include "jit/ptx/gpu_executor.h"
 #include "jit/ptx/ptx_check.h"
+#include "jit/ptx/ptx_target.h"
 #include "jit/specialise.h"
 #include "jit/thread_pool.h"
 #include "jit/write_guard.h"
@@ -75,6 +77,19 @@ TraceController::TraceController(JitOptions options) : options_(options) {
     executor_ = make_threaded_executor(options_.threads, options_.min_chunk_for_test);
   else
     executor_ = make_serial_executor();
+  if (options_.gpu) {
+    // The engine checked that a GPU opens (executor_unavailable); a driver failing between
+    // the two says so here.
+    std::string why;
+    device_executor_ =
+        options_.gpu_emulated ? ptx::make_emulated_gpu_executor() : ptx::make_gpu_executor(why);
+    if (!device_executor_) throw std::runtime_error("--executor gpu cannot run: " + why);
+    if (!options_.gpu_emulated) {
+      device_target_ = ptx::make_ptx_target(
+          options_.gpu_arch.empty() ? ptx::kDefaultGpuArch : options_.gpu_arch, why);
+      if (!device_target_) throw std::runtime_error("--executor gpu cannot run: " + why);
+    }
+  }
 }
 
 TraceController::~TraceController() = default;
@@ -87,6 +102,30 @@ LowerOptions TraceController::lower_options() const {
   o.dump_llvm = options_.dump_llvm;
   o.defer_assembly = executor_->parallel();
   return o;
+}
+
+// Under `--executor gpu`: the trace lowered with deferred writes for the GPU's target and
+// marked to run on the GPU; no kernel (the trace as it was) when the GPU cannot run it, with
+// why in the trace's note, so that the host's target compiles it.
+Lowered TraceController::lower_for_device(Entry& e) {
+  Lowered none;
+  if (!device_executor_) return none;
+  const Trace traced = *e.traced.trace;
+  LowerOptions o = lower_options();
+  o.defer_assembly = true;
+  Lowered l = lower(*e.traced.trace, device_target_ ? *device_target_ : *target_, o);
+  std::string why = l.failure;
+  // Elements that add into shared blocks without deferred writes would run one launch each.
+  if (l.kernel && writes_of(*e.traced.trace) == MapWrites::Shared && !e.traced.trace->deferred)
+    why = "its elements add into shared blocks that cannot be deferred";
+  if (!why.empty() || !l.kernel) {
+    *e.traced.trace = traced;
+    e.stats.note += "; on the host: " + why;
+    return none;
+  }
+  e.on_device = true;
+  e.stats.note += device_target_ ? "; on the GPU" : "; on the GPU (emulated)";
+  return l;
 }
 
 TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
@@ -129,16 +168,17 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
       s.failures = kMaxFailures;
       s.gave_up = e->stats.status;
     } else {
-      Lowered l = lower(*e->traced.trace, *target_, lower_options());
+      Lowered l = lower_for_device(*e);
+      if (!l.kernel) l = lower(*e->traced.trace, *target_, lower_options());
       e->stats.ir_nodes = l.ir_nodes;
       if (!l.kernel) {
         give_up("interpreted: " + l.failure);
       } else {
         e->kernel = std::move(l.kernel);
-        e->stats.status = "compiled";
+        e->stats.status = e->on_device ? "compiled for the GPU" : "compiled";
         e->writes = writes_of(*e->traced.trace);
         if (e->kernel->lanes > 1)
-          e->stats.note = "; " + std::to_string(e->kernel->lanes) + " elements at once";
+          e->stats.note += "; " + std::to_string(e->kernel->lanes) + " elements at once";
         if (e->kernel->cached) e->stats.note += "; from the kernel cache";
         e->stats.compile_ms = e->kernel->compile_ms;
       }

@@ -51,6 +51,13 @@ struct JitOptions {
   uint64_t shuffle_seed = 0;
   // Threads compiled maps and solver loops run on (the engine's pool; 1: the calling thread).
   int threads = 1;
+  // `--executor gpu`: map kernels compiled for the GPU (PTX for gpu_arch) and run on it
+  // (jit/ptx/gpu_executor.h); a map the GPU target refuses, and every system trace, runs on
+  // the host as under `jit`. gpu_emulated: the host-memory driver and the CPU target's
+  // kernels stand in for the GPU (the tests of the data path where there is none).
+  bool gpu = false;
+  bool gpu_emulated = false;
+  std::string gpu_arch;  // "": ptx::kDefaultGpuArch
   // For the tests of threads on small sets: the smallest chunk of a map (0: kMinThreadChunk).
   int min_chunk_for_test = 0;
 };
@@ -99,6 +106,7 @@ class TraceController : public interp::SiteHook {
   LoopEntry* system_entry_for(LoopState& s, std::vector<const frontend::ast::Stmt*> run,
                               interp::ExecState& in);
   Entry* entry_for(interp::SiteCall& call);
+  Lowered lower_for_device(Entry& e);
   bool run_kernel(Entry& e, interp::SiteCall& call);
   // Per result: its pattern table (null for a vector) and the pattern it belongs to.
   bool prepare_deferred(Entry& e, interp::SiteCall& call, const std::vector<const int32_t*>& tables,
@@ -120,6 +128,9 @@ class TraceController : public interp::SiteHook {
   std::unique_ptr<Target> target_;
   std::string target_error_;
   std::unique_ptr<Executor> executor_;
+  // `--executor gpu`: the GPU's target (null when emulated: the CPU's compiles) and executor.
+  std::unique_ptr<Target> device_target_;
+  std::unique_ptr<Executor> device_executor_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
   std::map<const void*, std::unique_ptr<LoopState>> loops_;  // by while loop
   std::map<const void*, std::unique_ptr<LoopState>> runs_;   // by a run's first statement

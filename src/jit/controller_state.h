@@ -27,6 +27,7 @@ struct TraceController::Entry {
   TracedSite traced;
   std::unique_ptr<Kernel> kernel;
   MapWrites writes = MapWrites::Shared;
+  bool on_device = false;  // the kernel runs through the GPU executor
   TraceStats stats;
   // Per result: its specialised pattern (jit/specialise.h), the last matrix made on it
   // (reused, zeroed, when the program has dropped it), the pattern the guard dropped (reused

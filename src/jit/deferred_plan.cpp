@@ -129,6 +129,18 @@ double* DeferredPlan::deferred(int result) {
   return nullptr;
 }
 
+size_t DeferredPlan::table_entries(int result) const {
+  for (const Result& r : results_)
+    if (r.result == result) return static_cast<size_t>(size_) * static_cast<size_t>(r.stride);
+  return 0;
+}
+
+size_t DeferredPlan::deferred_values(int result) const {
+  for (const Result& r : results_)
+    if (r.result == result) return r.scratch.size();
+  return 0;
+}
+
 void DeferredPlan::finish(const std::vector<double*>& values) const {
   if (!split_) return;
   for (const Result& r : results_) {

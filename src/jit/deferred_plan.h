@@ -33,6 +33,9 @@ class DeferredPlan {
   // For the array slots of a Table or a Deferred array of result `result`.
   const int32_t* table(int result) const;
   double* deferred(int result);
+  // Their lengths: the table's entries and the deferred blocks' values.
+  size_t table_entries(int result) const;
+  size_t deferred_values(int result) const;
   // After a split run: each deferred block added to its block, in element order. `values`:
   // per result its values (null for results not assembled).
   void finish(const std::vector<double*>& values) const;

@@ -140,67 +140,98 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   guard_results(e, call, scalars);
   std::vector<runtime::PatternPtr> patterns;
   const std::vector<const int32_t*> tables = prepare_results(e, call, &patterns);
-  const int32_t chunk = executor_->chunk_for(call.target.size());
+  Executor& executor = e.on_device ? *device_executor_ : *executor_;
+  const int32_t chunk = executor.chunk_for(call.target.size());
   MapWrites writes = e.writes;
   if (t.deferred && !prepare_deferred(e, call, tables, patterns, chunk, writes)) return false;
   std::vector<void*> arrays(t.arrays.size(), nullptr);
+  // Each array's bytes and whether the kernel writes it, for an executor that copies them to
+  // another memory (a GPU's).
+  std::vector<size_t> bytes(t.arrays.size(), 0);
+  std::vector<uint8_t> written(t.arrays.size(), 0);
   // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
   // pointers read afterwards then see the copy.
   for (int pass = 0; pass < 2; ++pass)
     for (size_t i = 0; i < t.arrays.size(); ++i) {
       const ArraySlot& a = t.arrays[i];
       if (a.written != (pass == 0)) continue;
+      written[i] = a.written ? 1 : 0;
       switch (a.kind) {
         case ArraySlot::Kind::Field: {
           auto& set = const_cast<runtime::Set&>(runtime::member_set(call.target, a.member));
           runtime::Field& f = set.field(a.index);
           arrays[i] = a.written ? static_cast<void*>(f.bytes())
                                 : const_cast<std::byte*>(std::as_const(f).bytes());
+          bytes[i] = f.element_bytes() * static_cast<size_t>(set.size());
           break;
         }
-        case ArraySlot::Kind::Vector:
-          arrays[i] = const_cast<double*>(call.partial_args[a.index].tensor().floats());
+        case ArraySlot::Kind::Vector: {
+          const runtime::Tensor& v = call.partial_args[a.index].tensor();
+          arrays[i] = const_cast<double*>(v.floats());
+          bytes[i] = static_cast<size_t>(v.size()) * sizeof(double);
           break;
+        }
         case ArraySlot::Kind::Result: {
           Value& r = call.results[a.index];
-          if (r.kind() == Value::Kind::Matrix)
-            arrays[i] = r.matrix()->values();
-          else if (r.is_tensor())
+          if (r.kind() == Value::Kind::Matrix) {
+            runtime::SystemMatrix& m = *r.matrix();
+            arrays[i] = m.values();
+            bytes[i] = static_cast<size_t>(m.pattern().nnz()) *
+                       static_cast<size_t>(m.block_size()) * sizeof(double);
+          } else if (r.is_tensor()) {
             arrays[i] = r.tensor().mutable_floats();
-          else
+            bytes[i] = static_cast<size_t>(r.tensor().size()) * sizeof(double);
+          } else {
             return false;
+          }
           break;
         }
         case ArraySlot::Kind::Table: {
           const int32_t* table = e.plan ? e.plan->table(a.index) : nullptr;
           arrays[i] = const_cast<int32_t*>(table ? table : tables[a.index]);
+          const auto& full = call.plan.results[static_cast<size_t>(a.index)].pattern;
+          bytes[i] = (table ? e.plan->table_entries(a.index)
+                            : (full ? full->assembly().table.size() : 0)) *
+                     sizeof(int32_t);
           break;
         }
-        case ArraySlot::Kind::Deferred: arrays[i] = e.plan->deferred(a.index); break;
+        case ArraySlot::Kind::Deferred:
+          arrays[i] = e.plan->deferred(a.index);
+          bytes[i] = e.plan->deferred_values(a.index) * sizeof(double);
+          break;
         case ArraySlot::Kind::Marks: {
           const size_t r = static_cast<size_t>(a.index);
           arrays[i] = r < e.special.size() && !e.special[r].marks.empty()
                           ? e.special[r].marks.data()
                           : nullptr;
+          bytes[i] = arrays[i] ? e.special[r].marks.size() : 0;
           break;
         }
         case ArraySlot::Kind::Matrix: {
           const Value& m = call.partial_args[a.index];
           if (m.kind() != Value::Kind::Matrix || !m.matrix()) return false;
           arrays[i] = const_cast<double*>(m.matrix()->values());
+          bytes[i] = static_cast<size_t>(m.matrix()->pattern().nnz()) *
+                     static_cast<size_t>(m.matrix()->block_size()) * sizeof(double);
           break;
         }
         case ArraySlot::Kind::Positions:
           e.positions.resize(t.arrays.size());
           if (!find_positions(a, call, e.positions[i])) return false;
           arrays[i] = e.positions[i].data();
+          bytes[i] = e.positions[i].size() * sizeof(int32_t);
           break;
       }
     }
-  const MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
+  MapArgs args{arrays.data(), scalars.data(), call.target.endpoints()};
+  args.array_count = arrays.size();
+  args.array_bytes = bytes.data();
+  args.array_written = written.data();
+  args.scalar_count = scalars.size();
+  args.arity = call.target.arity();
   interp::Trap& trap = call.interpreter.trap();
-  const MapOutcome out = executor_->run_map(*e.kernel, args, call.target.size(), chunk, writes,
-                                            [&trap] { return trap.interrupt_pending(); });
+  const MapOutcome out = executor.run_map(*e.kernel, args, call.target.size(), chunk, writes,
+                                          [&trap] { return trap.interrupt_pending(); });
   if (out.code != 0) {
     const ErrorSite& err = t.errors[static_cast<size_t>(out.code - 1)];
     for (Entry::Special& s : e.special) s.marks.clear();  // this call records nothing

@@ -4,6 +4,7 @@
 // (jit/cpu, jit/llvm) include LLVM's headers.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -18,6 +19,14 @@ struct MapArgs {
   void* const* arrays = nullptr;
   const double* scalars = nullptr;
   const int32_t* endpoints = nullptr;
+  // What an executor that copies the arguments into another memory (a GPU's) needs: how many
+  // arrays and scalars there are, each array's bytes and whether the kernel writes it, and
+  // the endpoint table's entries per element. Executors on the host ignore them.
+  size_t array_count = 0;
+  const size_t* array_bytes = nullptr;
+  const uint8_t* array_written = nullptr;
+  size_t scalar_count = 0;
+  int32_t arity = 0;
 };
 
 // The elements [begin, end) of a map's target set.

@@ -32,7 +32,7 @@ const CommandHelp kCommands[] = {
     {"time", ":time STMT", "run a statement and print how long it took"},
     {"run", ":run FUNC [N]", "run a function without parameters N times (default 1)"},
     {"set", ":set [OPTION VALUE]",
-     "float32 on|off, check_finite on|off, print_limit N, executor interpreter|jit, "
+     "float32 on|off, check_finite on|off, print_limit N, executor interpreter|jit|gpu, "
      "threads N|all; alone, the settings"},
     {"jit", ":jit", "what the JIT compiled for :run (executor jit): site, compile ms, calls, ms"},
     {"reset", ":reset", "forget every declaration, variable and scene"},
@@ -229,7 +229,7 @@ void Session::set_option(const std::string& arg) {
   }
   if (w.size() != 2) {
     err_ << ":set needs an option and a value (float32 on|off, check_finite on|off, "
-            "print_limit N, executor interpreter|jit, threads N|all)\n";
+            "print_limit N, executor interpreter|jit|gpu, threads N|all)\n";
     return;
   }
   bool flag = false;
@@ -334,7 +334,7 @@ void Session::run_command(const std::string& arg) {
 }
 
 void Session::jit_command() {
-  if (!run_.engine || options_.executor.kind != ExecutorKind::Jit) {
+  if (!run_.engine || !compiles(options_.executor.kind)) {
     out_ << "no traces: :set executor jit, then :run a function\n";
     return;
   }

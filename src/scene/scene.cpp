@@ -35,7 +35,7 @@ std::unique_ptr<Scene> Scene::open(const SceneOptions& options, std::ostream& er
     if (std::string bad = executor_unavailable(choice); !bad.empty())
       file.fail(file.doc.get("executor"), "executor: " + bad);
     // What says something about the JIT only would do nothing, silently, under the interpreter.
-    if (choice.kind != ExecutorKind::Jit && (choice.check || options.jit_stats))
+    if (!compiles(choice.kind) && (choice.check || options.jit_stats))
       throw SceneError(options.file + ": error: " + (choice.check ? "--check-jit" : "--jit-stats") +
                        " needs the JIT: --executor jit, or executor = \"jit\" in the scene");
   } catch (const SceneError& e) {

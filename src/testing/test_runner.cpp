@@ -280,7 +280,7 @@ std::string without_line(const std::string& status) {
 // What the JIT made of every section: traces compiled (or fused) and run interpreted, with
 // the reasons counted, so that a corpus run shows what its sections did not compile.
 struct JitTally {
-  int sections = 0, traces = 0, compiled = 0;
+  int sections = 0, traces = 0, compiled = 0, on_gpu = 0;
   std::map<std::string, int> interpreted;  // the status ("interpreted: why") and its count
 
   void add(const JitRecord& j) {
@@ -292,14 +292,16 @@ struct JitTally {
         ++interpreted[without_line(s)];
       else
         ++compiled;
+      if (s == "compiled for the GPU") ++on_gpu;
     }
   }
 
   // The most frequent reasons first.
   void print(std::ostream& out) const {
     out << "jit: " << traces << (traces == 1 ? " trace" : " traces") << " in " << sections
-        << (sections == 1 ? " section" : " sections") << ", " << compiled << " compiled, "
-        << traces - compiled << " interpreted\n";
+        << (sections == 1 ? " section" : " sections") << ", " << compiled << " compiled";
+    if (on_gpu) out << " (" << on_gpu << " for the GPU)";
+    out << ", " << traces - compiled << " interpreted\n";
     std::vector<std::pair<int, std::string>> reasons;
     for (const auto& [status, count] : interpreted) reasons.emplace_back(-count, status);
     std::sort(reasons.begin(), reasons.end());

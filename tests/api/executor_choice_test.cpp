@@ -28,9 +28,9 @@ TEST(ExecutorChoice, ParsesTheKindsAndNamesTheValidOnes) {
   EXPECT_EQ(simit::parse_executor_kind("jit", error), ExecutorKind::Jit);
   EXPECT_EQ(error, "");
   EXPECT_EQ(simit::parse_executor_kind("jti", error), std::nullopt);
-  EXPECT_EQ(error, "unknown executor 'jti': valid executors are interpreter, jit");
+  EXPECT_EQ(error, "unknown executor 'jti': valid executors are interpreter, jit, gpu");
   EXPECT_EQ(simit::parse_executor_kind("", error), std::nullopt);
-  EXPECT_EQ(error, "unknown executor '': valid executors are interpreter, jit");
+  EXPECT_EQ(error, "unknown executor '': valid executors are interpreter, jit, gpu");
   EXPECT_STREQ(simit::executor_name(ExecutorKind::Jit), "jit");
   EXPECT_STREQ(simit::executor_name(ExecutorKind::Interpreter), "interpreter");
 }
@@ -166,9 +166,22 @@ TEST(ExecutorChoice, InitSpellings) {
     EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("cpu"); }).rfind(kNoJit, 0), 0u);
   }
   EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("jti"); }),
-            "unknown executor 'jti': valid executors are interpreter, jit (or cpu, the JIT)");
-  EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("gpu"); }),
-            "no GPU executor in this build: valid executors are cpu (the JIT), jit, interpreter");
+            "unknown executor 'jti': valid executors are interpreter, jit, gpu (or cpu, the JIT)");
+  // A GPU executor where no GPU opens (this build without the JIT, or no driver or device)
+  // says why; with the test emulation it is chosen.
+  if (!simit::jit_available()) {
+    EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("gpu"); }).rfind(kNoJit, 0), 0u);
+  } else if (simit::gpu_emulated_for_test()) {
+    EXPECT_EQ(simit::init("gpu").executor.kind, ExecutorKind::Gpu);
+  } else {
+    const std::string why = simit::executor_unavailable(ExecutorChoice{.kind = ExecutorKind::Gpu});
+    if (why.empty()) {
+      EXPECT_EQ(simit::init("gpu").executor.kind, ExecutorKind::Gpu);
+    } else {
+      EXPECT_EQ(why.rfind("no GPU to run on: ", 0), 0u) << why;
+      EXPECT_EQ(message_of<simit::Error>([] { (void)simit::init("gpu"); }), why);
+    }
+  }
 }
 
 const char* kProgram = R"(

@@ -4,10 +4,13 @@ frames must write byte-identical final positions and the same per-frame statisti
 column but the timings), and the JIT must have compiled some of its sites.
 
 usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES [SHUFFLE_SEED] [--threads N]
+                                [--executor jit|gpu]
 
 With SHUFFLE_SEED the JIT runs its maps through the test-only shuffled executor (chunks of a
 few elements in a shuffled order: jit/executor.h), which must give the same bits. The JIT
-runs on N threads (default 1), which must give the same bits too.
+runs on N threads (default 1), which must give the same bits too. With --executor gpu the
+compiled maps run through the GPU executor (over host memory where SIMIT_TEST_GPU_EMULATION
+is set), and some must have been compiled for the GPU.
 """
 import csv
 import os
@@ -25,7 +28,7 @@ def run(simit, scene, out, frames, backend, env=None, threads=1):
     final = os.path.join(out, "final.csv")
     cmd = [simit, "run", scene, "--frames", str(frames), "--output", out, "--final-csv", final,
            "--executor", backend]
-    if backend == "jit":
+    if backend != "interpreter":
         cmd += ["--jit-stats", "--jit-cache", "off", "--threads", str(threads)]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
@@ -42,6 +45,11 @@ def run(simit, scene, out, frames, backend, env=None, threads=1):
 def main():
     args = sys.argv[1:]
     threads = 1
+    backend = "jit"
+    if "--executor" in args:
+        at = args.index("--executor")
+        backend = args[at + 1]
+        del args[at:at + 2]
     if "--threads" in args:
         at = args.index("--threads")
         threads = int(args[at + 1])
@@ -52,9 +60,12 @@ def main():
     env = dict(os.environ)
     if len(sys.argv) > 5:
         env["SIMIT_TEST_SHUFFLE_SEED"] = sys.argv[5]
-    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, "jit"), frames, "jit", env,
-                                 threads)
-    compiled = b_out.count(" compiled\n")
+    b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, backend), frames, backend,
+                                 env, threads)
+    on_gpu = b_out.count(" compiled for the GPU\n")
+    compiled = b_out.count(" compiled\n") + on_gpu
+    if backend == "gpu" and on_gpu == 0:
+        sys.exit("no site was compiled for the GPU")
     print(b_out[b_out.find("jit traces:"):])
     if compiled == 0:
         sys.exit("the JIT compiled no site")
@@ -62,14 +73,14 @@ def main():
         a_lines, b_lines = a_final.decode().splitlines(), b_final.decode().splitlines()
         for i, (x, y) in enumerate(zip(a_lines, b_lines)):
             if x != y:
-                sys.exit(f"final positions differ first at point {i}: {x} (interpreter) vs {y} (jit)")
+                sys.exit(f"final positions differ first at point {i}: {x} (interpreter) vs {y} ({backend})")
         sys.exit("final position files differ in length")
     if len(a_rows) != len(b_rows):
-        sys.exit(f"{len(a_rows)} statistics rows interpreted, {len(b_rows)} under the JIT")
+        sys.exit(f"{len(a_rows)} statistics rows interpreted, {len(b_rows)} under {backend}")
     for ra, rb in zip(a_rows, b_rows):
         for k in ra:
             if k not in TIMING_COLUMNS and ra[k] != rb[k]:
-                sys.exit(f"frame {ra.get('frame')}: {k} = {ra[k]} (interpreter) vs {rb[k]} (jit)")
+                sys.exit(f"frame {ra.get('frame')}: {k} = {ra[k]} (interpreter) vs {rb[k]} ({backend})")
     print(f"{scene}: {frames} frames, final positions and statistics identical; "
           f"{compiled} traces compiled")
 

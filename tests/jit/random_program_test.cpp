@@ -340,7 +340,10 @@ std::string check_program(uint64_t seed, Tally& tally) {
            program->compilation()->diagnostics.render_all();
   if (env_long("SIMIT_RANDOM_PRINT", 0))
     std::printf("--- seed %llu ---\n%s", static_cast<unsigned long long>(seed), g.text.c_str());
-  Runner in(program, g, ExecutorKind::Interpreter), jit(program, g, ExecutorKind::Jit);
+  // SIMIT_TEST_GPU_EMULATION: the compiled side is the GPU executor over host memory.
+  const ExecutorKind compiled =
+      simit::gpu_emulated_for_test() ? ExecutorKind::Gpu : ExecutorKind::Jit;
+  Runner in(program, g, ExecutorKind::Interpreter), jit(program, g, compiled);
   ++tally.programs;
   tally.empty_sets += g.sets.verts == 0 || g.sets.edges == 0;
   tally.deep_chains += g.chain_depth > kMaxInlineDepth;

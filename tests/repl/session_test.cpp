@@ -163,7 +163,8 @@ TEST(Session, SetExecutorReachesTheEngine) {
   r.feed(":scene fake.toml");
   EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
   std::string bad = r.feed(":set executor jti");
-  EXPECT_EQ(bad, ":set executor: unknown executor 'jti': valid executors are interpreter, jit\n");
+  EXPECT_EQ(bad,
+            ":set executor: unknown executor 'jti': valid executors are interpreter, jit, gpu\n");
   EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Interpreter);
   if (!jit_available()) {
     EXPECT_EQ(r.feed(":set executor jit")
@@ -181,7 +182,7 @@ TEST(Session, SetExecutorReachesTheEngine) {
   EXPECT_FALSE(x.eager);
   EXPECT_FALSE(x.check);
   EXPECT_EQ(r.feed(":set backend fast"),
-            ":set backend: unknown executor 'fast': valid executors are interpreter, jit\n");
+            ":set backend: unknown executor 'fast': valid executors are interpreter, jit, gpu\n");
   EXPECT_EQ(r.s.options().executor.kind, ExecutorKind::Jit);
   std::string run = r.feed(":run lift 2");
   EXPECT_NE(run.find("moved = 2"), std::string::npos) << run;

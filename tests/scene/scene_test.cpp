@@ -343,7 +343,7 @@ TEST_F(SceneTest, TheCommandLineOverridesTheFileAndBadValuesAreLocated) {
   EXPECT_EQ(run_scene(options("bad.toml"), out, err), 1);
   EXPECT_EQ(err.str(), path("bad.toml") +
                            ":2:12: error: executor: unknown executor 'jti': valid executors are "
-                           "interpreter, jit\n");
+                           "interpreter, jit, gpu\n");
   err.str("");
   write("bad.toml", std::string("jit_cache = 3\n") + kScene);
   EXPECT_EQ(run_scene(options("bad.toml"), out, err), 1);
