@@ -239,7 +239,7 @@ TEST(Session, SetThreadsReachesTheEngine) {
             "all (or 0): every core this process may use\n");
   EXPECT_EQ(r.feed(":set threads"),
             ":set needs an option and a value (float32 on|off, check_finite on|off, print_limit "
-            "N, executor interpreter|jit, threads N|all)\n");
+            "N, executor interpreter|jit|gpu, threads N|all)\n");
   EXPECT_EQ(r.s.options().executor.threads, 3);
   EXPECT_EQ(r.feed(":set threads all"), "");
   EXPECT_EQ(r.s.options().executor.threads, every_core);
