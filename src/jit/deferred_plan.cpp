@@ -114,6 +114,23 @@ bool DeferredPlan::build(Result& r, const runtime::Set& target, int64_t blocks) 
     }
   }
   r.scratch.assign(r.dest.size() * static_cast<size_t>(r.components), -0.0);
+  // The gather index, by a counting sort of the deferred blocks by their block (k ascending
+  // within each).
+  std::vector<int32_t> count(static_cast<size_t>(blocks) + 1, 0);
+  for (size_t k = 1; k < r.dest.size(); ++k) ++count[static_cast<size_t>(r.dest[k])];
+  r.gather_block.clear();
+  r.gather_start.assign(1, 0);
+  std::vector<int32_t> slot(static_cast<size_t>(blocks), -1);
+  for (int64_t b = 0; b < blocks; ++b)
+    if (count[static_cast<size_t>(b)] > 0) {
+      slot[static_cast<size_t>(b)] = r.gather_start.back();
+      r.gather_block.push_back(static_cast<int32_t>(b));
+      r.gather_start.push_back(r.gather_start.back() + count[static_cast<size_t>(b)]);
+    }
+  r.gather_k.assign(r.dest.size() > 0 ? r.dest.size() - 1 : 0, 0);
+  for (size_t k = 1; k < r.dest.size(); ++k)
+    r.gather_k[static_cast<size_t>(slot[static_cast<size_t>(r.dest[k])]++)] =
+        static_cast<int32_t>(k);
   return true;
 }
 
@@ -141,15 +158,33 @@ size_t DeferredPlan::deferred_values(int result) const {
   return 0;
 }
 
-void DeferredPlan::finish(const std::vector<double*>& values) const {
+void DeferredPlan::finish(
+    const std::vector<double*>& values,
+    const std::function<void(int64_t, const std::function<void(int64_t)>&)>& for_each) const {
   if (!split_) return;
+  // Blocks per task: enough that a task costs far more than handing it out.
+  constexpr size_t kBlocksPerTask = 2048;
   for (const Result& r : results_) {
     double* v = values[static_cast<size_t>(r.result)];
+    if (!v) continue;
     const size_t n = static_cast<size_t>(r.components);
-    for (size_t k = 1; k < r.dest.size(); ++k) {
-      double* to = v + static_cast<size_t>(r.dest[k]) * n;
-      const double* from = r.scratch.data() + k * n;
-      for (size_t c = 0; c < n; ++c) to[c] += from[c];
+    const size_t blocks = r.gather_block.size();
+    auto add = [&](int64_t task) {
+      const size_t first = static_cast<size_t>(task) * kBlocksPerTask;
+      const size_t end = std::min(blocks, first + kBlocksPerTask);
+      for (size_t i = first; i < end; ++i) {
+        double* to = v + static_cast<size_t>(r.gather_block[i]) * n;
+        for (int32_t j = r.gather_start[i]; j < r.gather_start[i + 1]; ++j) {
+          const double* from = r.scratch.data() + static_cast<size_t>(r.gather_k[j]) * n;
+          for (size_t c = 0; c < n; ++c) to[c] += from[c];
+        }
+      }
+    };
+    const int64_t tasks = static_cast<int64_t>((blocks + kBlocksPerTask - 1) / kBlocksPerTask);
+    if (for_each && tasks > 1) {
+      for_each(tasks, add);
+    } else {
+      for (int64_t t = 0; t < tasks; ++t) add(t);
     }
   }
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -37,8 +38,12 @@ class DeferredPlan {
   size_t table_entries(int result) const;
   size_t deferred_values(int result) const;
   // After a split run: each deferred block added to its block, in element order. `values`:
-  // per result its values (null for results not assembled).
-  void finish(const std::vector<double*>& values) const;
+  // per result its values (null for results not assembled). The blocks are split into
+  // tasks run through `for_each` (each task adds into its own blocks, each block's
+  // contributions in element order: the bits do not depend on how the tasks run).
+  void finish(
+      const std::vector<double*>& values,
+      const std::function<void(int64_t, const std::function<void(int64_t)>&)>& for_each = {}) const;
   // Deferred blocks of the last split prepared (for --jit-stats).
   int64_t deferred_blocks() const;
 
@@ -53,6 +58,10 @@ class DeferredPlan {
     std::vector<int32_t> plain;  // a vector's member table
     std::vector<int32_t> split;  // the table with later chunks' entries sent to deferred blocks
     std::vector<int32_t> dest;   // per deferred block, its block (block 0: the sink, -1)
+    // The gather index: the blocks that have deferred blocks, ascending, and for block
+    // gather_block[i] its deferred blocks gather_k[gather_start[i] .. gather_start[i + 1]),
+    // ascending (element order).
+    std::vector<int32_t> gather_block, gather_start, gather_k;
     std::vector<double> scratch;
   };
   bool build(Result& r, const runtime::Set& target, int64_t blocks);

@@ -106,6 +106,10 @@ class ThreadedExecutor : public Executor {
     on_pool.pool = &pool_;
     return kernel.run(on_pool);
   }
+  void for_each(int64_t tasks, const std::function<void(int64_t)>& task) override {
+    if (tasks <= 1 || pool_.threads() == 1) return Executor::for_each(tasks, task);
+    pool_.run(tasks, task);
+  }
   MapOutcome run_map(const Kernel& kernel, const MapArgs& args, int32_t n, int32_t chunk,
                      MapWrites writes, const std::function<bool()>& interrupt) override {
     const int32_t chunks = n <= 0 ? 0 : (n - 1) / chunk + 1;

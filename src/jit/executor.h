@@ -49,6 +49,11 @@ class Executor {
   virtual int32_t run_system(const Kernel& kernel, const SystemArgs& args) {
     return kernel.run(args);
   }
+  // task(i) for every i in [0, tasks), on the executor's threads where it has some; the
+  // tasks must write apart (a deferred assembly's additions, block by block).
+  virtual void for_each(int64_t tasks, const std::function<void(int64_t)>& task) {
+    for (int64_t i = 0; i < tasks; ++i) task(i);
+  }
 };
 
 // Whether the elements of a map kernel write apart (fields and results at their own index

@@ -265,7 +265,9 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
       else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float)
         values[i] = r.tensor().mutable_floats();
     }
-    e.plan->finish(values);
+    e.plan->finish(values, [&executor](int64_t tasks, const std::function<void(int64_t)>& task) {
+      executor.for_each(tasks, task);
+    });
   }
   specialise_results(e, call);
   return true;
