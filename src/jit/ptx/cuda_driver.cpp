@@ -42,18 +42,47 @@ std::string cuda_version_text(int version) {
 
 }  // namespace
 
-const char* missing_entry(const DriverTable& driver) {
+namespace {
+
+// The stream table's entries, as for_each_entry lists the driver table's.
+template <class Table, class Visit>
+void for_each_stream_entry(Table& t, Visit&& visit) {
+  visit("cuStreamCreate", 2000, t.cuStreamCreate);
+  visit("cuStreamDestroy", 4000, t.cuStreamDestroy);
+  visit("cuStreamSynchronize", 2000, t.cuStreamSynchronize);
+  visit("cuEventCreate", 2000, t.cuEventCreate);
+  visit("cuEventDestroy", 4000, t.cuEventDestroy);
+  visit("cuEventRecord", 2000, t.cuEventRecord);
+  visit("cuEventSynchronize", 2000, t.cuEventSynchronize);
+  visit("cuEventElapsedTime", 2000, t.cuEventElapsedTime);
+  visit("cuStreamBeginCapture", 10010, t.cuStreamBeginCapture);
+  visit("cuStreamEndCapture", 10000, t.cuStreamEndCapture);
+  visit("cuGraphInstantiateWithFlags", 11040, t.cuGraphInstantiateWithFlags);
+  visit("cuGraphLaunch", 10000, t.cuGraphLaunch);
+  visit("cuGraphExecDestroy", 10000, t.cuGraphExecDestroy);
+  visit("cuGraphDestroy", 10000, t.cuGraphDestroy);
+  visit("cuMemcpyDtoD", 3020, t.cuMemcpyDtoD);
+  visit("cuMemAllocHost", 3020, t.cuMemAllocHost);
+  visit("cuMemFreeHost", 2000, t.cuMemFreeHost);
+}
+
+// The first entry `for_each` lists that is not set, or nullptr.
+template <class Table, class ForEach>
+const char* first_missing(const Table& table, ForEach for_each) {
   const char* missing = nullptr;
-  for_each_entry(driver, [&](const char* name, int, const auto& slot) {
+  for_each(table, [&](const char* name, int, const auto& slot) {
     if (!missing && !slot) missing = name;
   });
   return missing;
 }
 
-std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why) {
-  DriverTable table;
+// Every entry `for_each` lists, through `get`, by its base name and the CUDA version of its
+// typedef; nullopt with `why` naming the first that failed and how.
+template <class Table, class ForEach>
+std::optional<Table> resolve_table(const GetProcAddress& get, std::string& why, ForEach for_each) {
+  Table table;
   bool ok = true;
-  for_each_entry(table, [&](const char* name, int version, auto& slot) {
+  for_each(table, [&](const char* name, int version, auto& slot) {
     if (!ok) return;
     void* pfn = nullptr;
     CUdriverProcAddressQueryResult status = CU_GET_PROC_ADDRESS_SUCCESS;
@@ -78,17 +107,23 @@ std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string
   return table;
 }
 
-std::optional<DriverTable> load_driver(std::string& why) {
-  // libcuda.so.1 is what the driver package installs; the unversioned libcuda.so may be the
-  // toolkit's link-time stub, which only fails every call.
-  void* lib = dlopen("libcuda.so.1", RTLD_NOW | RTLD_LOCAL);
+const auto driver_entries = [](auto& table, auto&& visit) { for_each_entry(table, visit); };
+const auto stream_entries = [](auto& table, auto&& visit) { for_each_stream_entry(table, visit); };
+
+// dlopen(library) and its cuGetProcAddress; `handle` is the library's on success (null
+// otherwise, the library closed again).
+std::optional<GetProcAddress> open_library(const std::string& library, std::string& why,
+                                           void*& handle) {
+  handle = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  void* const lib = handle;
   if (!lib) {
     const char* error = dlerror();
     const std::string detail = error ? error : "dlopen failed";
     if (detail.find("No such file") != std::string::npos)
-      why = "libcuda.so.1 not found: no NVIDIA driver on this machine";
+      why = library + " not found" +
+            (library == "libcuda.so.1" ? ": no NVIDIA driver on this machine" : "");
     else
-      why = "libcuda.so.1 could not be loaded: " + detail;
+      why = library + " could not be loaded: " + detail;
     return std::nullopt;
   }
   GetProcAddress get;
@@ -113,9 +148,42 @@ std::optional<DriverTable> load_driver(std::string& why) {
         driver_version && driver_version(&version) == CUDA_SUCCESS)
       why += "; this driver supports CUDA " + cuda_version_text(version);
     dlclose(lib);
+    handle = nullptr;
     return std::nullopt;
   }
-  auto table = resolve_driver(get, why);
+  return get;
+}
+
+}  // namespace
+
+const char* missing_entry(const DriverTable& driver) {
+  return first_missing(driver, driver_entries);
+}
+
+const char* missing_stream_entry(const StreamTable& streams) {
+  return first_missing(streams, stream_entries);
+}
+
+std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why) {
+  return resolve_table<DriverTable>(get, why, driver_entries);
+}
+
+std::optional<StreamTable> resolve_streams(const GetProcAddress& get, std::string& why) {
+  return resolve_table<StreamTable>(get, why, stream_entries);
+}
+
+std::optional<GetProcAddress> open_driver_library(const std::string& library, std::string& why) {
+  void* handle = nullptr;
+  return open_library(library, why, handle);
+}
+
+std::optional<DriverTable> load_driver(std::string& why) {
+  // libcuda.so.1 is what the driver package installs; the unversioned libcuda.so may be the
+  // toolkit's link-time stub, which only fails every call.
+  void* lib = nullptr;
+  const auto get = open_library("libcuda.so.1", why, lib);
+  if (!get) return std::nullopt;
+  auto table = resolve_driver(*get, why);
   // On success the library stays loaded for the process's life: the table points into it.
   if (!table) dlclose(lib);
   return table;

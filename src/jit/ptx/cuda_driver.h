@@ -126,6 +126,62 @@ struct DriverTable {
   PFN_cuLaunchKernel_v4000 cuLaunchKernel = nullptr;  // the legacy default stream
 };
 
+// ---- Streams, events, graphs, pinned host memory and device-to-device copies: what timing
+// launches and copies needs (bench/gpu_probe). A table of its own, resolved apart from
+// DriverTable, so that a table without these entries (a test's, or one a program does not
+// need them in) still opens a Device.
+using CUevent = struct CUevent_st*;
+using CUgraph = struct CUgraph_st*;
+using CUgraphExec = struct CUgraphExec_st*;
+using CUstreamCaptureMode = int;  // enum CUstreamCaptureMode_enum
+// CUstream_flags_enum, CUevent_flags_enum and CUstreamCaptureMode_enum.
+inline constexpr unsigned int CU_STREAM_DEFAULT = 0;
+inline constexpr unsigned int CU_STREAM_NON_BLOCKING = 1;
+inline constexpr unsigned int CU_EVENT_DEFAULT = 0;
+inline constexpr CUstreamCaptureMode CU_STREAM_CAPTURE_MODE_GLOBAL = 0;
+inline constexpr CUstreamCaptureMode CU_STREAM_CAPTURE_MODE_THREAD_LOCAL = 1;
+
+using PFN_cuStreamCreate_v2000 = CUresult (*)(CUstream* stream, unsigned int flags);
+using PFN_cuStreamDestroy_v4000 = CUresult (*)(CUstream stream);
+using PFN_cuStreamSynchronize_v2000 = CUresult (*)(CUstream stream);
+using PFN_cuEventCreate_v2000 = CUresult (*)(CUevent* event, unsigned int flags);
+using PFN_cuEventDestroy_v4000 = CUresult (*)(CUevent event);
+using PFN_cuEventRecord_v2000 = CUresult (*)(CUevent event, CUstream stream);
+using PFN_cuEventSynchronize_v2000 = CUresult (*)(CUevent event);
+using PFN_cuEventElapsedTime_v2000 = CUresult (*)(float* milliseconds, CUevent start, CUevent end);
+using PFN_cuStreamBeginCapture_v10010 = CUresult (*)(CUstream stream, CUstreamCaptureMode mode);
+using PFN_cuStreamEndCapture_v10000 = CUresult (*)(CUstream stream, CUgraph* graph);
+// cuGraphInstantiate of CUDA 12's headers is this entry (the 5-argument CUDA 10 form is gone).
+using PFN_cuGraphInstantiateWithFlags_v11040 = CUresult (*)(CUgraphExec* exec, CUgraph graph,
+                                                            unsigned long long flags);
+using PFN_cuGraphLaunch_v10000 = CUresult (*)(CUgraphExec exec, CUstream stream);
+using PFN_cuGraphExecDestroy_v10000 = CUresult (*)(CUgraphExec exec);
+using PFN_cuGraphDestroy_v10000 = CUresult (*)(CUgraph graph);
+using PFN_cuMemcpyDtoD_v3020 = CUresult (*)(CUdeviceptr destination, CUdeviceptr source,
+                                            std::size_t bytes);
+using PFN_cuMemAllocHost_v3020 = CUresult (*)(void** pointer, std::size_t bytes);
+using PFN_cuMemFreeHost_v2000 = CUresult (*)(void* pointer);
+
+struct StreamTable {
+  PFN_cuStreamCreate_v2000 cuStreamCreate = nullptr;
+  PFN_cuStreamDestroy_v4000 cuStreamDestroy = nullptr;  // cuStreamDestroy_v2
+  PFN_cuStreamSynchronize_v2000 cuStreamSynchronize = nullptr;
+  PFN_cuEventCreate_v2000 cuEventCreate = nullptr;
+  PFN_cuEventDestroy_v4000 cuEventDestroy = nullptr;  // cuEventDestroy_v2
+  PFN_cuEventRecord_v2000 cuEventRecord = nullptr;
+  PFN_cuEventSynchronize_v2000 cuEventSynchronize = nullptr;
+  PFN_cuEventElapsedTime_v2000 cuEventElapsedTime = nullptr;
+  PFN_cuStreamBeginCapture_v10010 cuStreamBeginCapture = nullptr;  // cuStreamBeginCapture_v2
+  PFN_cuStreamEndCapture_v10000 cuStreamEndCapture = nullptr;
+  PFN_cuGraphInstantiateWithFlags_v11040 cuGraphInstantiateWithFlags = nullptr;
+  PFN_cuGraphLaunch_v10000 cuGraphLaunch = nullptr;
+  PFN_cuGraphExecDestroy_v10000 cuGraphExecDestroy = nullptr;
+  PFN_cuGraphDestroy_v10000 cuGraphDestroy = nullptr;
+  PFN_cuMemcpyDtoD_v3020 cuMemcpyDtoD = nullptr;      // cuMemcpyDtoD_v2
+  PFN_cuMemAllocHost_v3020 cuMemAllocHost = nullptr;  // cuMemAllocHost_v2
+  PFN_cuMemFreeHost_v2000 cuMemFreeHost = nullptr;
+};
+
 // cuGetProcAddress in its CUDA 12 form (a CUDA 11 driver's is adapted to it).
 using GetProcAddress =
     std::function<CUresult(const char* symbol, void** pfn, int version, cuuint64_t flags,
@@ -135,6 +191,16 @@ using GetProcAddress =
 // version of its typedef, with CU_GET_PROC_ADDRESS_DEFAULT. nullopt, with `why` naming the
 // first entry that failed and how, when one is missing.
 std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why);
+
+// Resolves every entry of the stream table as resolve_driver does the driver table's.
+std::optional<StreamTable> resolve_streams(const GetProcAddress& get, std::string& why);
+// The first entry of `streams` that is not set, or nullptr when all are.
+const char* missing_stream_entry(const StreamTable& streams);
+
+// dlopen(library) and its cuGetProcAddress (a CUDA 11 driver's adapted to the CUDA 12 form).
+// The library stays loaded for the process's life. nullopt with `why` when it does not load
+// or has no cuGetProcAddress. load_driver is this on "libcuda.so.1", then resolve_driver.
+std::optional<GetProcAddress> open_driver_library(const std::string& library, std::string& why);
 
 // dlopen("libcuda.so.1") (kept loaded for the process's life), then resolve_driver through
 // the driver's cuGetProcAddress. nullopt with `why` when there is no driver, when it is too
