@@ -128,6 +128,16 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
                 "jit: where compiled kernels are kept between runs: off, or a folder (default: " +
                     std::string(x.jit_cache == "off" ? "off" : "the user's cache folder") + ")")
                 ->type_name("off|DIR");
+  add_parsed(
+      sub, "--gpu-arch",
+      [&x](const std::string& s, std::string& error) {
+        std::optional<std::string> a = parse_gpu_arch(s, error);
+        if (a) x.gpu_arch = *a;
+        return a.has_value();
+      },
+      "gpu and --check-ptx: the GPU architecture kernels are compiled for, sm_XX (default "
+      "sm_90, the H100's and H200's)")
+      ->type_name("sm_XX");
   sub.add_flag("--jit-stats", *t.stats,
                "jit: print each trace (site, key, compile ms, calls, ms spent, or why it ran "
                "interpreted) " +

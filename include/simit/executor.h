@@ -50,6 +50,8 @@ struct ExecutorChoice {
   bool dump_passes = false;
   bool dump_llvm = false;
   bool dump_ptx = false;
+  // gpu and check_ptx: the GPU architecture, "sm_XX" ("": sm_90).
+  std::string gpu_arch{};
   // jit: where compiled kernels are cached between runs: "" the user's cache folder
   // ($XDG_CACHE_HOME/simit/kernels, else $HOME/.cache/simit/kernels), "off" none, or a folder.
   std::string jit_cache{};
@@ -71,6 +73,9 @@ bool parse_dump_kind(std::string_view text, ExecutorChoice& choice, std::string&
 std::optional<long> parse_jit_threshold(std::string_view text, std::string& error);
 // "off" or a folder (not empty).
 std::optional<std::string> parse_jit_cache(std::string_view text, std::string& error);
+// A GPU architecture: "sm_" and its compute capability's digits (e.g. sm_90, sm_80);
+// whether LLVM knows it is checked when a GPU target is made.
+std::optional<std::string> parse_gpu_arch(std::string_view text, std::string& error);
 // A whole number of threads from 1 to kMaxThreads, or "all" (or "0", as in other tools'
 // thread options): default_threads(), the count returned.
 std::optional<int> parse_threads(std::string_view text, std::string& error);

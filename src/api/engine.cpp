@@ -71,6 +71,7 @@ void Engine::install_jit() {
   j.shuffle_seed = options_.shuffle_seed_for_test;
   j.threads = x.threads;
   j.gpu = x.kind == ExecutorKind::Gpu;
+  j.gpu_arch = x.gpu_arch;
   j.gpu_emulated = j.gpu && gpu_emulated_for_test();
   // The tests run the corpus and the random programs, whose sets are small, on threads in
   // chunks of a few elements.

@@ -54,7 +54,8 @@ struct EngineOptions {
   interp::SiteHook* sites = nullptr;
   // Where the JIT's dumps (ExecutorChoice::dump_loop_ir, dump_llvm) print; null: nowhere.
   std::ostream* dump = nullptr;
-  // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value.
+  // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value
+  // (else of an apply's first written field, else of a compiled statement's first value).
   bool corrupt_for_test = false;
   // Tests of the executor seam: nonzero runs compiled maps through the test-only shuffled
   // executor (jit/executor.h) with this seed; the environment variable SIMIT_TEST_SHUFFLE_SEED

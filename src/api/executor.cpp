@@ -68,6 +68,14 @@ std::optional<long> parse_jit_threshold(std::string_view text, std::string& erro
   return std::nullopt;
 }
 
+std::optional<std::string> parse_gpu_arch(std::string_view text, std::string& error) {
+  const bool digits = text.size() >= 5 && text.substr(0, 3) == "sm_" &&
+                      text.substr(3).find_first_not_of("0123456789") == std::string_view::npos;
+  if (digits) return std::string(text);
+  error = "bad GPU architecture '" + std::string(text) + "': expected sm_ and digits, e.g. sm_90";
+  return std::nullopt;
+}
+
 std::optional<std::string> parse_jit_cache(std::string_view text, std::string& error) {
   if (!text.empty()) return std::string(text);
   error = "empty JIT cache: expected 'off' or a folder";

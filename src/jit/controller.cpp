@@ -58,6 +58,7 @@ void check_gpu(const T& t, const std::string& site, const JitOptions& o,
                const frontend::SourceSpan& at) {
   if (!o.check_ptx && !(o.dump_ptx && o.dump)) return;
   ptx::CheckOptions c;
+  c.gpu_arch = o.gpu_arch;
   c.assemble = o.check_ptx;
   c.dump = o.dump_ptx ? o.dump : nullptr;
   if (std::string bad = ptx::check_trace(t, site, c); !bad.empty())

@@ -44,7 +44,8 @@ struct JitOptions {
   bool check_ptx = false;
   bool dump_ptx = false;
   // For the tests of the check alone: the lowest bit of a compiled map's first matrix or
-  // vector value is flipped after the kernel runs.
+  // vector value (else an apply's first written field, else a compiled statement's first
+  // value) is flipped after the kernel runs.
   bool corrupt_for_test = false;
   // For the tests of the executor seam: nonzero runs map kernels through the shuffled
   // executor (jit/executor.h) with this seed instead of the serial one.

@@ -31,8 +31,8 @@ std::optional<SpecialisedPattern> specialise(const runtime::PatternPtr& full,
       if (position[static_cast<size_t>(k)] >= 0) col_idx.push_back(p.col_idx()[k]);
     row_ptr[static_cast<size_t>(r) + 1] = static_cast<int32_t>(col_idx.size());
   }
-  s.pattern =
-      runtime::MatrixPattern::from_csr(p.rows(), p.cols(), std::move(row_ptr), std::move(col_idx));
+  s.pattern = runtime::MatrixPattern::from_csr(p.rows(), p.cols(), std::move(row_ptr),
+                                               std::move(col_idx), p.row_axis(), p.col_axis());
   const std::vector<int32_t>& table = p.assembly().table;
   s.table.resize(table.size());
   for (size_t i = 0; i < table.size(); ++i)

@@ -33,6 +33,23 @@ TEST(ExecutorChoice, ParsesTheKindsAndNamesTheValidOnes) {
   EXPECT_EQ(error, "unknown executor '': valid executors are interpreter, jit, gpu");
   EXPECT_STREQ(simit::executor_name(ExecutorKind::Jit), "jit");
   EXPECT_STREQ(simit::executor_name(ExecutorKind::Interpreter), "interpreter");
+  EXPECT_EQ(simit::parse_executor_kind("gpu", error), ExecutorKind::Gpu);
+  EXPECT_STREQ(simit::executor_name(ExecutorKind::Gpu), "gpu");
+  EXPECT_TRUE(simit::compiles(ExecutorKind::Gpu));
+  EXPECT_TRUE(simit::compiles(ExecutorKind::Jit));
+  EXPECT_FALSE(simit::compiles(ExecutorKind::Interpreter));
+}
+
+TEST(ExecutorChoice, ParsesGpuArchitectures) {
+  std::string error;
+  EXPECT_EQ(simit::parse_gpu_arch("sm_90", error), "sm_90");
+  EXPECT_EQ(simit::parse_gpu_arch("sm_100", error), "sm_100");
+  EXPECT_EQ(error, "");
+  for (const char* bad : {"sm90", "sm_", "sm_9a", "compute_90", ""}) {
+    EXPECT_EQ(simit::parse_gpu_arch(bad, error), std::nullopt) << bad;
+    EXPECT_EQ(error, "bad GPU architecture '" + std::string(bad) +
+                         "': expected sm_ and digits, e.g. sm_90");
+  }
 }
 
 TEST(ExecutorChoice, ParsesDumpKindsThresholdsAndCaches) {

@@ -143,6 +143,8 @@ TEST(ExecutorOptions, BadValuesAreRefusedWhereGiven) {
       {{"--dump", "loop-ir,asm"},
        "--dump: unknown dump kind 'asm': valid dump kinds are loop-ir, passes, llvm, ptx"},
       {{"--jit-cache", ""}, "--jit-cache: empty JIT cache: expected 'off' or a folder"},
+      {{"--gpu-arch", "sm90"},
+       "--gpu-arch: bad GPU architecture 'sm90': expected sm_ and digits, e.g. sm_90"},
       {{"--threads", "1025"},
        "--threads: bad thread count '1025': expected a whole number from 1 to 1024, or all (or "
        "0): every core this process may use"},
