@@ -178,8 +178,7 @@ TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
         e->kernel = std::move(l.kernel);
         e->stats.status = e->on_device ? "compiled for the GPU" : "compiled";
         e->writes = writes_of(*e->traced.trace);
-        if (e->kernel->lanes > 1)
-          e->stats.note += "; " + std::to_string(e->kernel->lanes) + " elements at once";
+        if (e->kernel->simd.reported) e->stats.note += "; " + e->kernel->simd.summary();
         if (e->kernel->cached) e->stats.note += "; from the kernel cache";
         e->stats.compile_ms = e->kernel->compile_ms;
       }

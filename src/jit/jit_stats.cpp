@@ -5,6 +5,9 @@
 #include <ctime>
 #include <functional>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "interp/exec_state.h"
 #include "interp/runtime_error.h"
@@ -25,6 +28,50 @@ double thread_cpu_ms() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+std::string SimdReport::summary() const {
+  std::string out = "SIMD: ";
+  if (map && lanes > 1) {
+    out += std::to_string(lanes) + " elements at once";
+  } else {
+    if (map) out += "no lanes (" + (lanes_why_not.empty() ? "no reason" : lanes_why_not) + "); ";
+    if (!vectorisers) return out + "LLVM's vectorisers off (a large trace)";
+    if (loops.empty()) {
+      out += "no loop for LLVM's vectoriser";
+    } else {
+      int vectorised = 0, lo = 0, hi = 0;
+      // Each reason not to vectorise (a loop's first), with its count, in order of appearance.
+      std::vector<std::pair<std::string, int>> not_why;
+      for (const SimdLoop& l : loops) {
+        if (l.width > 1) {
+          ++vectorised;
+          lo = lo == 0 ? l.width : std::min(lo, l.width);
+          hi = std::max(hi, l.width);
+          continue;
+        }
+        const std::string why = l.why_not.substr(0, l.why_not.find(", "));
+        auto it = std::find_if(not_why.begin(), not_why.end(),
+                               [&](const auto& w) { return w.first == why; });
+        if (it == not_why.end())
+          not_why.emplace_back(why, 1);
+        else
+          ++it->second;
+      }
+      out += std::to_string(vectorised) + " of " + std::to_string(loops.size()) + " loop" +
+             (loops.size() == 1 ? "" : "s") + " vectorised";
+      if (vectorised > 0)
+        out += " (width " + std::to_string(lo) + (hi > lo ? "-" + std::to_string(hi) : "") + ")";
+      std::stable_sort(not_why.begin(), not_why.end(),
+                       [](const auto& a, const auto& b) { return a.second > b.second; });
+      for (size_t i = 0; i < not_why.size(); ++i)
+        out += (i == 0 ? "; not: " : ", ") + not_why[i].first + " (" +
+               std::to_string(not_why[i].second) + ")";
+    }
+  }
+  if (slp_groups > 0)
+    out += "; SLP: " + std::to_string(slp_groups) + " group" + (slp_groups == 1 ? "" : "s");
+  return out;
 }
 
 std::vector<TraceStats> TraceController::stats() const {
@@ -62,12 +109,21 @@ std::vector<TraceStats> TraceController::stats() const {
                            (e->guard_failures > 1 ? "s" : "") + " (blocks recorded again)";
       if (!e->full_why.empty()) out.back().note += "; full patterns: " + e->full_why;
     }
+  // A system kernel's note is rebuilt at each call (jit/loop_kernel.cpp): its SIMD report
+  // is added here.
   for (const auto* states : {&runs_, &loops_})
     for (const auto& [at, s] : *states)
-      for (const auto& e : s->entries) out.push_back(e->stats);
+      for (const auto& e : s->entries) {
+        out.push_back(e->stats);
+        if (e->kernel && e->kernel->simd.reported)
+          out.back().note += "; " + e->kernel->simd.summary();
+      }
   for (const auto& [at, s] : alone_)
     for (const auto& e : s->entries)
-      if (e->kernel) out.push_back(e->stats);
+      if (e->kernel) {
+        out.push_back(e->stats);
+        if (e->kernel->simd.reported) out.back().note += "; " + e->kernel->simd.summary();
+      }
   for (const auto& [at, s] : sums_)
     if (!s.stats.status.empty()) out.push_back(s.stats);
   std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {

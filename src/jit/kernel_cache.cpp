@@ -152,13 +152,15 @@ class KeyWriter {
 // The entry files
 
 constexpr char kMagic[8] = {'S', 'I', 'M', 'I', 'T', 'K', 'O', '\0'};
-// The header's layout (bump when it changes; what the object holds is kKernelFormatVersion's).
-constexpr uint32_t kFileVersion = 1;
-// magic, version, symbol length, object length, checksum, digest.
-constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8 + KernelCache::kDigestBytes;
+// The file's layout (bump when it changes; what the object holds is kKernelFormatVersion's).
+// Version 2 added the report (CacheEntry::simd).
+constexpr uint32_t kFileVersion = 2;
+// magic, version, symbol length, object length, checksum, digest, report length.
+constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8 + KernelCache::kDigestBytes + 4;
 // A symbol is a short generated name; an object above this is not one of ours.
 constexpr uint32_t kMaxSymbol = 1024;
 constexpr uint64_t kMaxObject = uint64_t{1} << 30;
+constexpr uint32_t kMaxReport = 1 << 20;
 
 void put_le(std::string& s, uint64_t v, int bytes) {
   for (int i = 0; i < bytes; ++i) s += static_cast<char>((v >> (8 * i)) & 0xff);
@@ -170,7 +172,40 @@ uint64_t get_le(const char* p, int bytes) {
 }
 
 uint64_t checksum(const CacheEntry& e) {
-  return fnv1a64(e.object.data(), e.object.size(), fnv1a64(e.symbol.data(), e.symbol.size()));
+  return fnv1a64(e.object.data(), e.object.size(),
+                 fnv1a64(e.simd.data(), e.simd.size(), fnv1a64(e.symbol.data(), e.symbol.size())));
+}
+
+// A report's words as one field of a line: no tabs or line breaks.
+std::string field(std::string s) {
+  std::replace_if(
+      s.begin(), s.end(), [](char c) { return c == '\t' || c == '\n'; }, ' ');
+  return s;
+}
+
+// The tab-separated fields of a line.
+std::vector<std::string> fields_of(const std::string& line) {
+  std::vector<std::string> out(1);
+  for (char c : line) {
+    if (c == '\t')
+      out.emplace_back();
+    else
+      out.back() += c;
+  }
+  return out;
+}
+
+// A whole decimal number in [lo, hi], or false.
+bool whole(const std::string& s, int lo, int hi, int& out) {
+  if (s.empty() || s.size() > 9) return false;
+  int v = 0;
+  for (char c : s) {
+    if (c < '0' || c > '9') return false;
+    v = v * 10 + (c - '0');
+  }
+  if (v < lo || v > hi) return false;
+  out = v;
+  return true;
 }
 
 // A name no other writer picks: this process, a counter, and random bits (for processes of
@@ -243,6 +278,54 @@ std::string kernel_key_text(const SystemTrace& t) {
   return std::move(w.out);
 }
 
+// The report as lines of tab-separated fields: "simd", map, lanes, vectorisers, SLP groups,
+// why not in lanes; then one "loop" line per loop: number, width, interleave, what, why not.
+std::string simd_report_text(const SimdReport& r) {
+  std::string out = "simd\t" + std::to_string(r.map) + "\t" + std::to_string(r.lanes) + "\t" +
+                    std::to_string(r.vectorisers) + "\t" + std::to_string(r.slp_groups) + "\t" +
+                    field(r.lanes_why_not) + "\n";
+  for (const SimdLoop& l : r.loops)
+    out += "loop\t" + std::to_string(l.number) + "\t" + std::to_string(l.width) + "\t" +
+           std::to_string(l.interleave) + "\t" + field(l.what) + "\t" + field(l.why_not) + "\n";
+  return out;
+}
+
+bool read_simd_report(const std::string& text, SimdReport& r) {
+  constexpr int kMost = 1 << 24;
+  SimdReport out;
+  size_t at = 0;
+  bool head = false;
+  while (at < text.size()) {
+    const size_t end = text.find('\n', at);
+    if (end == std::string::npos) return false;  // every line ends with a line break
+    const std::vector<std::string> f = fields_of(text.substr(at, end - at));
+    at = end + 1;
+    int map = 0, vectorisers = 0;
+    if (!head) {
+      if (f.size() != 6 || f[0] != "simd" || !whole(f[1], 0, 1, map) ||
+          !whole(f[2], 1, kMost, out.lanes) || !whole(f[3], 0, 1, vectorisers) ||
+          !whole(f[4], 0, kMost, out.slp_groups))
+        return false;
+      out.reported = true;
+      out.map = map != 0;
+      out.vectorisers = vectorisers != 0;
+      out.lanes_why_not = f[5];
+      head = true;
+      continue;
+    }
+    SimdLoop l;
+    if (f.size() != 6 || f[0] != "loop" || !whole(f[1], 1, kMost, l.number) ||
+        !whole(f[2], 1, kMost, l.width) || !whole(f[3], 1, kMost, l.interleave))
+      return false;
+    l.what = f[4];
+    l.why_not = f[5];
+    out.loops.push_back(std::move(l));
+  }
+  if (!head) return false;
+  r = std::move(out);
+  return true;
+}
+
 std::string hex_of(const std::string& bytes) {
   static const char* const digits = "0123456789abcdef";
   std::string s;
@@ -277,12 +360,17 @@ std::optional<CacheEntry> KernelCache::load(const std::string& digest) const {
     return std::nullopt;
   const uint64_t symbol_size = get_le(h + 12, 4), object_size = get_le(h + 16, 8);
   const uint64_t sum = get_le(h + 24, 8);
+  const uint64_t report_size = get_le(h + 32 + kDigestBytes, 4);
   if (std::memcmp(h + 32, digest.data(), kDigestBytes) != 0) return std::nullopt;
-  if (symbol_size == 0 || symbol_size > kMaxSymbol || object_size > kMaxObject) return std::nullopt;
+  if (symbol_size == 0 || symbol_size > kMaxSymbol || object_size > kMaxObject ||
+      report_size > kMaxReport)
+    return std::nullopt;
   CacheEntry e;
   e.symbol.resize(symbol_size);
+  e.simd.resize(report_size);
   e.object.resize(object_size);
   if (!in.read(e.symbol.data(), static_cast<std::streamsize>(symbol_size)) ||
+      !in.read(e.simd.data(), static_cast<std::streamsize>(report_size)) ||
       !in.read(e.object.data(), static_cast<std::streamsize>(object_size)))
     return std::nullopt;                                                // truncated
   if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;  // trailing bytes
@@ -298,7 +386,7 @@ bool KernelCache::store(const std::string& digest, const CacheEntry& entry,
                         std::string& error) const {
   if (!enabled()) return true;
   if (digest.size() != kDigestBytes || entry.symbol.empty() || entry.symbol.size() > kMaxSymbol ||
-      entry.object.size() > kMaxObject) {
+      entry.object.size() > kMaxObject || entry.simd.size() > kMaxReport) {
     error = "not a kernel cache entry";
     return false;
   }
@@ -314,7 +402,9 @@ bool KernelCache::store(const std::string& digest, const CacheEntry& entry,
   put_le(data, entry.object.size(), 8);
   put_le(data, checksum(entry), 8);
   data += digest;
+  put_le(data, entry.simd.size(), 4);
   data += entry.symbol;
+  data += entry.simd;
   data += entry.object;
 
   const std::string final_name = path_of(digest), temp = temporary_name(final_name);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "jit/loop_ir.h"
+#include "jit/target.h"
 
 namespace simit::jit {
 
@@ -28,16 +29,24 @@ inline constexpr uint64_t kKernelCacheMaxBytes = uint64_t{256} << 20;
 std::string kernel_key_text(const Trace& t);
 std::string kernel_key_text(const SystemTrace& t);
 
-// One entry: the name of the kernel's function and its relocatable object code.
+// One entry: the name of the kernel's function, its relocatable object code, and what its
+// compile found of its loops (simd_report_text), which a kernel loaded from the cache reports.
 struct CacheEntry {
   std::string symbol;
   std::string object;
+  std::string simd = {};
 };
 
+// A kernel's SimdReport as an entry keeps it (lines of text), and read back: false when the
+// text is not one.
+std::string simd_report_text(const SimdReport& r);
+bool read_simd_report(const std::string& text, SimdReport& r);
+
 // A folder of entries, one file per key digest: `<folder>/<64 hex digits>.o`. The file holds a
-// header (magic, file format version, the lengths, an FNV-1a 64 checksum of the symbol and
-// object, the key digest again), the symbol, then the object. A reader takes a file only when
-// all of these agree; anything else (truncated, garbage, another key) is no entry.
+// header (magic, file format version, the lengths, an FNV-1a 64 checksum of the symbol, object
+// and report, the key digest again), the symbol, the report, then the object. A reader takes
+// a file only when all of these agree; anything else (truncated, garbage, another key, an
+// older file format) is no entry.
 class KernelCache {
  public:
   static constexpr size_t kDigestBytes = 32;

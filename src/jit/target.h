@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "jit/loop_ir.h"
 
@@ -52,6 +53,31 @@ struct SystemArgs {
 // back: everything as a whole number of iterations leaves it, the ops after the loop not run).
 inline constexpr int32_t kSystemInterrupted = -1;
 
+// What a kernel computes in SIMD (docs/jit.md, "What vectorises"): a map kernel's lanes, or
+// why it has none, and what LLVM's vectorisers did with the kernel's innermost loops (the
+// only loops LLVM's loop vectoriser looks at).
+struct SimdLoop {
+  int number = 0;       // the loop's place among the kernel's loops, in emission order (from 1)
+  std::string what;     // what the loop does, e.g. "vector pass", "a sum's runs one by one"
+  int width = 1;        // elements per vector operation: 1 when not vectorised
+  int interleave = 1;   // vector operations in flight per iteration
+  std::string why_not;  // when not vectorised: LLVM's reason in short words
+};
+struct SimdReport {
+  bool reported = false;      // filled in by the target (the CPU's; not the GPU's)
+  bool map = false;           // a map or apply kernel (which may run in lanes), not a system one
+  int lanes = 1;              // a map kernel's elements at once
+  std::string lanes_why_not;  // a map kernel not in lanes: why
+  // Whether LLVM's loop and SLP vectorisers ran (not on a large trace, compiled without
+  // optimisation: jit/tunables.h).
+  bool vectorisers = true;
+  std::vector<SimdLoop> loops;  // the innermost loops the loop vectoriser reported on
+  int slp_groups = 0;  // straight-line code the SLP vectoriser turned into vector operations
+  // The --jit-stats note: "SIMD: 4 elements at once", "SIMD: 2 of 3 loops vectorised
+  // (width 4); not: reduction in the contract's order (1)" (jit/jit_stats.cpp).
+  std::string summary() const;
+};
+
 class Kernel {
  public:
   virtual ~Kernel() = default;
@@ -66,6 +92,7 @@ class Kernel {
   int lanes = 1;        // elements computed at once (a map kernel in SIMD lanes)
   bool cached = false;  // loaded from the kernel cache rather than compiled
   std::string llvm_ir;  // the optimised module, when asked for (`--dump=llvm`)
+  SimdReport simd;      // what runs in SIMD (kept with the kernel in the kernel cache)
 };
 
 // A code generation target (the host CPU; NVIDIA GPUs next).

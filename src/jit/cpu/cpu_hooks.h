@@ -4,13 +4,16 @@
 // order on one thread) and returns its status.
 #pragma once
 
+#include <string>
+
 #include "jit/llvm/emitter.h"
 #include "jit/llvm/target_hooks.h"
 
 namespace simit::jit::cpu {
 
-// Whether a map kernel computes kLanes elements at once (jit/cpu/emit_lanes.cpp).
-bool lanes_fit(const Trace& t);
+// Whether a map kernel computes kLanes elements at once (jit/cpu/emit_lanes.cpp); when not,
+// *why_not (where given) says why in short words ("a local assigned in a branch").
+bool lanes_fit(const Trace& t, std::string* why_not = nullptr);
 // Elements first .. first + kLanes - 1 of a kernel that lanes_fit, not past `end` (i32s).
 void run_lanes(codegen::MapEmitter& k, llvm::Value* first, llvm::Value* end);
 

@@ -2,6 +2,7 @@
 // statements in order, reading those values back (jit/cpu/cpu_hooks.h, docs/jit.md "Four
 // elements at once").
 #include <functional>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -20,21 +21,33 @@ using llvm::Value;
 // order of every reduction and the first failing element are the one-element kernel's.
 // Reads are speculative across branches: loads of fields and arguments at the element's own
 // endpoints are always in range, and no operation traps.
-bool lanes_fit(const Trace& t) {
-  // Tiled tensors' scratch arrays and loops are one element's: not in lanes.
-  if (kLanes <= 1 || t.writes_fields || !t.scratch.empty() ||
-      t.local_mutable.size() < t.locals.size())
+bool lanes_fit(const Trace& t, std::string* why_not) {
+  auto no = [&](const char* why) {
+    if (why_not) *why_not = why;
     return false;
-  for (bool m : t.local_mutable)
-    if (m) return false;
-  std::function<bool(const std::vector<Stmt>&)> fits = [&](const std::vector<Stmt>& body) {
-    for (const Stmt& s : body) {
-      if (s.kind == StmtKind::Store || s.kind == StmtKind::Decompose) return false;
-      if (s.kind == StmtKind::If && !(fits(s.body) && fits(s.orelse))) return false;
-    }
-    return true;
   };
-  return fits(t.body);
+  if (kLanes <= 1) return no("lanes are off");
+  if (t.writes_fields) return no("it writes fields");
+  // Tiled tensors' scratch arrays and loops are one element's: not in lanes.
+  if (!t.scratch.empty()) return no("a tiled tensor's loops");
+  if (t.local_mutable.size() < t.locals.size()) return no("a local assigned in a branch");
+  for (bool m : t.local_mutable)
+    if (m) return no("a local assigned in a branch");
+  std::function<const char*(const std::vector<Stmt>&)> misfit =
+      [&](const std::vector<Stmt>& body) -> const char* {
+    for (const Stmt& s : body) {
+      if (s.kind == StmtKind::Store) return "it writes fields";
+      if (s.kind == StmtKind::Decompose) return "a decomposition call it cannot widen";
+      if (s.kind == StmtKind::If) {
+        if (const char* why = misfit(s.body)) return why;
+        if (const char* why = misfit(s.orelse)) return why;
+      }
+    }
+    return nullptr;
+  };
+  if (const char* why = misfit(t.body)) return no(why);
+  if (why_not) why_not->clear();
+  return true;
 }
 
 namespace {

@@ -26,6 +26,7 @@
 #include <llvm/Target/TargetMachine.h>
 
 #include "jit/cpu/emitter.h"
+#include "jit/cpu/simd_remarks.h"
 #include "jit/kernel_cache.h"
 #include "runtime/math/math_functions.h"
 
@@ -241,19 +242,25 @@ class CpuTarget : public Target {
   const char* name() const override { return "cpu"; }
 
   std::unique_ptr<Kernel> compile(const Trace& trace, bool keep_ir, std::string& error) override {
-    const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace);
+    std::string why_not;
+    const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace, &why_not);
     const int level = !large ? kOptLevel : lanes ? kLargeLanesTraceOptLevel : kLargeTraceOptLevel;
     const bool fast = large && !lanes && kLargeTraceFastCodegen;
-    auto k = build(key_of(trace), level, fast, keep_ir, error,
+    auto k = build(key_of(trace), level, fast, lanes, keep_ir, error,
                    [&](llvm::Module& m, const std::string& name) {
                      return Emitter(trace, m, host_).run(name);
                    });
-    if (k) k->lanes = lanes ? kLanes : 1;
+    if (k) {
+      k->lanes = lanes ? kLanes : 1;
+      k->simd.map = true;
+      k->simd.lanes = k->lanes;
+      k->simd.lanes_why_not = why_not;
+    }
     return k;
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
                                   std::string& error) override {
-    auto k = build(key_of(trace), kOptLevel, false, keep_ir, error,
+    auto k = build(key_of(trace), kOptLevel, false, false, keep_ir, error,
                    [&](llvm::Module& m, const std::string& name) {
                      return Emitter(trace, m).run_system(name);
                    });
@@ -324,10 +331,12 @@ class CpuTarget : public Target {
   }
 
   // The kernel from the cache when it holds one (and the IR is not asked for); otherwise
-  // emits a function into a new module, optimises it for the host, compiles it, keeps the
-  // object in the cache, and links it.
+  // emits a function into a new module, optimises it for the host (collecting what the
+  // vectorisers did with its loops: `lanes`, a map kernel in lanes), compiles it, keeps the
+  // object and that report in the cache, and links it.
   std::unique_ptr<CpuKernel> build(
-      const std::string& trace_key, int level, bool fast, bool keep_ir, std::string& error,
+      const std::string& trace_key, int level, bool fast, bool lanes, bool keep_ir,
+      std::string& error,
       const std::function<llvm::Function*(llvm::Module&, const std::string&)>& emit) {
     const auto start = std::chrono::steady_clock::now();
     const auto elapsed_ms = [&] {
@@ -337,11 +346,16 @@ class CpuTarget : public Target {
     const std::string digest = cache_.enabled() ? digest_of(trace_key, level, fast) : "";
     if (cache_.enabled() && !keep_ir) {
       if (std::optional<CacheEntry> entry = cache_.load(digest)) {
-        std::string link_error;  // an entry that does not link is compiled again
-        auto k =
-            link(entry->symbol, llvm::MemoryBuffer::getMemBufferCopy(entry->object, entry->symbol),
-                 link_error);
+        // An entry that does not link, or whose report does not read, is compiled again.
+        std::string link_error;
+        SimdReport simd;
+        auto k = read_simd_report(entry->simd, simd)
+                     ? link(entry->symbol,
+                            llvm::MemoryBuffer::getMemBufferCopy(entry->object, entry->symbol),
+                            link_error)
+                     : nullptr;
         if (k) {
+          k->simd = std::move(simd);
           k->cached = true;
           k->compile_ms = elapsed_ms();
           return k;
@@ -367,10 +381,25 @@ class CpuTarget : public Target {
       return nullptr;
     }
     const bool keep = cache_.enabled() && relocatable(*mod);
-    if (level > 0) optimise(*mod, s_.target(), level);
+    // The vectorisers run from -O2 on (optimise); their remarks are kept while they do.
+    SimdReport simd;
+    simd.reported = true;
+    simd.vectorisers = level >= 2;
+    if (simd.vectorisers) {
+      cpu::SimdRemarks remarks(*mod, lanes);
+      ctx->setDiagnosticHandler(remarks.handler());
+      optimise(*mod, s_.target(), level);
+      ctx->setDiagnosticHandler(std::make_unique<llvm::DiagnosticHandler>());
+      remarks.fill(simd);
+    } else if (level > 0) {
+      optimise(*mod, s_.target(), level);
+    }
     std::string ir;
     if (keep_ir) {
       llvm::raw_string_ostream os(ir);
+      // What the vectorisers did with each loop, above the module (its loops carry their
+      // numbers as "simit.loop" metadata).
+      for (const SimdLoop& l : simd.loops) os << "; " << cpu::SimdRemarks::describe(l) << "\n";
       mod->print(os, nullptr);
     }
     auto obj = s_.compile(*mod, fast);
@@ -381,11 +410,13 @@ class CpuTarget : public Target {
     if (keep) {
       // A cache that cannot be written is no cache for this kernel: nothing is reported.
       std::string store_error;
-      cache_.store(digest, CacheEntry{name, (*obj)->getBuffer().str()}, store_error);
+      cache_.store(digest, CacheEntry{name, (*obj)->getBuffer().str(), simd_report_text(simd)},
+                   store_error);
     }
     auto k = link(name, std::move(*obj), error);
     if (!k) return nullptr;
     k->llvm_ir = std::move(ir);
+    k->simd = std::move(simd);
     k->compile_ms = elapsed_ms();
     return k;
   }
