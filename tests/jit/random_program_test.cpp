@@ -2,7 +2,8 @@
 // (threshold 0) and compared bit for bit (up to the sign of a zero): every result of the exported
 // function and every field of every set, after each of several calls. SIMIT_RANDOM_PROGRAMS=N runs
 // N programs, from SIMIT_RANDOM_SEED (default 1); SIMIT_RANDOM_PRINT=1 prints each program and its
-// traces.
+// traces. SIMIT_TEST_GPU=1 compares the GPU executor on a real GPU instead of the JIT (and fails
+// where none can run); SIMIT_TEST_GPU_EMULATION=1 the GPU executor over host memory.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "api/engine.h"
@@ -332,7 +334,7 @@ long env_long(const char* name, long fallback) {
 
 // Runs one generated program through both executors for a few calls of `step`. Returns ""
 // or a report of the first difference.
-std::string check_program(uint64_t seed, Tally& tally) {
+std::string check_program(uint64_t seed, ExecutorKind compiled, Tally& tally) {
   const Generated g = generate_program(seed);
   const auto program = CompiledProgram::from_source("random.sim", g.text);
   if (!program->ok())
@@ -340,9 +342,6 @@ std::string check_program(uint64_t seed, Tally& tally) {
            program->compilation()->diagnostics.render_all();
   if (env_long("SIMIT_RANDOM_PRINT", 0))
     std::printf("--- seed %llu ---\n%s", static_cast<unsigned long long>(seed), g.text.c_str());
-  // SIMIT_TEST_GPU_EMULATION: the compiled side is the GPU executor over host memory.
-  const ExecutorKind compiled =
-      simit::gpu_emulated_for_test() ? ExecutorKind::Gpu : ExecutorKind::Jit;
   Runner in(program, g, ExecutorKind::Interpreter), jit(program, g, compiled);
   ++tally.programs;
   tally.empty_sets += g.sets.verts == 0 || g.sets.edges == 0;
@@ -386,15 +385,36 @@ std::string check_program(uint64_t seed, Tally& tally) {
          "--- jit ---\n" + stats.str();
 }
 
+bool env_flag(const char* name) {
+  const char* v = std::getenv(name);
+  return v && *v && std::string_view(v) != "0";
+}
+
 TEST(RandomPrograms, TheJitComputesTheInterpretersBits) {
+  // SIMIT_TEST_GPU asks for a GPU: where none can run, that is a failure, not a skip (the GPU
+  // check would otherwise report a pass that compared nothing on a GPU).
+  const bool on_gpu = env_flag("SIMIT_TEST_GPU");
+  if (on_gpu) {
+    const std::string why =
+        simit::executor_unavailable(simit::ExecutorChoice{.kind = ExecutorKind::Gpu});
+    if (!why.empty())
+      FAIL() << "SIMIT_TEST_GPU=1 asks for the GPU executor, which cannot run: " << why;
+  }
   if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  // SIMIT_TEST_GPU_EMULATION without SIMIT_TEST_GPU: the GPU executor over host memory.
+  const bool emulated = simit::gpu_emulated_for_test();
+  const ExecutorKind compiled = on_gpu || emulated ? ExecutorKind::Gpu : ExecutorKind::Jit;
+  std::printf("compared with the interpreter: the %s executor%s\n", executor_name(compiled),
+              compiled != ExecutorKind::Gpu ? ""
+              : emulated                    ? " (emulated over host memory)"
+                                            : " (on the GPU)");
   const long count = env_long("SIMIT_RANDOM_PROGRAMS", kDefaultPrograms);
   const uint64_t first = static_cast<uint64_t>(env_long("SIMIT_RANDOM_SEED", 1));
   Tally tally;
   int failures = 0;
   const auto start = std::chrono::steady_clock::now();
   for (long i = 0; i < count && failures < 3; ++i) {
-    const std::string report = check_program(first + static_cast<uint64_t>(i), tally);
+    const std::string report = check_program(first + static_cast<uint64_t>(i), compiled, tally);
     if (!report.empty()) {
       ++failures;
       ADD_FAILURE() << report;
