@@ -116,6 +116,8 @@ Lowered TraceController::lower_for_device(Entry& e) {
   o.defer_assembly = true;
   Lowered l = lower(*e.traced.trace, device_target_ ? *device_target_ : *target_, o);
   std::string why = l.failure;
+  // Emulated, the CPU's target compiles what the GPU's refuses: refused all the same.
+  if (l.kernel && !device_target_) why = ptx::gpu_refusal(*e.traced.trace);
   // Elements that add into shared blocks without deferred writes would run one launch each.
   if (l.kernel && writes_of(*e.traced.trace) == MapWrites::Shared && !e.traced.trace->deferred)
     why = "its elements add into shared blocks that cannot be deferred";
