@@ -3,7 +3,7 @@
 
 Usage: bench/accuracy.py [--build DIR] [--example fem,springs,cloth,...] [--executor LIST]
                          [--frames K] [--points LIST] [--precisions LIST] [--repeat N]
-                         [--out DIR] [--plot-only] [--table]
+                         [--out DIR] [--plot-only] [--no-plot] [--table]
 
 Each example runs its scene for K frames (default 10) once per point of a sweep, with
 float64 and with float32 (`simit run --float32`), and each point gives the median ms/frame
@@ -42,11 +42,12 @@ Besides the sweep, each example runs once as it ships (its scene unchanged, floa
 iterations and line-search halvings per frame (the mean over the frames), and in `capped`
 the frames where Newton stopped at newton_max.
 
-Executors: --executor interpreter,jit (default: jit when this simit has it, else the
-interpreter). The JIT compiles each site at its first execution (--jit-threshold 0), so its
-compile time falls in frame 1, which the JIT's medians leave out. The reference runs with
-the JIT when it is built (its results are the interpreter's bit for bit), else with the
-interpreter. The interpreter emulates float32 by rounding every result, so its float32 times
+Executors: --executor interpreter,jit,gpu (default: jit when this simit has it, else the
+interpreter; gpu: `simit run --executor gpu`, the compiled maps on an NVIDIA GPU, refused
+with simit's reason where it cannot run). The JIT and the GPU executor compile each site at
+its first execution (--jit-threshold 0), so their compile time falls in frame 1, which their
+medians leave out. The reference runs with the JIT when it is built (its results are the
+interpreter's bit for bit), else with the interpreter. The interpreter emulates float32 by rounding every result, so its float32 times
 say nothing about the speed of single precision.
 
 Error: max over vertices of |x - x_ref| divided by max over vertices of |x_ref| (the size of
@@ -60,7 +61,8 @@ Writes DIR/accuracy_EXAMPLE_EXECUTOR.csv per run and DIR/accuracy_EXAMPLE.png (d
 bench-accuracy) with matplotlib: error against ms/frame and against the sweep's parameter,
 one series per executor and precision, from every accuracy_EXAMPLE_*.csv in DIR (so that an
 interpreter run and a JIT run of the same example share one figure). --plot-only redraws the
-figures from the CSVs; --table prints each example's table in markdown. Not a test. With the
+figures from the CSVs; --no-plot draws none (no matplotlib needed); --table prints each
+example's table in markdown. Not a test. With the
 JIT the default sweep of all three examples takes a few minutes; with the interpreter about
 0.5 to 1 s per fem frame (use --points to thin it).
 """
@@ -76,10 +78,13 @@ import sys
 import tempfile
 import time
 
-from run_bench import jit_available  # the same test of whether this simit has the JIT
+# The same tests of whether this simit has the JIT or can run the GPU executor, and the same
+# spelling of the option that selects one.
+from run_bench import executor_flag, executor_unavailable, jit_available
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRECISIONS = ("float64", "float32")
+COMPILING = ("jit", "gpu")  # the executors that compile sites (the rest: the interpreter)
 FRAME_TIME = 0.01  # cloth's frame, substeps * h
 
 
@@ -210,7 +215,8 @@ def run(simit, executor, scene, frames, outdir, float32):
     final = outdir + "-final.csv"
     if os.path.exists(final):
         os.remove(final)
-    flags = ["--backend", "jit", "--jit-threshold", "0"] if executor == "jit" else []
+    flags = ([executor_flag(simit), executor, "--jit-threshold", "0"]
+             if executor in COMPILING else [])
     argv = [simit, "run"] + flags + (["--float32"] if float32 else []) + [
         "--frames", str(frames), "--output", outdir, "--final-csv", final, scene]
     with open(outdir + ".log", "w") as log:
@@ -308,9 +314,10 @@ def measure(simit, executor, example, args, workdir, x0, ref, setup_cpu, prec, v
         point.update(status="failed")
         return point
     rows, x, _ = got
-    # The JIT compiles in frame 1 (--jit-threshold 0): its medians leave that frame out.
+    # The JIT and the GPU executor compile in frame 1 (--jit-threshold 0): their medians
+    # leave that frame out.
     def skip(frames):
-        return frames[1:] if executor == "jit" and len(frames) > 1 else frames
+        return frames[1:] if executor in COMPILING and len(frames) > 1 else frames
     worst, rms, of_motion = errors(x, ref, x0)
 
     def least(column):
@@ -409,7 +416,7 @@ def describe(p):
     return text + ", max rel error %.2e, rms %.2e" % (p["max_rel_error"], p["rms_rel_error"])
 
 
-EXECUTORS = ("interpreter", "jit")
+EXECUTORS = ("interpreter", "jit", "gpu")
 
 
 def csv_paths(out, name):
@@ -449,7 +456,8 @@ def plot(plt, out, example):
     # The Newton examples add a third panel: Newton iterations per frame against the parameter.
     fig, axes = plt.subplots(1, 3 if newton else 2, figsize=(19 if newton else 13, 5.2))
     styles = {("jit", "float64"): ("C0", "o"), ("jit", "float32"): ("C1", "s"),
-              ("interpreter", "float64"): ("C2", "^"), ("interpreter", "float32"): ("C3", "v")}
+              ("interpreter", "float64"): ("C2", "^"), ("interpreter", "float32"): ("C3", "v"),
+              ("gpu", "float64"): ("C4", "D"), ("gpu", "float32"): ("C5", "P")}
     for (executor, prec), (color, marker) in styles.items():
         series = sorted((r for r in rows if r["executor"] == executor and
                          r["precision"] == prec and not r["shipped"]),
@@ -524,14 +532,15 @@ def table_head(head):
 
 
 def table_settings(rows):
-    """The (executor, shipped, value) settings of the rows: the JIT first, then the
-    interpreter; the shipped setting first within each, then by decreasing value."""
+    """The (executor, shipped, value) settings of the rows: the JIT first, then the GPU
+    executor, then the interpreter; the shipped setting first within each, then by
+    decreasing value."""
     settings = []
     for r in rows:
         key = (r["executor"], bool(r["shipped"]), float(r["value"]))
         if key not in settings:
             settings.append(key)
-    order = {"jit": 0, "interpreter": 1}
+    order = {"jit": 0, "gpu": 1, "interpreter": 2}
     settings.sort(key=lambda k: (order.get(k[0], 2), not k[1], -k[2]))
     return settings
 
@@ -614,7 +623,7 @@ def main():
                    help="examples, comma-separated (default fem,springs,cloth; also "
                         "fem_newton, springs_newton, fem_newton_cg, springs_newton_cg)")
     p.add_argument("--executor", default=None,
-                   help="interpreter, jit or both, comma-separated (default: jit if built)")
+                   help="interpreter, jit, gpu, comma-separated (default: jit if built)")
     p.add_argument("--frames", type=int, default=10, help="frames per run, K (default 10)")
     p.add_argument("--points", default=None,
                    help="the sweep: CG tolerances (fem, springs, *_newton_cg), Newton "
@@ -631,10 +640,14 @@ def main():
                    help="substeps per frame of the cloth reference (default 1600)")
     p.add_argument("--out", default="bench-accuracy", help="output folder (default bench-accuracy)")
     p.add_argument("--plot-only", action="store_true", help="redraw the figures from the CSVs")
+    p.add_argument("--no-plot", action="store_true",
+                   help="draw no figures (matplotlib is then not needed)")
     p.add_argument("--table", action="store_true",
                    help="also print each example's results as a markdown table")
     args = p.parse_args()
-    plt = require_matplotlib()
+    if args.plot_only and args.no_plot:
+        p.error("--plot-only and --no-plot contradict each other")
+    plt = None if args.no_plot else require_matplotlib()
     names = [n.strip() for n in args.example.split(",") if n.strip()]
     for n in names:
         if n not in EXAMPLES:
@@ -655,16 +668,21 @@ def main():
                      if args.executor else ["jit" if has_jit else "interpreter"])
         for e in executors:
             if e not in EXECUTORS:
-                sys.exit("accuracy.py: unknown executor %s (expected interpreter or jit)" % e)
+                sys.exit("accuracy.py: unknown executor %s (expected %s)"
+                         % (e, ", ".join(EXECUTORS)))
             if e == "jit" and not has_jit:
                 sys.exit("accuracy.py: this simit has no JIT (configure with "
                          "-DSIMIT_WITH_LLVM=ON)")
+            if e == "gpu" and executor_unavailable(simit, "gpu"):
+                sys.exit("accuracy.py: the GPU executor cannot run: %s"
+                         % executor_unavailable(simit, "gpu"))
         ref_executor = "jit" if has_jit else "interpreter"
         for example in examples:
             for executor in executors:
                 sweep(simit, executor, ref_executor, example, args, args.out)
     for example in examples:
-        plot(plt, args.out, example)
+        if plt:
+            plot(plt, args.out, example)
         if args.table:
             print(table(args.out, example))
     print("total %.0f s" % (time.monotonic() - started))

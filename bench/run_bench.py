@@ -2,7 +2,7 @@
 """The examples' benchmark table: every executor of `simit` against the Eigen baselines.
 
 Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
-                          [--only SUBSTRING] [--baseline-only SUBSTRING]...
+                          [--only SUBSTRING]... [--baseline-only SUBSTRING]...
                           [--compare-baseline LABEL=DIR]... [--compare-simit LABEL=DIR]...
                           [--fem-sim-form] [--threads N]
                           [--executors interpreter,...] [--out FILE]...
@@ -32,9 +32,16 @@ prints one row per run:
                once in the footnote);
   vs baseline  ms/frame divided by the baseline's ms/frame measured in this run;
   rel. err     max |x - x_ref| / max |x_ref| over the final positions, x_ref those of the
-               first executor run (the interpreter by default; "-" when none ran).
+               first executor run (the interpreter by default; "-" when none ran);
+               "same bits" where the final positions' CSV is byte for byte the reference's.
                With CG stopped by its iteration cap this is mostly rounding amplified by
                unpreconditioned CG; the scene_*_vs_baseline tests compare converged runs.
+
+Executors (--executors, comma-separated, default interpreter,jit): interpreter, jit and gpu
+(`simit run --executor gpu`: the compiled maps on an NVIDIA GPU, solver loops on the CPU).
+An executor this simit cannot run (no JIT, no GPU: `simit run --executor gpu` says why) is
+left out of every case with a note giving the reason. --only SUBSTRING, repeatable, keeps
+the cases whose example/mesh contains any of them.
 
 --baseline-only SUBSTRING runs only the baselines on the matching cases (dragon160k takes
 about 40 s a frame under the interpreter). --compare-baseline LABEL=DIR adds rows for the
@@ -69,6 +76,8 @@ runs 5 frames of each example; --frames changes that for all of them.
 """
 import argparse
 import csv
+import filecmp
+import functools
 import os
 import re
 import shutil
@@ -82,38 +91,63 @@ import tomllib
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def scene_run(executor_flags):
-    """The argv of `simit run` with extra flags selecting an executor; THREADS (a list, maybe
-    empty) holds the --threads flag when the run passes one."""
+def executor_flag(simit):
+    """The option that selects an executor: --executor, or --backend in a simit from before
+    that name (the CLI keeps --backend as another name of --executor)."""
+    return "--executor" if help_mentions(simit, "--executor") else "--backend"
+
+
+def scene_run(executor, extra_flags):
+    """The argv of `simit run` under EXECUTOR (None: simit's default, the interpreter) with
+    EXTRA_FLAGS; THREADS (a list, maybe empty) holds the --threads flag when the run passes
+    one."""
     def argv(simit, scene, frames, outdir, final_csv, threads):
-        return ([simit, "run"] + executor_flags + threads +
+        selected = [executor_flag(simit), executor] if executor else []
+        return ([simit, "run"] + selected + extra_flags + threads +
                 ["--frames", str(frames), "--output", outdir, "--final-csv", final_csv, scene])
     return argv
 
 
-# Executors of simit, in table order: name -> (argv builder, availability check, whether it
-# runs on --threads N threads). The JIT compiles every site at its first execution
-# (--jit-threshold 0: the compile time falls in the first frame, outside the medians) and
-# prints its traces (--jit-stats), whose compile times and CPU times go into the notes.
+# Executors of simit, in table order: name -> (argv builder, why this simit cannot run it
+# ("" when it can), whether it runs on --threads N threads). The JIT and the GPU executor
+# compile every site at its first execution (--jit-threshold 0: the compile time falls in the
+# first frame, outside the medians) and print their traces (--jit-stats), whose compile times
+# and CPU times go into the notes. The GPU executor's solver loops run on --threads N.
 EXECUTORS = {
-    "interpreter": (scene_run([]), lambda simit: True, False),
-    "jit": (scene_run(["--backend", "jit", "--jit-threshold", "0", "--jit-stats"]),
-            lambda simit: jit_available(simit), True),
+    "interpreter": (scene_run(None, []), lambda simit: "", False),
+    "jit": (scene_run("jit", ["--jit-threshold", "0", "--jit-stats"]),
+            lambda simit: executor_unavailable(simit, "jit"), True),
+    "gpu": (scene_run("gpu", ["--jit-threshold", "0", "--jit-stats"]),
+            lambda simit: executor_unavailable(simit, "gpu"), True),
 }
+DEFAULT_EXECUTORS = "interpreter,jit"
+
+
+@functools.lru_cache(maxsize=None)
+def executor_unavailable(simit, executor):
+    """Why SIMIT cannot run EXECUTOR (jit or gpu), "" when it can: a tiny program is run
+    with it, and its error message is the reason (for the GPU: no driver, no device)."""
+    if not help_mentions(simit, "--backend"):
+        return "this simit has no --executor option (built before the JIT)"
+    if executor != "jit" and not help_mentions(simit, "|" + executor):
+        return "this simit has no %s executor (simit run --help lists none)" % executor
+    with tempfile.NamedTemporaryFile("w", suffix=".sim", delete=False) as f:
+        f.write("export func one() -> (x : float)\n  x = 1.0;\nend\n")
+    try:
+        out = subprocess.run([simit, "run", executor_flag(simit), executor, f.name,
+                              "--call", "one"], capture_output=True, text=True)
+    finally:
+        os.unlink(f.name)
+    if out.returncode == 0:
+        return ""
+    lines = (out.stderr or out.stdout).strip().splitlines()
+    why = lines[-1] if lines else "exit status %d" % out.returncode
+    return why.replace(f.name + ": ", "").replace("error: ", "")
 
 
 def jit_available(simit):
     """Whether this simit has the JIT (built with LLVM): a tiny program runs with it."""
-    if not help_mentions(simit, "--backend"):
-        return False
-    with tempfile.NamedTemporaryFile("w", suffix=".sim", delete=False) as f:
-        f.write("export func one() -> (x : float)\n  x = 1.0;\nend\n")
-    try:
-        out = subprocess.run([simit, "run", "--backend", "jit", f.name, "--call", "one"],
-                             capture_output=True, text=True)
-        return out.returncode == 0
-    finally:
-        os.unlink(f.name)
+    return executor_unavailable(simit, "jit") == ""
 
 
 def jit_traces(log_path):
@@ -130,6 +164,7 @@ def jit_traces(log_path):
             if line.strip() and not line.strip().startswith("key:")]
 
 
+@functools.lru_cache(maxsize=None)
 def help_mentions(simit, flag):
     """Whether `simit run --help` lists FLAG (for executors that need a newer simit)."""
     out = subprocess.run([simit, "run", "--help"], capture_output=True, text=True)
@@ -248,7 +283,7 @@ def cases(args, workdir):
     for n in args.cloth:
         scene = bench_scene(os.path.join(ex, "cloth", "square.toml"), workdir, "square%d" % n, n)
         out.append(Case("cloth", "square%d" % n, scene, str(n), 5))
-    return [c for c in out if not args.only or args.only in c.name]
+    return [c for c in out if not args.only or any(o in c.name for o in args.only)]
 
 
 def read_simit_csv(outdir):
@@ -298,7 +333,7 @@ def row_of(case, who, threads, frames_run, code, peak, data, loc):
         "solve": median(data["solve"]),
         "iterations": median(data["iterations"]) if data["iterations"] else None,
         "residual": data["residual"][-1] if data["residual"] else None,
-        "peak_mb": peak, "loc": loc, "ratio": None, "error": None,
+        "peak_mb": peak, "loc": loc, "ratio": None, "error": None, "same_bits": False,
     }
 
 
@@ -397,9 +432,11 @@ def measure(case, args, workdir, notes):
     runs += [(name + " " + label, name, os.path.join(build, "tools", "simit"))
              for label, build in args.compare_simit for name in args.executors]
     for runner, name, simit in ([] if baseline_only(case, args) else runs):
-        make_argv, available, threaded = EXECUTORS[name]
-        if not available(simit):
-            notes.append("%s: executor %s is not available in %s" % (case.name, name, simit))
+        make_argv, unavailable, threaded = EXECUTORS[name]
+        why = unavailable(simit)
+        if why:
+            notes.append("%s: executor %s is not available in %s: %s"
+                         % (case.name, name, simit, why))
             continue
         thread_flags = simit_thread_flags(simit, args.threads)
         if thread_flags is None and not threaded:
@@ -434,6 +471,8 @@ def measure(case, args, workdir, notes):
             reference = positions
         else:
             row["error"] = relative_error(positions, reference) if reference else None
+            row["same_bits"] = bool(reference) and code == 0 and \
+                filecmp.cmp(positions, reference, shallow=False)
         # Same stopping rule, same iterates: the iteration counts should match frame by frame.
         if data["iterations"] or base["iterations"]:
             diffs = [(k + 1, a, b) for k, (a, b) in
@@ -483,6 +522,8 @@ def cell(row, key):
         return "%.1f" % v if v >= 10 else "%.3f" % v
     if key == "iterations":
         return "%g" % v
+    if key == "error" and row["same_bits"]:
+        return "same bits"
     if key in ("residual", "error"):
         return "%.2e" % v
     if key == "peak_mb":
@@ -553,9 +594,12 @@ def main():
     p.add_argument("--repeat", type=int, default=1,
                    help="run each case N times and keep each timing's least median "
                         "(default 1; for a busy machine)")
-    p.add_argument("--only", default="", help="run only the cases whose example/mesh contains this")
-    p.add_argument("--executors", default=",".join(EXECUTORS),
-                   help="comma-separated, from: " + ", ".join(EXECUTORS))
+    p.add_argument("--only", action="append", default=[], metavar="SUBSTRING",
+                   help="run only the cases whose example/mesh contains this (repeatable: "
+                        "any of them)")
+    p.add_argument("--executors", default=DEFAULT_EXECUTORS,
+                   help="comma-separated, from: %s (default %s)"
+                        % (", ".join(EXECUTORS), DEFAULT_EXECUTORS))
     p.add_argument("--out", action="append", default=[],
                    help="also write the table to FILE: .md as markdown, anything else as CSV")
     p.add_argument("--keep", default="", help="keep the runs' output in this folder")
