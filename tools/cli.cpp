@@ -141,11 +141,11 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
   sub.add_flag("--jit-stats", *t.stats,
                "jit: print each trace (site, key, compile ms, calls, ms spent, or why it ran "
                "interpreted) " +
-                   stats_when + "; needs --executor jit");
+                   stats_when + "; needs --executor jit or gpu");
   sub.add_flag("--check-jit", x.check,
                "jit: run every compiled call interpreted as well, on the same inputs, and stop at "
                "the first result, field or variable that differs (bit for bit), naming it; needs "
-               "--executor jit");
+               "--executor jit or gpu");
   sub.add_flag("--check-ptx", x.check_ptx,
                "Compile every trace the run compiles for the CPU for the GPU as well (PTX for "
                "sm_90, through LLVM's NVPTX back end) and assemble it with the CUDA toolkit's "
