@@ -4,13 +4,13 @@ frames must write byte-identical final positions and the same per-frame statisti
 column but the timings), and the JIT must have compiled some of its sites.
 
 usage: check_examples_agree.py SIMIT SCENE.toml OUTDIR FRAMES [SHUFFLE_SEED] [--threads N]
-                                [--executor jit|gpu]
+                                [--executor jit|gpu] [--float32]
 
 With SHUFFLE_SEED the JIT runs its maps through the test-only shuffled executor (chunks of a
 few elements in a shuffled order: jit/executor.h), which must give the same bits. The JIT
 runs on N threads (default 1), which must give the same bits too. With --executor gpu the
 compiled maps run through the GPU executor (over host memory where SIMIT_TEST_GPU_EMULATION
-is set), and some must have been compiled for the GPU.
+is set), and some must have been compiled for the GPU. --float32 runs both in float32.
 """
 import csv
 import os
@@ -21,13 +21,15 @@ import sys
 TIMING_COLUMNS = {"ms", "assembly_ms", "solve_ms"}
 
 
-def run(simit, scene, out, frames, backend, env=None, threads=1):
+def run(simit, scene, out, frames, backend, env=None, threads=1, float32=False):
     if os.path.exists(out):
         shutil.rmtree(out)
     os.makedirs(out)
     final = os.path.join(out, "final.csv")
     cmd = [simit, "run", scene, "--frames", str(frames), "--output", out, "--final-csv", final,
            "--executor", backend]
+    if float32:
+        cmd.append("--float32")
     if backend != "interpreter":
         cmd += ["--jit-stats", "--jit-cache", "off", "--threads", str(threads)]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -46,6 +48,9 @@ def main():
     args = sys.argv[1:]
     threads = 1
     backend = "jit"
+    float32 = "--float32" in args
+    if float32:
+        args.remove("--float32")
     if "--executor" in args:
         at = args.index("--executor")
         backend = args[at + 1]
@@ -56,12 +61,13 @@ def main():
         del args[at:at + 2]
     sys.argv[1:] = args
     simit, scene, outdir, frames = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-    a_final, a_rows, _ = run(simit, scene, os.path.join(outdir, "interpreter"), frames, "interpreter")
+    a_final, a_rows, _ = run(simit, scene, os.path.join(outdir, "interpreter"), frames, "interpreter",
+                             float32=float32)
     env = dict(os.environ)
     if len(sys.argv) > 5:
         env["SIMIT_TEST_SHUFFLE_SEED"] = sys.argv[5]
     b_final, b_rows, b_out = run(simit, scene, os.path.join(outdir, backend), frames, backend,
-                                 env, threads)
+                                 env, threads, float32)
     on_gpu = b_out.count(" compiled for the GPU\n")
     compiled = b_out.count(" compiled\n") + on_gpu
     if backend == "gpu" and on_gpu == 0:
