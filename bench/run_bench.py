@@ -11,7 +11,9 @@ For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon1
 springs: bunny; cloth: the generated N x N square for each --cloth size) it runs the scene
 once per executor (`simit run SCENE`, which writes a per-frame CSV) and the hand-written
 baseline (bench/baselines/EXAMPLE_baseline.cpp) once, for the same number of frames, and
-prints one row per run:
+prints one row per run. Cloths above 64 points a side diverge at cloth.sim's step (NaN in
+the first frame, the baseline's too): they run a copy of cloth.sim with the step shrunk by
+(N / 64)^2 (the mesh column says the step), without a baseline, whose step is fixed.
 
   threads      the threads the run used: --threads N for the baselines and simit's JIT,
                1 for the interpreter (which runs on one thread whatever N);
@@ -78,6 +80,7 @@ import argparse
 import csv
 import filecmp
 import functools
+import math
 import os
 import re
 import shutil
@@ -240,17 +243,19 @@ class Case:
         return self.example + "/" + self.mesh
 
 
-def bench_scene(source, workdir, name, cloth_n=None):
+def bench_scene(source, workdir, name, cloth_n=None, program=None):
     """SOURCE itself when it already writes a per-frame CSV; else a copy in WORKDIR with the
-    program and mesh paths made absolute, [output] csv added and, for the cloth, n points per
-    side (the example ships n = 32)."""
+    program and mesh paths made absolute (the program PROGRAM when given), [output] csv added
+    and, for the cloth, n points per side (the example ships n = 32)."""
     with open(source, "rb") as f:
         doc = tomllib.load(f)
-    if "csv" in doc.get("output", {}) and cloth_n in (None, 32):
+    if "csv" in doc.get("output", {}) and cloth_n in (None, 32) and program is None:
         return source
     base = os.path.dirname(os.path.abspath(source))
     text = open(source).read()
     def absolute(m):
+        if m.group(1) == "program" and program:
+            return 'program = "%s"' % program
         return '%s = "%s"' % (m.group(1), os.path.normpath(os.path.join(base, m.group(2))))
     text = re.sub(r'(?m)^(program|mesh) = "([^"]+)"', absolute, text)
     if cloth_n is not None:
@@ -265,7 +270,36 @@ def bench_scene(source, workdir, name, cloth_n=None):
     return path
 
 
-def cases(args, workdir):
+# The largest cloth side at which cloth.sim's explicit step (h = 2e-4, 50 steps a frame) is
+# stable: at 128 and 256 points a side the stability limit, which shrinks with the edge
+# length, is below it, and the baseline (the same fixed step) and simit both reach NaN in the
+# first frame. Larger cloths run a copy of cloth.sim whose step is shrunk by (n / 64)^2 (the
+# bending term's limit goes with the square of the edge: a step shrunk by n / 64 alone still
+# diverges at 256), the frame still 1/100 s, without a baseline row, whose step is fixed.
+CLOTH_STABLE_N = 64
+
+
+def cloth_program(n, workdir):
+    """For a cloth of N > CLOTH_STABLE_N points a side: (a copy of cloth.sim in WORKDIR with
+    h and substeps scaled, h); else (None, None), the shipped program."""
+    if n <= CLOTH_STABLE_N:
+        return None, None
+    source = os.path.join(ROOT, "examples", "cloth", "cloth.sim")
+    code = open(source).read()
+    h = float(re.search(r"(?m)^const h\s*=\s*([^;%]+);", code).group(1))
+    substeps = int(re.search(r"(?m)^const substeps\s*=\s*([^;%]+);", code).group(1))
+    steps = math.ceil(substeps * (n / CLOTH_STABLE_N) ** 2)
+    step = h * substeps / steps
+    code = re.sub(r"(?m)^const h\s*=\s*[^;]+;", "const h = %r;" % step, code, count=1)
+    code = re.sub(r"(?m)^const substeps\s*=\s*[^;]+;", "const substeps = %d;" % steps, code,
+                  count=1)
+    path = os.path.join(workdir, "cloth%d.sim" % n)
+    with open(path, "w") as f:
+        f.write(code)
+    return path, step
+
+
+def cases(args, workdir, notes):
     ex = os.path.join(ROOT, "examples")
     data = os.path.join(ex, "data")
 
@@ -281,8 +315,17 @@ def cases(args, workdir):
                         os.path.join(data, "dragon160k.node"), 3))
     out.append(case("springs", "bunny", "bunny.toml", os.path.join(data, "bunny.1.node"), 5))
     for n in args.cloth:
-        scene = bench_scene(os.path.join(ex, "cloth", "square.toml"), workdir, "square%d" % n, n)
-        out.append(Case("cloth", "square%d" % n, scene, str(n), 5))
+        program, step = cloth_program(n, workdir)
+        scene = bench_scene(os.path.join(ex, "cloth", "square.toml"), workdir, "square%d" % n, n,
+                            program)
+        if program is None:
+            out.append(Case("cloth", "square%d" % n, scene, str(n), 5))
+            continue
+        mesh = "square%d h=%.3g" % (n, step)
+        out.append(Case("cloth", mesh, scene, None, 5))
+        notes.append("cloth/%s: the shipped step h diverges above %d points a side, so this case "
+                     "runs cloth.sim with h = %.3g (%d steps a frame), and no baseline (its step "
+                     "is fixed)" % (mesh, CLOTH_STABLE_N, step, round(0.01 / step)))
     return [c for c in out if not args.only or any(o in c.name for o in args.only)]
 
 
@@ -412,15 +455,20 @@ def baseline_only(case, args):
 def measure(case, args, workdir, notes):
     frames = args.frames or case.default_frames
     rows = []
-    # The baseline first: its numbers are the reference of this case's ratios.
-    baseline_run = run_baseline(case, args, workdir, notes, "baseline", args.build, [])
-    if baseline_run is None:  # main() checked this build's baselines: not reached
-        sys.exit("%s: this build's baseline cannot run --threads" % case.name)
-    base_row, base, base_positions = baseline_run
-    base_row["ratio"] = 1.0
+    # The baseline first: its numbers are the reference of this case's ratios (a case with
+    # no baseline input has none: a cloth whose step the baselines cannot shrink).
+    base_row, base, base_positions = None, {"iterations": [], "energy": []}, None
+    if case.baseline_input is not None:
+        baseline_run = run_baseline(case, args, workdir, notes, "baseline", args.build, [])
+        if baseline_run is None:  # main() checked this build's baselines: not reached
+            sys.exit("%s: this build's baseline cannot run --threads" % case.name)
+        base_row, base, base_positions = baseline_run
+        base_row["ratio"] = 1.0
     variants = [(label, build, []) for label, build in args.compare_baseline]
     if case.example == "fem" and args.fem_sim_form:
         variants.insert(0, ("baseline --sim-form", args.build, ["--sim-form"]))
+    if base_row is None:
+        variants = []
     others = []  # (row, final positions) of the other baselines
     for label, build, extra in variants:
         run = run_baseline(case, args, workdir, notes, label, build, extra)
@@ -445,8 +493,8 @@ def measure(case, args, workdir, notes):
             notes.append("%s %s: skipped, %s has no --threads (built before it)"
                          % (case.name, runner, simit))
             continue
-        outdir = os.path.join(workdir, case.example + "-" + case.mesh + "-" +
-                              re.sub(r"[^\w-]+", "_", runner))
+        outdir = os.path.join(workdir, re.sub(r"[^\w-]+", "_", case.example + "-" + case.mesh +
+                                              "-" + runner))
         shutil.rmtree(outdir, ignore_errors=True)
         positions = outdir + "-final.csv"
         argv = make_argv(simit, case.scene, frames, outdir, positions, thread_flags)
@@ -465,7 +513,7 @@ def measure(case, args, workdir, notes):
                      count_loc(case.program))
         for trace in jit_traces(outdir + ".log"):
             notes.append("%s %s trace: %s" % (case.name, runner, trace))
-        if base_row["ms"] > 0:
+        if base_row and base_row["ms"] > 0:
             row["ratio"] = row["ms"] / base_row["ms"]
         if reference is None and code == 0:
             reference = positions
@@ -473,6 +521,9 @@ def measure(case, args, workdir, notes):
             row["error"] = relative_error(positions, reference) if reference else None
             row["same_bits"] = bool(reference) and code == 0 and \
                 filecmp.cmp(positions, reference, shallow=False)
+        if base_row is None:
+            rows.append(row)
+            continue
         # Same stopping rule, same iterates: the iteration counts should match frame by frame.
         if data["iterations"] or base["iterations"]:
             diffs = [(k + 1, a, b) for k, (a, b) in
@@ -483,7 +534,7 @@ def measure(case, args, workdir, notes):
                                 or "(frame counts differ)"))
         note_energy_differences(case, runner, data["energy"], base["energy"], notes)
         rows.append(row)
-    for row, positions in [(base_row, base_positions)] + others:
+    for row, positions in ([(base_row, base_positions)] if base_row else []) + others:
         if row is not base_row and base_row["ms"] > 0:
             row["ratio"] = row["ms"] / base_row["ms"]
         if reference:
@@ -501,9 +552,9 @@ def fastest_of(runs):
         for key in ("ms", "assembly", "solve"):
             row[key] = min([row[key]] + [o[key] for o in others])
         row["ok"] = row["ok"] and all(o["ok"] for o in others)
-    base = next(r for r in rows if r["runner"] == "baseline")
+    base = next((r for r in rows if r["runner"] == "baseline"), None)
     for row in rows:
-        row["ratio"] = row["ms"] / base["ms"] if base["ms"] > 0 else None
+        row["ratio"] = row["ms"] / base["ms"] if base and base["ms"] > 0 else None
     return rows
 
 
@@ -650,7 +701,7 @@ def main():
     rows, notes = [], []
     started = time.monotonic()
     try:
-        for case in cases(args, workdir):
+        for case in cases(args, workdir, notes):
             print("%s (%d frames)" % (case.name, args.frames or case.default_frames), flush=True)
             runs = [measure(case, args, workdir, notes) for _ in range(args.repeat)]
             rows += fastest_of(runs)
