@@ -1,20 +1,38 @@
 #!/usr/bin/env bash
 # The GPU check: a self-contained bundle built here, run on a machine with an NVIDIA GPU.
 #
-#   scripts/gpu_check.sh bundle [DIR]   builds simit and gpu_probe (Release, the JIT with LLVM
-#                                       linked in statically) in build-gpu-release, and packs
-#                                       them with every shared library they need and the dynamic
-#                                       loader into DIR/simit-gpu-bundle.tar.xz (DIR: by default
+#   scripts/gpu_check.sh bundle [DIR]   builds simit, gpu_probe, jit_tests (the random
+#                                       programs) and the examples' Eigen baselines (Release,
+#                                       the JIT with LLVM linked in statically) in
+#                                       build-gpu-release, and packs them with every shared
+#                                       library they need and the dynamic loader into
+#                                       DIR/simit-gpu-bundle.tar.xz (DIR: by default
 #                                       build-gpu-bundle); then unpacks it, runs it here in an
-#                                       empty environment and checks that each library it loads
-#                                       comes from the bundle
+#                                       empty environment, checks that each library it loads
+#                                       comes from the bundle and reports its sizes
 #   scripts/gpu_check.sh run [DIR]      on the GPU machine, in the repository root, with DIR
-#                                       there (unpacked into a temporary folder): the probe,
-#                                       the language corpus and the fem, springs and cloth
-#                                       examples (10 frames) under each executor, final
-#                                       positions compared byte for byte with the interpreter's;
-#                                       writes bench/results/gpu_check.md (and a copy into $OUT
-#                                       when that is set)
+#                                       there (unpacked into a temporary folder), in order:
+#                                       the probe; the language corpus and the fem, springs and
+#                                       cloth examples (10 frames) under each executor, final
+#                                       positions compared byte for byte with the
+#                                       interpreter's; 300 random programs under the GPU
+#                                       executor against the interpreter (jit_tests,
+#                                       SIMIT_TEST_GPU=1); the benchmark with the GPU executor
+#                                       (bench/run_bench.py, then a thin bench/accuracy.py
+#                                       sweep). Writes bench/results/gpu_check.md (and a copy
+#                                       into $OUT when that is set), rewritten after each step:
+#                                       a table of each step's outcome (passed, FAILED or
+#                                       skipped, and why), then what each measured. A failing
+#                                       step does not stop the later ones; the exit status is
+#                                       1 when one failed
+#
+# run's environment: SIMIT_GPU_CHECK_BUDGET, the seconds the whole run may take (540: a step
+# that would start with too little left is skipped, saying so), SIMIT_GPU_CHECK_STEP_LIMIT
+# (300, the most one command may take), SIMIT_GPU_CHECK_PROGRAMS, _SEED and _SHARDS (300
+# random programs from seed 1 in half as many processes as there are cores, 2 to 8),
+# SIMIT_GPU_CHECK_FRAMES and _THREADS (the benchmark's: 4 frames, every core),
+# SIMIT_GPU_CHECK_REPORT (the report's path). SIMIT_TEST_GPU_EMULATION=1 runs the GPU steps
+# without a GPU, over host memory (a rehearsal of the script; the report says so).
 #
 # The GPU machine's CPU is not this one: the bundle is built with SIMIT_NATIVE=OFF (plain
 # x86-64, which every x86-64 CPU runs; the JIT still compiles for the CPU it runs on). Its C
@@ -26,7 +44,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 usage() {
-  sed -n '2,/^$/p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  sed -n '2,/^set /{/^#/p}' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
   exit 2
 }
 
@@ -36,6 +54,14 @@ usage() {
 GLIBC_EXTRAS=(libdl.so.2 libpthread.so.0 librt.so.1 libm.so.6 libc.so.6)
 # The one file of a bundle folder: the bundle, packed.
 ARCHIVE=simit-gpu-bundle.tar.xz
+# The bundled programs and where the build puts them: simit, the probe, the unit tests of the
+# JIT (for the random programs under the GPU executor) and the examples' Eigen baselines (the
+# benchmark's reference rows).
+declare -A BUNDLED=(
+  [simit]=tools/simit [gpu_probe]=bench/gpu_probe [jit_tests]=tests/jit_tests
+  [fem_baseline]=bench/fem_baseline [springs_baseline]=bench/springs_baseline
+  [cloth_baseline]=bench/cloth_baseline
+)
 
 # The wrapper that starts bin/NAME through the carried loader and libraries.
 write_wrapper() {
@@ -92,19 +118,21 @@ cmd_bundle() {
   # libstdc++ and libgcc stay shared, carried like the rest: the shared libraries simit needs
   # (toml++, tinyobjloader, libgfortran under LAPACK) load them anyway, and a static copy in
   # simit (whose symbols it exports, for the JIT) would make two of each in the process.
+  # Tests and benchmarks are configured, but only the bundled targets are built.
   configure_build "$build" Release -DSIMIT_WITH_LLVM=ON -DSIMIT_NATIVE=OFF \
-    -DSIMIT_BUILD_TESTS=OFF -DSIMIT_PYTHON=OFF -DSIMIT_BUILD_BENCH=OFF \
+    -DSIMIT_BUILD_TESTS=ON -DSIMIT_PYTHON=OFF -DSIMIT_BUILD_BENCH=ON \
     -DCMAKE_EXE_LINKER_FLAGS="" >/dev/null
-  echo "gpu_check: building simit and gpu_probe (under $lock)"
-  flock "$lock" cmake --build "$build" -j2 --target simit gpu_probe
-  local exe probe
-  exe="$build/tools/simit"
-  probe="$build/bench/gpu_probe"
-  if ldd "$exe" | grep -q 'libLLVM'; then
-    echo "gpu_check: $exe links the shared libLLVM (zstd's development files missing?); the" \
-      "bundle needs LLVM linked in statically" >&2
-    exit 1
-  fi
+  local name targets=()
+  for name in "${!BUNDLED[@]}"; do targets+=(--target "$name"); done
+  echo "gpu_check: building ${!BUNDLED[*]} (under $lock)"
+  flock "$lock" cmake --build "$build" -j2 "${targets[@]}"
+  for name in simit jit_tests; do
+    if ldd "$build/${BUNDLED[$name]}" | grep -q 'libLLVM'; then
+      echo "gpu_check: $name links the shared libLLVM (zstd's development files missing?);" \
+        "the bundle needs LLVM linked in statically" >&2
+      exit 1
+    fi
+  done
 
   # The bundle is assembled unpacked in the build folder, then packed: xz brings its ~60 MiB
   # of code and libraries to a fraction, and the repository's own files travel beside it
@@ -113,23 +141,22 @@ cmd_bundle() {
   echo "gpu_check: assembling $stage"
   rm -rf "${stage:?}"
   mkdir -p "$stage/bin" "$stage/lib"
-  strip -o "$stage/bin/simit" "$exe"
-  strip -o "$stage/bin/gpu_probe" "$probe"
+  for name in "${!BUNDLED[@]}"; do
+    strip -o "$stage/bin/$name" "$build/${BUNDLED[$name]}"
+    write_wrapper "$stage" "$name"
+  done
   local soname path
   while read -r soname path; do
     [ -e "$stage/lib/$soname" ] || cp -L "$path" "$stage/lib/$soname"
-  done < <({
-    shared_libraries "$exe"
-    shared_libraries "$probe"
-  } | sort -u)
+  done < <(for name in "${!BUNDLED[@]}"; do shared_libraries "$build/${BUNDLED[$name]}"; done |
+    sort -u)
   local libc_dir
-  libc_dir="$(dirname "$(awk '$1 == "libc.so.6" { print $2 }' < <(shared_libraries "$exe"))")"
+  libc_dir="$(dirname "$(awk '$1 == "libc.so.6" { print $2 }' < <(shared_libraries \
+    "$build/tools/simit"))")"
   for soname in "${GLIBC_EXTRAS[@]}"; do
     [ -e "$stage/lib/$soname" ] || cp -L "$libc_dir/$soname" "$stage/lib/$soname"
   done
   chmod -R u+w "$stage/lib"
-  write_wrapper "$stage" simit
-  write_wrapper "$stage" gpu_probe
 
   echo "gpu_check: packing $dir/$ARCHIVE"
   mkdir -p "$dir"
@@ -197,9 +224,55 @@ check_bundle() (
       exit 1
       ;;
   esac
+  # The random programs' runner, through the loader as above (its libraries checked too):
+  # three programs under the JIT, then SIMIT_TEST_GPU=1, which fails where there is no GPU.
+  (cd "$SIMIT_ROOT" && env -i LD_DEBUG=libs SIMIT_RANDOM_PROGRAMS=3 \
+    "$dir/lib/ld-linux-x86-64.so.2" --library-path "$dir/lib" "$dir/bin/jit_tests" \
+    --gtest_filter='RandomPrograms.*' >"$tmp/random.out" 2>"$tmp/random.err") || {
+    cat "$tmp/random.out" "$tmp/random.err" >&2
+    echo "gpu_check: the bundle's jit_tests failed" >&2
+    exit 1
+  }
+  foreign="$(grep -o 'calling init: .*' "$tmp/random.err" | sed 's/calling init: //' |
+    grep -v "^$dir/lib/" || true)"
+  if [ -n "$foreign" ]; then
+    echo "gpu_check: jit_tests loads libraries from outside the bundle's lib/:" >&2
+    echo "$foreign" >&2
+    exit 1
+  fi
+  echo "  jit_tests: $(grep -m1 ' programs from seed ' "$tmp/random.out" | cut -d: -f1)" \
+    "under the JIT; its libraries all from the bundle's lib/"
+  status=0
+  env -i SIMIT_TEST_GPU=1 SIMIT_RANDOM_PROGRAMS=3 "$dir/jit_tests" \
+    --gtest_filter='RandomPrograms.*' >"$tmp/random_gpu.out" 2>&1 || status=$?
+  if [ "$status" = 0 ]; then
+    echo "  jit_tests with SIMIT_TEST_GPU=1: $(grep -m1 ' programs from seed ' \
+      "$tmp/random_gpu.out" | cut -d: -f1) on the GPU here"
+  elif grep -q 'SIMIT_TEST_GPU=1 asks for the GPU executor' "$tmp/random_gpu.out"; then
+    echo "  jit_tests with SIMIT_TEST_GPU=1 fails here, as it should without a GPU:" \
+      "$(grep -m1 -o 'no GPU to run on.*' "$tmp/random_gpu.out")"
+  else
+    cat "$tmp/random_gpu.out" >&2
+    echo "gpu_check: the bundle's jit_tests with SIMIT_TEST_GPU=1 exited $status" >&2
+    exit 1
+  fi
+  for name in fem springs cloth; do
+    input=examples/data/bunny.1.node
+    [ "$name" = cloth ] && input=8
+    (cd "$SIMIT_ROOT" && env -i "$dir/${name}_baseline" "$input" 1 >"$tmp/$name.out" 2>&1) || {
+      cat "$tmp/$name.out" >&2
+      echo "gpu_check: the bundle's ${name}_baseline failed" >&2
+      exit 1
+    }
+  done
+  echo "  fem, springs and cloth baselines: one frame each"
   echo "  newest glibc symbol asked for: $(newest_glibc "$dir/bin/simit") (simit)," \
+    "$(newest_glibc "$dir/bin/jit_tests") (jit_tests)," \
     "$(newest_glibc "$dir/bin/gpu_probe") (gpu_probe); glibc $(ldd --version |
       head -1 | awk '{ print $NF }') carried"
+  echo "  unpacked sizes: $(cd "$dir" && du -b bin/* | sort -rn |
+    awk '{ printf "%s%s %.1f MiB", sep, substr($2, 5), $1 / 1048576; sep = ", " }'),"\
+    "lib/ $(du -sb "$dir/lib" | awk '{ printf "%.1f MiB", $1 / 1048576 }')"
   size="$(stat -c %s "$1/$ARCHIVE")"
   tree="$(cd "$SIMIT_ROOT" && git ls-files -z --cached --others --exclude-standard |
     xargs -0 stat -c %s 2>/dev/null | awk '{ s += $1 } END { print s + 0 }')"
@@ -210,6 +283,7 @@ check_bundle() (
     echo "gpu_check: over the 64 MiB that may travel to the GPU machine" >&2
     exit 1
   fi
+  echo "  room left of the 64 MiB: $(mib $((64 * 1048576 - size - tree)))"
   echo "gpu_check: bundle ready: $1 (carry it to the GPU machine; run it there with" \
     "scripts/gpu_check.sh run ${1#"$SIMIT_ROOT"/})"
 )
@@ -227,183 +301,513 @@ has_gpu_executor() {
   return 1
 }
 
-# seconds since the epoch with milliseconds, for timing steps.
+# seconds since the epoch with nanoseconds, for timing steps.
 now() { date +%s.%N; }
 elapsed() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f s", b - a }'; }
+# Whole seconds left of the run's budget (SIMIT_GPU_CHECK_BUDGET from the start).
+time_left() { echo $((DEADLINE - $(date +%s))); }
 
-# Runs a step with a time limit (when coreutils' timeout is there).
+# Runs a step's command with a time limit: STEP_LIMIT, or less when the run's budget has less
+# left (with coreutils' timeout, which stops the command's whole process group).
 limited() {
-  if command -v timeout >/dev/null; then timeout "$STEP_LIMIT" "$@"; else "$@"; fi
+  local limit left
+  limit="$STEP_LIMIT"
+  left="$(time_left)"
+  [ "$left" -lt "$limit" ] && limit="$left"
+  [ "$limit" -lt 1 ] && limit=1
+  if command -v timeout >/dev/null; then timeout "$limit" "$@"; else "$@"; fi
 }
 
-cmd_run() {
-  local dir
-  dir="$(realpath -m "${1:-$SIMIT_ROOT/build-gpu-bundle}")"
-  STEP_LIMIT="${SIMIT_GPU_CHECK_STEP_LIMIT:-300}"
-  local report="${SIMIT_GPU_CHECK_REPORT:-$SIMIT_ROOT/bench/results/gpu_check.md}"
-  tmp="$(mktemp -d)" # global: the EXIT trap runs after this function's locals are gone
-  trap 'rm -rf "$tmp"' EXIT
-  cd "$SIMIT_ROOT"
-  # DIR holds the packed bundle (what `bundle` makes), or is an unpacked one.
-  if [ -f "$dir/$ARCHIVE" ]; then
-    log "unpacking $dir/$ARCHIVE"
-    unpack_bundle "$dir/$ARCHIVE" "$tmp/bundle"
-    dir="$tmp/bundle"
-  fi
-  SIMIT="$dir/simit"
-  if [ ! -x "$SIMIT" ] || [ ! -x "$dir/bin/simit" ]; then
-    log "no bundle in $dir (scripts/gpu_check.sh bundle makes one)"
-    exit 1
-  fi
-  local failed=0 body="$tmp/body.md"
-  : >"$body"
+# Exit status of `timeout` when it stopped the command.
+timed_out_note() { if [ "$1" = 124 ]; then echo " (stopped by the time limit)"; fi; }
 
-  log "[1/5] the bundle starts here"
-  local version
-  if ! version="$("$SIMIT" --version 2>&1)"; then
-    log "the bundle's simit does not start: $version"
-    failed=1
-  fi
+# record STEP OUTCOME WHAT: one line of the report's summary (passed, FAILED or skipped, and
+# why); a failure fails the run. The report is rewritten after each step, so that a run
+# stopped from outside still leaves what it measured.
+record() {
+  echo "| $1 | $2 | ${*:3} |" >>"$SUMMARY"
+  [ "$2" = FAILED ] && FAILED=1
+  log "  => $2: ${*:3}"
+  write_report
+}
 
-  log "[2/5] gpu_probe"
-  local probe_status=0 t0
-  t0="$(now)"
-  limited "$dir/gpu_probe" >"$tmp/probe.md" 2>"$tmp/probe.err" || probe_status=$?
-  log "  gpu_probe exited $probe_status after $(elapsed "$t0")"
-  {
-    echo "## The probe (gpu_probe, exit status $probe_status)"
-    echo
-    cat "$tmp/probe.md"
-    if [ "$probe_status" != 0 ] && [ "$probe_status" != 77 ]; then
-      echo
-      echo '```'
-      tail -20 "$tmp/probe.err"
-      echo '```'
-      failed=1
-    fi
-    echo
-  } >>"$body"
+# A step that has less than MIN seconds of the budget left is skipped: true when skipped.
+out_of_time() {
+  local left
+  left="$(time_left)"
+  [ "$left" -ge "$2" ] && return 1
+  record "$1" skipped "the run's time budget (SIMIT_GPU_CHECK_BUDGET=$BUDGET s) has ${left} s left"
+  return 0
+}
 
-  # The interpreter, the JIT (the bundle's code generation on this machine's CPU) and, where
-  # there is one, the GPU executor.
-  local executors=(interpreter jit) test_executors=(interpreter jit) gpu_note=""
-  if ! has_gpu_executor run; then
-    gpu_note="The GPU executor is not built yet (simit run --help lists no gpu among --executor's values): its steps are skipped."
-  elif [ "$probe_status" = 77 ]; then
-    gpu_note="No GPU here (the probe says why): the GPU executor's steps are skipped."
-  else
-    executors+=(gpu)
-    has_gpu_executor test && test_executors+=(gpu)
-  fi
-  [ -z "$gpu_note" ] || log "  $gpu_note"
-
-  log "[3/5] the language corpus (tests/lang) under ${test_executors[*]}"
-  {
-    echo "## The language corpus (simit test tests/lang)"
-    echo
-    [ -n "$gpu_note" ] && echo "$gpu_note" && echo
-    echo "| executor | result | time |"
-    echo "| --- | --- | ---: |"
-  } >>"$body"
-  local e status summary
-  for e in "${test_executors[@]}"; do
-    t0="$(now)"
-    status=0
-    limited "$SIMIT" test --executor "$e" tests/lang >"$tmp/lang.$e.out" 2>&1 || status=$?
-    summary="$(tail -1 "$tmp/lang.$e.out")"
-    [ "$status" = 0 ] || {
-      failed=1
-      summary="exit $status: $summary"
-    }
-    log "  $e: $summary ($(elapsed "$t0"))"
-    echo "| $e | $summary | $(elapsed "$t0") |" >>"$body"
-  done
-  echo >>"$body"
-
-  log "[4/5] the examples, 10 frames, under ${executors[*]}"
-  {
-    echo "## The examples, 10 frames (final positions, --final-csv)"
-    echo
-    echo "| example | executor | time | final positions |"
-    echo "| --- | --- | ---: | --- |"
-  } >>"$body"
-  local example name csv verdict
-  for example in fem/bunny springs/bunny cloth/square; do
-    name="${example//\//_}"
-    for e in "${executors[@]}"; do
-      csv="$tmp/$name.$e.csv"
-      t0="$(now)"
-      status=0
-      limited "$SIMIT" run "examples/$example.toml" --executor "$e" --frames 10 \
-        --jit-cache off --output "$tmp/out.$name.$e" --final-csv "$csv" \
-        >"$tmp/$name.$e.out" 2>&1 || status=$?
-      if [ "$status" != 0 ]; then
-        verdict="FAILED: exit $status: $(tail -1 "$tmp/$name.$e.out")"
-        failed=1
-      elif [ "$e" = interpreter ]; then
-        verdict="$(wc -l <"$csv") positions"
-      elif cmp -s "$tmp/$name.interpreter.csv" "$csv"; then
-        verdict="byte for byte the interpreter's"
-      else
-        verdict="DIFFER from the interpreter's: $(cmp "$tmp/$name.interpreter.csv" "$csv" 2>&1 |
-          head -1)"
-        failed=1
-      fi
-      log "  $example $e: $verdict ($(elapsed "$t0"))"
-      echo "| $example | $e | $(elapsed "$t0") | $verdict |" >>"$body"
-    done
-  done
-  echo >>"$body"
-
-  log "[5/5] random programs"
-  {
-    echo "## Random programs"
-    echo
-    if [ -x "$dir/bin/random_programs" ]; then
-      t0="$(now)"
-      status=0
-      SIMIT_RANDOM_PROGRAMS=300 limited "$dir/bin/random_programs" >"$tmp/random.out" 2>&1 ||
-        status=$?
-      [ "$status" = 0 ] || failed=1
-      echo "300 programs: exit $status after $(elapsed "$t0")"
-      echo
-      echo '```'
-      tail -5 "$tmp/random.out"
-      echo '```'
-    else
-      echo "Not run: the bundle has no runner for them (the random-program comparison is the" \
-        "RandomPrograms unit test, interpreter against the JIT, which is not bundled)."
-    fi
-    echo
-  } >>"$body"
-  log "  $(tail -2 "$body" | head -1)"
-
-  # The GPU and its driver head the report: from nvidia-smi, else from the probe's table.
-  local gpu driver
+write_report() {
+  local gpu driver cuda
   gpu="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1 || true)"
   driver="$(nvidia-smi --query-gpu=driver_version --format=csv,noheader 2>/dev/null |
     head -1 || true)"
-  [ -n "$gpu" ] || gpu="$(sed -n 's/^| device [0-9]* | \(.*\) |$/\1/p' "$tmp/probe.md" | head -1)"
-  local cuda
-  cuda="$(sed -n 's/^| driver | \(.*\) |$/\1/p' "$tmp/probe.md" | head -1)"
-  mkdir -p "$(dirname "$report")"
+  [ -n "$gpu" ] || gpu="$(sed -n 's/^| device [0-9]* | \(.*\) |$/\1/p' "$WORK/probe.md" \
+    2>/dev/null | head -1 || true)"
+  cuda="$(sed -n 's/^| driver | \(.*\) |$/\1/p' "$WORK/probe.md" 2>/dev/null | head -1 || true)"
+  mkdir -p "$(dirname "$REPORT")"
   {
     echo "# GPU check"
     echo
     echo "GPU: ${gpu:-none found}; driver ${driver:-not reported}${cuda:+ ($cuda)}"
     echo
-    echo "Run $(date -u '+%Y-%m-%d %H:%M UTC') on $(nproc) cores by scripts/gpu_check.sh run;" \
-      "${version:-simit did not start}; commit $(git rev-parse --short HEAD 2>/dev/null ||
-        echo unknown). Result: $([ "$failed" = 0 ] && echo 'all passed' || echo 'FAILURES')."
+    if [ "$EMULATED" = 1 ]; then
+      echo "**Emulated** (SIMIT_TEST_GPU_EMULATION=1): the GPU executor's data path ran over" \
+        "host memory with the CPU's kernels; no GPU was used, and its times say nothing of one."
+      echo
+    fi
+    echo "Run $(date -u '+%Y-%m-%d %H:%M UTC') on $(nproc) cores by scripts/gpu_check.sh run" \
+      "(budget $BUDGET s, $(elapsed "$STARTED") used);" \
+      "${VERSION:-simit did not start}; commit $(git rev-parse --short HEAD 2>/dev/null ||
+        echo unknown). Result: $([ "$FAILED" = 0 ] && echo 'no step failed' || echo 'FAILURES')."
     echo
-    cat "$body"
-  } >"$report"
-  log "report: $report"
-  if [ -n "${OUT:-}" ]; then
-    cp "$report" "$OUT/"
-    log "copied to $OUT/$(basename "$report")"
+    echo "| step | outcome | what |"
+    echo "| --- | --- | --- |"
+    cat "$SUMMARY"
+    echo
+    cat "$BODY"
+  } >"$REPORT.tmp"
+  mv "$REPORT.tmp" "$REPORT"
+  if [ -n "${OUT:-}" ] && [ -d "$OUT" ]; then cp "$REPORT" "$OUT/"; fi
+}
+
+STEPS=7
+step() { log "[$1/$STEPS] $2"; }
+
+run_probe() {
+  step 2 "gpu_probe"
+  local t0
+  t0="$(now)"
+  PROBE_STATUS=0
+  limited "$DIR/gpu_probe" >"$WORK/probe.md" 2>"$WORK/probe.err" || PROBE_STATUS=$?
+  {
+    echo "## The probe (gpu_probe, exit status $PROBE_STATUS)"
+    echo
+    cat "$WORK/probe.md"
+    if [ "$PROBE_STATUS" != 0 ] && [ "$PROBE_STATUS" != 77 ]; then
+      echo
+      echo '```'
+      tail -20 "$WORK/probe.err"
+      echo '```'
+    fi
+    echo
+  } >>"$BODY"
+  case "$PROBE_STATUS" in
+    0) record "gpu_probe" passed "measured the GPU ($(elapsed "$t0"))" ;;
+    77) record "gpu_probe" skipped "no GPU here: $(head -1 "$WORK/probe.md")" ;;
+    *) record "gpu_probe" FAILED "exit $PROBE_STATUS$(timed_out_note "$PROBE_STATUS"):" \
+      "$(tail -1 "$WORK/probe.err")" ;;
+  esac
+}
+
+run_corpus() {
+  step 3 "the language corpus (tests/lang) under ${TEST_EXECUTORS[*]}"
+  out_of_time "corpus" 30 && return
+  {
+    echo "## The language corpus (simit test tests/lang)"
+    echo
+    [ -n "$GPU_NOTE" ] && echo "$GPU_NOTE" && echo
+    echo "| executor | result | time |"
+    echo "| --- | --- | ---: |"
+  } >>"$BODY"
+  local e status summary t0 failures=()
+  for e in "${TEST_EXECUTORS[@]}"; do
+    t0="$(now)"
+    status=0
+    limited "$SIMIT" test --executor "$e" tests/lang >"$WORK/lang.$e.out" 2>&1 || status=$?
+    summary="$(tail -1 "$WORK/lang.$e.out")"
+    if [ "$status" != 0 ]; then
+      summary="exit $status$(timed_out_note "$status"): $summary"
+      failures+=("$e")
+    fi
+    log "  $e: $summary ($(elapsed "$t0"))"
+    echo "| $e | $summary | $(elapsed "$t0") |" >>"$BODY"
+  done
+  echo >>"$BODY"
+  if [ ${#failures[@]} = 0 ]; then
+    record "corpus" passed "${TEST_EXECUTORS[*]}${GPU_NOTE:+ (gpu skipped: no GPU)}"
+  else
+    record "corpus" FAILED "under ${failures[*]}"
   fi
-  return "$failed"
+}
+
+run_examples() {
+  step 4 "the examples, 10 frames, under ${EXECUTORS[*]}"
+  out_of_time "examples" 30 && return
+  {
+    echo "## The examples, 10 frames (final positions, --final-csv)"
+    echo
+    [ -n "$GPU_NOTE" ] && echo "$GPU_NOTE" && echo
+    echo "| example | executor | time | final positions |"
+    echo "| --- | --- | ---: | --- |"
+  } >>"$BODY"
+  local example name csv verdict e status t0 bad=()
+  for example in fem/bunny springs/bunny cloth/square; do
+    name="${example//\//_}"
+    for e in "${EXECUTORS[@]}"; do
+      csv="$WORK/$name.$e.csv"
+      t0="$(now)"
+      status=0
+      limited "$SIMIT" run "examples/$example.toml" --executor "$e" --frames 10 \
+        --jit-cache off --output "$WORK/out.$name.$e" --final-csv "$csv" \
+        >"$WORK/$name.$e.out" 2>&1 || status=$?
+      if [ "$status" != 0 ]; then
+        verdict="FAILED: exit $status$(timed_out_note "$status"): $(tail -1 "$WORK/$name.$e.out")"
+        bad+=("$example $e")
+      elif [ "$e" = interpreter ]; then
+        verdict="$(wc -l <"$csv") positions"
+      elif cmp -s "$WORK/$name.interpreter.csv" "$csv"; then
+        verdict="byte for byte the interpreter's"
+      else
+        verdict="DIFFER from the interpreter's: $(cmp "$WORK/$name.interpreter.csv" "$csv" 2>&1 |
+          head -1)"
+        bad+=("$example $e")
+      fi
+      log "  $example $e: $verdict ($(elapsed "$t0"))"
+      echo "| $example | $e | $(elapsed "$t0") | $verdict |" >>"$BODY"
+    done
+  done
+  echo >>"$BODY"
+  if [ ${#bad[@]} = 0 ]; then
+    record "examples" passed "fem, springs, cloth under ${EXECUTORS[*]}: the interpreter's" \
+      "bits${GPU_NOTE:+ (gpu skipped: no GPU)}"
+  else
+    record "examples" FAILED "$(
+      IFS=,
+      echo "${bad[*]}"
+    )"
+  fi
+}
+
+# The random programs (the RandomPrograms unit test, tests/jit/random_program_test.cpp) with
+# SIMIT_TEST_GPU=1: each compared bit for bit between the interpreter and the GPU executor.
+# They run as SHARDS processes side by side, each on its own seeds, which the GPU serves alike.
+run_random_programs() {
+  local count="${SIMIT_GPU_CHECK_PROGRAMS:-300}" seed="${SIMIT_GPU_CHECK_SEED:-1}"
+  local shards="${SIMIT_GPU_CHECK_SHARDS:-}"
+  if [ -z "$shards" ]; then
+    shards=$(($(nproc) / 2))
+    [ "$shards" -ge 2 ] || shards=2
+    [ "$shards" -le 8 ] || shards=8
+  fi
+  step 5 "$count random programs under the GPU executor (SIMIT_TEST_GPU=1, $shards processes)"
+  {
+    echo "## Random programs under the GPU executor"
+    echo
+  } >>"$BODY"
+  local what="$count programs from seed $seed, interpreter against gpu"
+  if [ ! -x "$DIR/bin/jit_tests" ]; then
+    echo "Not run: the bundle has no jit_tests (a bundle from before it carried them)." >>"$BODY"
+    echo >>"$BODY"
+    record "random programs" skipped "the bundle has no jit_tests"
+    return
+  fi
+  if [ -n "$GPU_WHY" ]; then
+    printf '%s\n\n' "Not run: $GPU_WHY (SIMIT_TEST_GPU=1 would fail)." >>"$BODY"
+    record "random programs" skipped "$GPU_WHY (SIMIT_TEST_GPU=1 would fail)"
+    return
+  fi
+  out_of_time "random programs" 60 && return
+  local t0 k n first pids=() statuses=() starts=() sizes=() from=$seed
+  local per=$(((count + shards - 1) / shards))
+  t0="$(now)"
+  for ((k = 0; k < shards && from < seed + count; k++)); do
+    n=$((seed + count - from))
+    [ "$n" -gt "$per" ] && n=$per
+    SIMIT_TEST_GPU=1 SIMIT_RANDOM_PROGRAMS=$n SIMIT_RANDOM_SEED=$from \
+      limited "$DIR/jit_tests" --gtest_filter='RandomPrograms.*' >"$WORK/random.$k.out" 2>&1 &
+    pids+=($!)
+    starts+=("$from")
+    sizes+=("$n")
+    from=$((from + n))
+  done
+  for k in "${!pids[@]}"; do
+    statuses[k]=0
+    wait "${pids[k]}" || statuses[k]=$?
+  done
+  local failed_shards=0 ran=0
+  {
+    echo "$what, in ${#pids[@]} processes: $(elapsed "$t0")."
+    echo
+    echo "| seeds | exit | compared with the interpreter | its summary |"
+    echo "| --- | ---: | --- | --- |"
+    for k in "${!pids[@]}"; do
+      first="$(grep -m1 ' programs from seed ' "$WORK/random.$k.out" || true)"
+      n="$(grep -m1 -o '^[0-9]* programs from seed' "$WORK/random.$k.out" | cut -d' ' -f1 ||
+        true)"
+      ran=$((ran + ${n:-0}))
+      echo "| ${starts[k]} to $((starts[k] + sizes[k] - 1)) |" \
+        "${statuses[k]}$(timed_out_note "${statuses[k]}") |" \
+        "$(grep -m1 -o 'the [a-z]* executor.*' "$WORK/random.$k.out" || echo '-') |" \
+        "${first:-no summary} |"
+      [ "${statuses[k]}" = 0 ] || failed_shards=$((failed_shards + 1))
+    done
+    echo
+    for k in "${!pids[@]}"; do
+      [ "${statuses[k]}" = 0 ] && continue
+      echo "Process $k's failures (the first 40 lines):"
+      echo
+      echo '```'
+      grep -A12 'Failure' "$WORK/random.$k.out" | head -40 || tail -20 "$WORK/random.$k.out"
+      echo '```'
+      echo
+    done
+  } >>"$BODY"
+  if [ "$failed_shards" = 0 ] && [ "$ran" = "$count" ]; then
+    record "random programs" passed "$what: the interpreter's bits ($(elapsed "$t0"))"
+  else
+    record "random programs" FAILED "$what: $failed_shards of ${#pids[@]} processes failed," \
+      "$ran programs reported"
+  fi
+}
+
+# A build folder's layout (tools/simit, bench/EXAMPLE_baseline) of scripts that start the
+# bundle's programs: what bench/run_bench.py and bench/accuracy.py take as --build.
+bench_build_folder() {
+  local build="$WORK/bench-build" name
+  mkdir -p "$build/tools" "$build/bench"
+  printf '#!/bin/sh\nexec "%s/simit" "$@"\n' "$DIR" >"$build/tools/simit"
+  for name in fem springs cloth; do
+    printf '#!/bin/sh\nexec "%s/%s_baseline" "$@"\n' "$DIR" "$name" >"$build/bench/${name}_baseline"
+  done
+  chmod +x "$build/tools/simit" "$build/bench/"*
+  echo "$build"
+}
+
+# Why the benchmark scripts cannot run here ("" when they can): they need Python 3.11
+# (tomllib) and the bundle's baselines.
+bench_unavailable() {
+  if ! command -v python3 >/dev/null; then
+    echo "no python3 here"
+  elif ! python3 -c 'import tomllib' 2>/dev/null; then
+    echo "python3 here is $(python3 -c 'import sys; print(sys.version.split()[0])'), the" \
+      "benchmark scripts need 3.11 (tomllib)"
+  elif [ ! -x "$DIR/bin/fem_baseline" ]; then
+    echo "the bundle has no baselines (a bundle from before it carried them)"
+  fi
+}
+
+# The benchmark (bench/run_bench.py) with the GPU executor: the small cases beside the
+# interpreter, whose positions are the reference of the error column, the large ones beside
+# the JIT only (the interpreter takes tens of seconds a frame there; the JIT's positions are
+# the interpreter's bits, as the steps above check).
+run_benchmark() {
+  local frames="${SIMIT_GPU_CHECK_FRAMES:-4}" threads="${SIMIT_GPU_CHECK_THREADS:-$(nproc)}"
+  step 6 "the benchmark (bench/run_bench.py, $frames frames, $threads threads) with the GPU executor"
+  {
+    echo "## The benchmark (bench/run_bench.py --executors ...,gpu, $frames frames)"
+    echo
+    echo "The JIT, the GPU executor's solver loops and the baselines on $threads threads" \
+      "(--threads $threads), the interpreter on one."
+  } >>"$BODY"
+  echo >>"$BODY"
+  local why
+  why="$(bench_unavailable)"
+  [ -z "$GPU_WHY" ] || why="$GPU_WHY"
+  if [ -n "$why" ]; then
+    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
+    record "benchmark" skipped "$why"
+    return
+  fi
+  out_of_time "benchmark" 60 && return
+  # shellcheck disable=SC2054 # the commas are run_bench.py's lists
+  local build big=(--cloth 64,256) t0 status part label bad=() only
+  build="$(bench_build_folder)"
+  [ -e examples/data/dragon160k.node ] && big+=(--dragon160k)
+  t0="$(now)"
+  for part in small large; do
+    # shellcheck disable=SC2054 # the commas are run_bench.py's lists
+    if [ "$part" = small ]; then
+      label="beside the interpreter (rel. err against its positions)"
+      only=(--executors interpreter,jit,gpu --only fem/bunny --only fem/dragon40k
+        --only springs/bunny --only cloth/square64)
+    else
+      label="beside the JIT (rel. err against its positions)"
+      only=(--executors jit,gpu --only fem/dragon160k --only cloth/square256)
+    fi
+    out_of_time "benchmark, $part cases" 30 && continue
+    status=0
+    limited python3 bench/run_bench.py --build "$build" --frames "$frames" --threads "$threads" \
+      "${big[@]}" \
+      "${only[@]}" --timeout "$(time_left)" --out "$WORK/bench.$part.md" \
+      >"$WORK/bench.$part.out" 2>&1 || status=$?
+    log "  $part cases: exit $status ($(elapsed "$t0"))"
+    {
+      echo "### The $part cases, $label"
+      echo
+      if [ -s "$WORK/bench.$part.md" ]; then cat "$WORK/bench.$part.md"; else
+        echo "No table: run_bench.py exited $status$(timed_out_note "$status"):"
+        echo
+        echo '```'
+        tail -15 "$WORK/bench.$part.out"
+        echo '```'
+      fi
+      echo
+      grep -v ' trace: ' "$WORK/bench.$part.out" | sed -n 's/^note: /- /p' || true
+      grep -q '^note: .* gpu trace: ' "$WORK/bench.$part.out" && {
+        echo
+        echo "<details><summary>The GPU executor's traces (--jit-stats)</summary>"
+        echo
+        echo '```'
+        sed -n 's/^note: \(.* gpu trace: \)/\1/p' "$WORK/bench.$part.out"
+        echo '```'
+        echo "</details>"
+      }
+      echo
+    } >>"$BODY"
+    if [ "$status" != 0 ] || [ ! -s "$WORK/bench.$part.md" ]; then
+      bad+=("$part cases: exit $status$(timed_out_note "$status")")
+    elif grep -q '(failed)' "$WORK/bench.$part.md"; then
+      bad+=("$part cases: a run failed")
+    elif grep '| gpu |' "$WORK/bench.$part.md" | grep -vq 'same bits'; then
+      bad+=("$part cases: the GPU's positions differ from the reference's")
+    elif ! grep -q '| gpu |' "$WORK/bench.$part.md"; then
+      bad+=("$part cases: no gpu rows")
+    fi
+  done
+  if [ ${#bad[@]} = 0 ]; then
+    record "benchmark" passed "fem, springs, cloth under gpu, the reference's bits ($(elapsed "$t0"))"
+  else
+    record "benchmark" FAILED "$(
+      IFS=';'
+      echo "${bad[*]}"
+    )"
+  fi
+}
+
+# A thin sweep of bench/accuracy.py: the error of each point against a converged reference,
+# under the JIT and the GPU executor side by side (equal errors: the same bits), float64 and
+# float32.
+run_accuracy() {
+  local frames="${SIMIT_GPU_CHECK_FRAMES:-4}"
+  step 7 "bench/accuracy.py, a thin sweep, jit and gpu"
+  echo "## Speed against error (bench/accuracy.py --executor jit,gpu, $frames frames)" >>"$BODY"
+  echo >>"$BODY"
+  local why
+  why="$(bench_unavailable)"
+  [ -z "$GPU_WHY" ] || why="$GPU_WHY"
+  if [ -n "$why" ]; then
+    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
+    record "accuracy" skipped "$why"
+    return
+  fi
+  out_of_time "accuracy" 45 && return
+  local build t0 status examples points bad=() differ
+  build="$(bench_build_folder)"
+  t0="$(now)"
+  for examples in fem,springs cloth; do
+    points=1e-6,1e-10
+    [ "$examples" = cloth ] && points=25,100
+    status=0
+    limited python3 bench/accuracy.py --build "$build" --executor jit,gpu --example "$examples" \
+      --points "$points" --frames "$frames" --no-plot --table --out "$WORK/accuracy" \
+      >"$WORK/accuracy.$examples.out" 2>&1 || status=$?
+    log "  $examples: exit $status ($(elapsed "$t0"))"
+    {
+      if [ "$status" = 0 ]; then
+        grep '^|' "$WORK/accuracy.$examples.out" |
+          awk '/^\| executor/ && NR > 1 { print "" } 1' || true
+      else
+        echo "accuracy.py --example $examples exited $status$(timed_out_note "$status"):"
+        echo
+        echo '```'
+        tail -10 "$WORK/accuracy.$examples.out"
+        echo '```'
+      fi
+      echo
+    } >>"$BODY"
+    [ "$status" = 0 ] || bad+=("$examples: exit $status$(timed_out_note "$status")")
+  done
+  # The GPU's errors are the JIT's, point by point (the same positions).
+  differ="$(cat "$WORK"/accuracy/accuracy_*_jit.csv 2>/dev/null | grep -v '^#' |
+    awk -F, '$1 != "example" { print $1, $3, $5, $6, $7, $8, $18, $19 }' | sort |
+    diff - <(cat "$WORK"/accuracy/accuracy_*_gpu.csv 2>/dev/null | grep -v '^#' |
+      awk -F, '$1 != "example" { print $1, $3, $5, $6, $7, $8, $18, $19 }' | sort) || true)"
+  [ -z "$differ" ] || bad+=("the GPU's errors differ from the JIT's")
+  if [ ${#bad[@]} = 0 ]; then
+    record "accuracy" passed "fem, springs, cloth: the GPU's errors are the JIT's ($(elapsed "$t0"))"
+  else
+    record "accuracy" FAILED "$(
+      IFS=';'
+      echo "${bad[*]}"
+    )"
+  fi
+}
+
+cmd_run() {
+  DIR="$(realpath -m "${1:-$SIMIT_ROOT/build-gpu-bundle}")"
+  STEP_LIMIT="${SIMIT_GPU_CHECK_STEP_LIMIT:-300}"
+  BUDGET="${SIMIT_GPU_CHECK_BUDGET:-540}"
+  STARTED="$(now)"
+  DEADLINE=$(($(date +%s) + BUDGET))
+  REPORT="${SIMIT_GPU_CHECK_REPORT:-$SIMIT_ROOT/bench/results/gpu_check.md}"
+  EMULATED=0
+  if [ -n "${SIMIT_TEST_GPU_EMULATION:-}" ] && [ "$SIMIT_TEST_GPU_EMULATION" != 0 ]; then
+    EMULATED=1
+  fi
+  WORK="$(mktemp -d)" # global: the EXIT trap runs after this function's locals are gone
+  trap 'rm -rf "$WORK"' EXIT
+  cd "$SIMIT_ROOT"
+  BODY="$WORK/body.md"
+  SUMMARY="$WORK/summary.md"
+  FAILED=0
+  : >"$BODY"
+  : >"$SUMMARY"
+
+  step 1 "the bundle starts here"
+  # DIR holds the packed bundle (what `bundle` makes), or is an unpacked one.
+  if [ -f "$DIR/$ARCHIVE" ]; then
+    log "  unpacking $DIR/$ARCHIVE"
+    unpack_bundle "$DIR/$ARCHIVE" "$WORK/bundle"
+    DIR="$WORK/bundle"
+  fi
+  SIMIT="$DIR/simit"
+  if [ ! -x "$SIMIT" ] || [ ! -x "$DIR/bin/simit" ]; then
+    record "bundle" FAILED "no bundle in $DIR (scripts/gpu_check.sh bundle makes one)"
+    exit 1
+  fi
+  if VERSION="$("$SIMIT" --version 2>&1)"; then
+    record "bundle" passed "$VERSION starts"
+  else
+    record "bundle" FAILED "the bundle's simit does not start: $VERSION"
+    VERSION=""
+  fi
+
+  run_probe
+
+  # The interpreter, the JIT (the bundle's code generation on this machine's CPU) and, where
+  # there is one (or emulated), the GPU executor.
+  EXECUTORS=(interpreter jit)
+  TEST_EXECUTORS=(interpreter jit)
+  GPU_NOTE=""
+  # GPU_WHY: why the GPU steps are skipped, in the summary; GPU_NOTE: the same in a section.
+  GPU_WHY=""
+  if ! has_gpu_executor run; then
+    GPU_WHY="this simit has no GPU executor (simit run --help lists no gpu)"
+    GPU_NOTE="The GPU executor is not built yet (simit run --help lists no gpu among --executor's values): its steps are skipped."
+  elif [ "$PROBE_STATUS" = 77 ] && [ "$EMULATED" = 0 ]; then
+    GPU_WHY="no GPU here: $(grep -m1 . "$WORK/probe.md" | sed 's/^No GPU probed: //' || true)"
+    GPU_NOTE="The GPU executor's steps are skipped: $GPU_WHY (gpu_probe)."
+  else
+    EXECUTORS+=(gpu)
+    has_gpu_executor test && TEST_EXECUTORS+=(gpu)
+  fi
+  [ -z "$GPU_NOTE" ] || log "  $GPU_NOTE"
+  [ "$EMULATED" = 0 ] || log "  emulated: SIMIT_TEST_GPU_EMULATION=1, no GPU is used"
+
+  run_corpus
+  run_examples
+  run_random_programs
+  run_benchmark
+  run_accuracy
+
+  write_report
+  log "report: $REPORT"
+  [ -n "${OUT:-}" ] && [ -d "$OUT" ] && log "copied to $OUT/$(basename "$REPORT")"
+  return "$FAILED"
 }
 
 case "${1:-}" in
