@@ -55,7 +55,10 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   if (options_.check) want = runtime::add(*m, *k, 1.0, beta, &in.patterns());
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
-  if (!runtime::add_into(*m, 1.0, *k, beta)) {
+  if (!runtime::add_into(*m, 1.0, *k, beta,
+                         [this](int64_t tasks, const std::function<void(int64_t)>& task) {
+                           executor_->for_each(tasks, task);
+                         })) {
     s.stats.status =
         "interpreted: " + sum.base->name + " has blocks outside the pattern of " + sum.scaled->name;
     return false;

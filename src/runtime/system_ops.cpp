@@ -396,33 +396,51 @@ bool blocks_within(const MatrixPattern& a, const MatrixPattern& b) {
 
 }  // namespace
 
-bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta) {
+bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
+              const ForEachTask& for_each) {
   if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
       a.block_cols() != b.block_cols())
     return false;
   const int bs = b.block_size();
   double* vb = b.values();
   const double* va = a.values();
+  // Tasks of this many rows (or values): far more work than handing a task out.
+  constexpr int64_t kRowsPerTask = 1024, kValuesPerTask = 65536;
+  auto run = [&for_each](int64_t tasks, const std::function<void(int64_t)>& task) {
+    if (for_each && tasks > 1) {
+      for_each(tasks, task);
+    } else {
+      for (int64_t t = 0; t < tasks; ++t) task(t);
+    }
+  };
   if (a.shared_pattern() == b.shared_pattern()) {  // add()'s combine: no zero to add into
-    for (size_t i = 0; i < b.value_count(); ++i) vb[i] = alpha * va[i] + beta * vb[i];
+    const int64_t n = static_cast<int64_t>(b.value_count());
+    run((n + kValuesPerTask - 1) / kValuesPerTask, [&](int64_t t) {
+      const int64_t end = std::min(n, (t + 1) * kValuesPerTask);
+      for (int64_t i = t * kValuesPerTask; i < end; ++i) vb[i] = alpha * va[i] + beta * vb[i];
+    });
     return true;
   }
   if (!blocks_within(a.pattern(), b.pattern())) return false;
   // add()'s sum over the union, whose blocks are b's: 0.0 + alpha a where a has the block
   // (+0.0 where it has none), then + beta b.
   const MatrixPattern &pa = a.pattern(), &pb = b.pattern();
-  for (int r = 0; r < pb.rows(); ++r) {
-    int32_t i = pa.row_ptr()[r];
-    for (int32_t k = pb.row_ptr()[r]; k < pb.row_ptr()[r + 1]; ++k) {
-      double* o = vb + static_cast<size_t>(k) * bs;
-      if (i < pa.row_ptr()[r + 1] && pa.col_idx()[i] == pb.col_idx()[k]) {
-        const double* x = va + static_cast<size_t>(i++) * bs;
-        for (int c = 0; c < bs; ++c) o[c] = (0.0 + alpha * x[c]) + beta * o[c];
-      } else {
-        for (int c = 0; c < bs; ++c) o[c] = 0.0 + beta * o[c];
+  const int64_t rows = pb.rows();
+  run((rows + kRowsPerTask - 1) / kRowsPerTask, [&](int64_t t) {
+    const int end = static_cast<int>(std::min(rows, (t + 1) * kRowsPerTask));
+    for (int r = static_cast<int>(t * kRowsPerTask); r < end; ++r) {
+      int32_t i = pa.row_ptr()[r];
+      for (int32_t k = pb.row_ptr()[r]; k < pb.row_ptr()[r + 1]; ++k) {
+        double* o = vb + static_cast<size_t>(k) * bs;
+        if (i < pa.row_ptr()[r + 1] && pa.col_idx()[i] == pb.col_idx()[k]) {
+          const double* x = va + static_cast<size_t>(i++) * bs;
+          for (int c = 0; c < bs; ++c) o[c] = (0.0 + alpha * x[c]) + beta * o[c];
+        } else {
+          for (int c = 0; c < bs; ++c) o[c] = 0.0 + beta * o[c];
+        }
       }
     }
-  }
+  });
   return true;
 }
 

@@ -3,6 +3,8 @@
 // unblocked form share this layout, so every vector operation serves both.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -32,7 +34,11 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha = 1.
 // B = alpha A + beta B in B's own storage, with add()'s bits, when every block of A lies in
 // B's pattern (float matrices of one block shape, canonical patterns); returns false and
 // leaves B alone otherwise. The JIT computes `A = M - s * K` so in the matrix K's map made.
-bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta);
+// `for_each(tasks, task)`, when given, runs task(0 .. tasks-1) on the caller's threads (each
+// task computes its own rows: the bits do not depend on how the tasks run).
+using ForEachTask = std::function<void(int64_t, const std::function<void(int64_t)>&)>;
+bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
+              const ForEachTask& for_each = {});
 // A .* B: component products over the union of the patterns.
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry = nullptr);

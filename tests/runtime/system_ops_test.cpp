@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 
 #include "runtime/sparse_convert.h"
 #include "runtime_fixtures.h"
@@ -162,6 +164,38 @@ TEST_F(TetMatrices, SumIntoTheSecondOperandKeepsTheBitsOfTheSum) {
   EXPECT_FALSE(add_into(k, 1.0, mass, -1.0));
   EXPECT_EQ(std::memcmp(before.values(), mass.values(), mass.value_count() * sizeof(double)), 0);
   EXPECT_GT(db.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// In tasks of rows run in any order (the JIT's threads): the same bits as in one pass.
+TEST(AddInto, TasksInAnyOrderGiveTheSameBits) {
+  const int n = 5000;
+  std::vector<int32_t> row_ptr{0}, col_idx, diag_ptr{0}, diag_idx;
+  for (int r = 0; r < n; ++r) {
+    for (int c : {r, (r + 1) % n}) col_idx.push_back(c);
+    std::sort(col_idx.end() - 2, col_idx.end());
+    row_ptr.push_back(static_cast<int32_t>(col_idx.size()));
+    diag_idx.push_back(r);
+    diag_ptr.push_back(r + 1);
+  }
+  SystemMatrix k(MatrixPattern::from_csr(n, n, row_ptr, col_idx), 2, 2);
+  SystemMatrix m(MatrixPattern::from_csr(n, n, diag_ptr, diag_idx), 2, 2);
+  for (size_t i = 0; i < k.value_count(); ++i) k.values()[i] = std::sin(0.1 * i) * 1e3;
+  for (size_t i = 0; i < m.value_count(); ++i) m.values()[i] = std::cos(0.7 * i) / 3;
+  SystemMatrix serial = k, tasked = k;
+  ASSERT_TRUE(add_into(m, 1.0, serial, -0.37));
+  int64_t seen = 0;
+  ASSERT_TRUE(add_into(m, 1.0, tasked, -0.37,
+                       [&seen](int64_t tasks, const std::function<void(int64_t)>& task) {
+                         seen = tasks;
+                         for (int64_t t = tasks - 1; t >= 0; --t) task(t);
+                       }));
+  EXPECT_GT(seen, 1);
+  EXPECT_EQ(std::memcmp(serial.values(), tasked.values(), k.value_count() * sizeof(double)), 0);
+  // And each block is the sum written out: 0 + m where m has the block, then -0.37 k.
+  const int32_t at = k.pattern().find(7, 7);
+  const int32_t off = k.pattern().find(7, 8);
+  EXPECT_EQ(tasked.block(at)[3], (0.0 + m.block(7)[3]) + -0.37 * k.block(at)[3]);
+  EXPECT_EQ(tasked.block(off)[1], 0.0 + -0.37 * k.block(off)[1]);
 }
 
 TEST_F(TetMatrices, ScaleAndNegate) {
