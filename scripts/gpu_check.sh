@@ -327,6 +327,7 @@ timed_out_note() { if [ "$1" = 124 ]; then echo " (stopped by the time limit)"; 
 record() {
   echo "| $1 | $2 | ${*:3} |" >>"$SUMMARY"
   [ "$2" = FAILED ] && FAILED=1
+  CURRENT=""
   log "  => $2: ${*:3}"
   write_report
 }
@@ -340,11 +341,10 @@ out_of_time() {
   return 0
 }
 
+# The report: the GPU, the summary of the steps so far (and the one under way, which a run
+# stopped from outside never finished), then their sections.
 write_report() {
-  local gpu driver cuda
-  gpu="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1 || true)"
-  driver="$(nvidia-smi --query-gpu=driver_version --format=csv,noheader 2>/dev/null |
-    head -1 || true)"
+  local gpu="$GPU_NAME" cuda
   [ -n "$gpu" ] || gpu="$(sed -n 's/^| device [0-9]* | \(.*\) |$/\1/p' "$WORK/probe.md" \
     2>/dev/null | head -1 || true)"
   cuda="$(sed -n 's/^| driver | \(.*\) |$/\1/p' "$WORK/probe.md" 2>/dev/null | head -1 || true)"
@@ -352,7 +352,7 @@ write_report() {
   {
     echo "# GPU check"
     echo
-    echo "GPU: ${gpu:-none found}; driver ${driver:-not reported}${cuda:+ ($cuda)}"
+    echo "GPU: ${gpu:-none found}; driver ${GPU_DRIVER:-not reported}${cuda:+ ($cuda)}"
     echo
     if [ "$EMULATED" = 1 ]; then
       echo "**Emulated** (SIMIT_TEST_GPU_EMULATION=1): the GPU executor's data path ran over" \
@@ -367,6 +367,7 @@ write_report() {
     echo "| step | outcome | what |"
     echo "| --- | --- | --- |"
     cat "$SUMMARY"
+    [ -z "$CURRENT" ] || echo "| $CURRENT | not finished | under way when this was written |"
     echo
     cat "$BODY"
   } >"$REPORT.tmp"
@@ -375,7 +376,11 @@ write_report() {
 }
 
 STEPS=7
-step() { log "[$1/$STEPS] $2"; }
+step() {
+  log "[$1/$STEPS] $2"
+  CURRENT="$2"
+  write_report
+}
 
 run_probe() {
   step 2 "gpu_probe"
@@ -427,6 +432,16 @@ run_corpus() {
     echo "| $e | $summary | $(elapsed "$t0") |" >>"$BODY"
   done
   echo >>"$BODY"
+  for e in "${failures[@]}"; do
+    {
+      echo "Under $e (the first 10 failures):"
+      echo
+      echo '```'
+      grep '^FAIL' "$WORK/lang.$e.out" | head -10 || tail -5 "$WORK/lang.$e.out"
+      echo '```'
+      echo
+    } >>"$BODY"
+  done
   if [ ${#failures[@]} = 0 ]; then
     record "corpus" passed "${TEST_EXECUTORS[*]}${GPU_NOTE:+ (gpu skipped: no GPU)}"
   else
@@ -754,6 +769,12 @@ cmd_run() {
   BODY="$WORK/body.md"
   SUMMARY="$WORK/summary.md"
   FAILED=0
+  CURRENT=""
+  VERSION=""
+  # The GPU and its driver head the report: from nvidia-smi, else from the probe's table.
+  GPU_NAME="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1 || true)"
+  GPU_DRIVER="$(nvidia-smi --query-gpu=driver_version --format=csv,noheader 2>/dev/null |
+    head -1 || true)"
   : >"$BODY"
   : >"$SUMMARY"
 
@@ -761,7 +782,10 @@ cmd_run() {
   # DIR holds the packed bundle (what `bundle` makes), or is an unpacked one.
   if [ -f "$DIR/$ARCHIVE" ]; then
     log "  unpacking $DIR/$ARCHIVE"
-    unpack_bundle "$DIR/$ARCHIVE" "$WORK/bundle"
+    if ! unpack_bundle "$DIR/$ARCHIVE" "$WORK/bundle"; then
+      record "bundle" FAILED "$DIR/$ARCHIVE does not unpack"
+      exit 1
+    fi
     DIR="$WORK/bundle"
   fi
   SIMIT="$DIR/simit"
