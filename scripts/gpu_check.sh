@@ -667,7 +667,10 @@ run_benchmark() {
         echo "<details><summary>The GPU executor's traces (--jit-stats)</summary>"
         echo
         echo '```'
-        sed -n 's/^note: \(.* gpu trace: \)/\1/p' "$WORK/bench.$part.out"
+        # The case, then the trace as simit's --jit-stats prints it under its header.
+        printf '%-24s %s\n' case "site                         compile ms    calls     run ms     cpu ms ir nodes  status"
+        sed -n 's/^note: \(.*\) gpu trace: /\1\t/p' "$WORK/bench.$part.out" |
+          awk -F'\t' '{ printf "%-24s %s\n", $1, $2 }'
         echo '```'
         echo "</details>"
       }
@@ -710,31 +713,33 @@ run_accuracy() {
     return
   fi
   out_of_time "accuracy" 45 && return
-  local build t0 status examples points bad=() differ
+  local build t0 status example points bad=() differ
   build="$(bench_build_folder)"
   t0="$(now)"
-  for examples in fem,springs cloth; do
-    points=1e-6,1e-10
-    [ "$examples" = cloth ] && points=25,100
+  for example in fem springs cloth; do
+    points=1e-6,1e-10 # CG's tolerance on r'r (fem, springs); cloth: steps a frame
+    [ "$example" = cloth ] && points=25,100
     status=0
-    limited python3 bench/accuracy.py --build "$build" --executor jit,gpu --example "$examples" \
+    limited python3 bench/accuracy.py --build "$build" --executor jit,gpu --example "$example" \
       --points "$points" --frames "$frames" --no-plot --table --out "$WORK/accuracy" \
-      >"$WORK/accuracy.$examples.out" 2>&1 || status=$?
-    log "  $examples: exit $status ($(elapsed "$t0"))"
+      >"$WORK/accuracy.$example.out" 2>&1 || status=$?
+    log "  $example: exit $status ($(elapsed "$t0"))"
     {
+      echo "### $example ($(grep -m1 -o 'reference: .*' "$WORK/accuracy.$example.out" ||
+        echo 'no reference'))"
+      echo
       if [ "$status" = 0 ]; then
-        grep '^|' "$WORK/accuracy.$examples.out" |
-          awk '/^\| executor/ && NR > 1 { print "" } 1' || true
+        grep '^|' "$WORK/accuracy.$example.out" || true
       else
-        echo "accuracy.py --example $examples exited $status$(timed_out_note "$status"):"
+        echo "accuracy.py --example $example exited $status$(timed_out_note "$status"):"
         echo
         echo '```'
-        tail -10 "$WORK/accuracy.$examples.out"
+        tail -10 "$WORK/accuracy.$example.out"
         echo '```'
       fi
       echo
     } >>"$BODY"
-    [ "$status" = 0 ] || bad+=("$examples: exit $status$(timed_out_note "$status")")
+    [ "$status" = 0 ] || bad+=("$example: exit $status$(timed_out_note "$status")")
   done
   # The GPU's errors are the JIT's, point by point (the same positions).
   differ="$(cat "$WORK"/accuracy/accuracy_*_jit.csv 2>/dev/null | grep -v '^#' |
