@@ -24,7 +24,7 @@ constexpr long kKeepCalls = 64;
 class GpuExecutor final : public Executor {
  public:
   GpuExecutor(std::unique_ptr<cuda::Device> device, bool emulated)
-      : device_(std::move(device)), emulated_(emulated) {}
+      : emulated_(emulated), device_(std::move(device)) {}
   ~GpuExecutor() override {
     try {
       for (auto& [host, m] : mirrors_) device_->free(m.array);
