@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "simit/executor.h"
 
 namespace simit::tools {
 namespace {
@@ -137,6 +138,7 @@ TEST_F(MeshNumbers, TriangularSolveNamesTheMeshVertex) {
       << renumbered;
   const std::string plain = run("lower", false);
   EXPECT_TRUE(has(plain, "triangularSolve: the diagonal entry of row 0 is zero")) << plain;
+  if (!simit::jit_available()) GTEST_SKIP() << "the JIT's half: this build has no JIT";
   const std::string jit =
       run("lower", true, {"--executor", "jit", "--jit-threshold", "0", "--jit-cache", "off"});
   EXPECT_EQ(jit, renumbered);
@@ -149,6 +151,7 @@ TEST_F(MeshNumbers, ASpecialisedPatternKeepsTheMeshNumbers) {
       has(renumbered,
           "triangularSolve: the diagonal entry of the row of element 0 of set 'verts' is zero"))
       << renumbered;
+  if (!simit::jit_available()) GTEST_SKIP() << "the JIT's half: this build has no JIT";
   const std::string jit = run("lower_later", true,
                               {"--frames", "2", "--executor", "jit", "--jit-threshold", "0",
                                "--jit-cache", "off", "--jit-stats"});
@@ -166,6 +169,7 @@ TEST_F(MeshNumbers, SingularSolveNamesTheMeshVertex) {
                   "LU factorisation failed: the matrix is singular (the column of element 0 of "
                   "set 'verts' has no nonzero entry)"))
       << renumbered;
+  if (!simit::jit_available()) GTEST_SKIP() << "the JIT's half: this build has no JIT";
   const std::string jit =
       run("backslash", true, {"--executor", "jit", "--jit-threshold", "0", "--jit-cache", "off"});
   EXPECT_EQ(jit, renumbered);
