@@ -179,6 +179,19 @@ unpack_bundle() {
   fi
 }
 
+# only_bundle_libraries LD_DEBUG_LOG PROGRAM BUNDLE: fails naming every library PROGRAM loaded
+# from outside BUNDLE/lib (an LD_DEBUG=libs log).
+only_bundle_libraries() {
+  local foreign
+  foreign="$(grep -o 'calling init: .*' "$1" | sed 's/calling init: //' |
+    grep -v "^$3/lib/" || true)"
+  if [ -n "$foreign" ]; then
+    echo "gpu_check: $2 loads libraries from outside the bundle's lib/:" >&2
+    echo "$foreign" >&2
+    exit 1
+  fi
+}
+
 # The bundle unpacked from DIR's archive and run here with an empty environment: each library
 # loaded must come from its lib/. (A subshell: its temporary folder goes when it ends.)
 check_bundle() (
@@ -195,13 +208,7 @@ check_bundle() (
     echo "gpu_check: the bundle's simit test failed" >&2
     exit 1
   }
-  foreign="$(grep -o 'calling init: .*' "$tmp/test.err" | sed 's/calling init: //' |
-    grep -v "^$dir/lib/" || true)"
-  if [ -n "$foreign" ]; then
-    echo "gpu_check: libraries loaded from outside the bundle's lib/:" >&2
-    echo "$foreign" >&2
-    exit 1
-  fi
+  only_bundle_libraries "$tmp/test.err" simit "$dir"
   echo "  simit test tests/lang/functions.sim: $(tail -1 "$tmp/test.out");" \
     "$(grep -c 'calling init: ' "$tmp/test.err") libraries loaded, all from the bundle's lib/"
   (cd "$SIMIT_ROOT" && env -i "$dir/simit" run examples/fem/bunny.toml --executor jit \
@@ -233,13 +240,7 @@ check_bundle() (
     echo "gpu_check: the bundle's jit_tests failed" >&2
     exit 1
   }
-  foreign="$(grep -o 'calling init: .*' "$tmp/random.err" | sed 's/calling init: //' |
-    grep -v "^$dir/lib/" || true)"
-  if [ -n "$foreign" ]; then
-    echo "gpu_check: jit_tests loads libraries from outside the bundle's lib/:" >&2
-    echo "$foreign" >&2
-    exit 1
-  fi
+  only_bundle_libraries "$tmp/random.err" jit_tests "$dir"
   echo "  jit_tests: $(grep -m1 ' programs from seed ' "$tmp/random.out" | cut -d: -f1)" \
     "under the JIT; its libraries all from the bundle's lib/"
   status=0
