@@ -2,6 +2,7 @@
 #include "jit/deferred_plan.h"
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 #include <set>
 
@@ -69,6 +70,9 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
     split_ok_ = true;
     for (Result& r : results_)
       split_ok_ = split_ok_ && build(r, target, results[static_cast<size_t>(r.result)].blocks);
+    // Process-wide, so that two plans (one freed, one at its address) never share a value.
+    static std::atomic<uint64_t> builds{0};
+    build_id_ = ++builds;
   }
   if (!split_ok_) return false;
   split_ = true;
@@ -187,6 +191,24 @@ void DeferredPlan::finish(
       for (int64_t t = 0; t < tasks; ++t) add(t);
     }
   }
+}
+
+std::vector<DeferredPlan::Gather> DeferredPlan::gathers() const {
+  std::vector<Gather> out;
+  if (!split_) return out;
+  for (const Result& r : results_) {
+    Gather g;
+    g.result = r.result;
+    g.components = r.components;
+    g.blocks = r.gather_block.size();
+    g.block = r.gather_block.data();
+    g.start = r.gather_start.data();
+    g.k = r.gather_k.data();
+    g.deferred = r.scratch.data();
+    g.deferred_values = r.scratch.size();
+    out.push_back(g);
+  }
+  return out;
 }
 
 int64_t DeferredPlan::deferred_blocks() const {

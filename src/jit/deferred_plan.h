@@ -47,6 +47,29 @@ class DeferredPlan {
   // Deferred blocks of the last split prepared (for --jit-stats).
   int64_t deferred_blocks() const;
 
+  // One result's gather index and deferred blocks, for an executor that adds them itself (a
+  // GPU's, in device memory): `blocks` blocks have deferred blocks, block[i] (ascending) adds
+  // deferred blocks k[start[i] .. start[i + 1]) (ascending: element order), each `components`
+  // values of `deferred` (the array deferred(result) gives; deferred block 0, the sink, is
+  // never listed). finish's contract: to[c] += from[c] for each k in turn, from the block's
+  // value after the run.
+  struct Gather {
+    int result = -1;
+    int components = 1;
+    size_t blocks = 0;
+    const int32_t* block = nullptr;  // `blocks` entries
+    const int32_t* start = nullptr;  // `blocks` + 1 entries
+    const int32_t* k = nullptr;      // start[blocks] entries
+    const double* deferred = nullptr;
+    size_t deferred_values = 0;
+  };
+  // Per result written, its gather index; empty unless the last prepare split the elements.
+  std::vector<Gather> gathers() const;
+  // Names the split tables (and gather index) in use: a value of its own each time they are
+  // built, unique in the process, so a copy of them elsewhere knows when it is stale (a new
+  // topology, chunk or result pattern). 0 before the first split.
+  uint64_t build_id() const { return build_id_; }
+
  private:
   struct Result {
     int result = -1;
@@ -72,6 +95,7 @@ class DeferredPlan {
   std::vector<runtime::PatternPtr> patterns_;
   std::vector<const int32_t*> sources_;
   bool built_split_ = false, split_ok_ = false, split_ = false;
+  uint64_t build_id_ = 0;
   std::vector<Result> results_;
 };
 

@@ -8,12 +8,19 @@
 #include <random>
 #include <vector>
 
+#include "jit/deferred_plan.h"
 #include "jit/thread_pool.h"
 #include "jit/tunables.h"
 
 namespace simit::jit {
 
 int32_t Executor::chunk_for(int32_t) const { return kChunkElements; }
+
+void Executor::finish_deferred(const DeferredPlan& plan, const std::vector<double*>& values) {
+  plan.finish(values, [this](int64_t tasks, const std::function<void(int64_t)>& task) {
+    for_each(tasks, task);
+  });
+}
 
 namespace {
 

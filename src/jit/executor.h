@@ -7,10 +7,13 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "jit/target.h"
 
 namespace simit::jit {
+
+class DeferredPlan;
 
 // What a map kernel's run came to: code 0, or 1 + the index of the failed check in
 // Trace::errors with `element` the lowest element whose check failed.
@@ -54,6 +57,12 @@ class Executor {
   virtual void for_each(int64_t tasks, const std::function<void(int64_t)>& task) {
     for (int64_t i = 0; i < tasks; ++i) task(i);
   }
+  // After a run_map with MapWrites::Deferred that succeeded, before the results are read:
+  // each deferred block of `plan` added to its block, in element order (DeferredPlan::finish).
+  // `values`: per result its values (null for results not assembled). Here: the plan's finish
+  // on the host, its tasks through for_each; an executor whose memory is elsewhere adds them
+  // there.
+  virtual void finish_deferred(const DeferredPlan& plan, const std::vector<double*>& values);
 };
 
 // Whether the elements of a map kernel write apart (fields and results at their own index

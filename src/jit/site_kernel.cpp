@@ -125,7 +125,8 @@ bool TraceController::prepare_deferred(Entry& e, interp::SiteCall& call,
   if (writes == MapWrites::Deferred && !e.split_noted) {
     e.split_noted = true;
     e.stats.note += "; chunks of " + std::to_string(chunk) + " apart, " +
-                    std::to_string(e.plan->deferred_blocks()) + " deferred blocks";
+                    std::to_string(e.plan->deferred_blocks()) + " deferred blocks" +
+                    (e.on_device ? " added on the device" : "");
   }
   return true;
 }
@@ -265,9 +266,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
       else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float)
         values[i] = r.tensor().mutable_floats();
     }
-    e.plan->finish(values, [&executor](int64_t tasks, const std::function<void(int64_t)>& task) {
-      executor.for_each(tasks, task);
-    });
+    executor.finish_deferred(*e.plan, values);
   }
   specialise_results(e, call);
   return true;

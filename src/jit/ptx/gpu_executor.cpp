@@ -1,12 +1,16 @@
 // The GPU executor (jit/ptx/gpu_executor.h): a map kernel's arrays mirrored in device memory,
-// copied there before the launch and back after it, one thread per element.
+// copied there before the launch and back after it, one thread per element; a deferred
+// assembly's additions by the gather kernel (jit/ptx/gather_kernel.h) before the copy back.
 #include "jit/ptx/gpu_executor.h"
 
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 #include <vector>
 
+#include "jit/deferred_plan.h"
 #include "jit/ptx/cuda_driver.h"
+#include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/host_driver.h"
 #include "jit/ptx/ptx_target.h"
 
@@ -28,6 +32,7 @@ class GpuExecutor final : public Executor {
   ~GpuExecutor() override {
     try {
       for (auto& [host, m] : mirrors_) device_->free(m.array);
+      for (auto& [plan, u] : uploads_) free_index(u);
       device_->free(pointers_);
       device_->free(failure_);
     } catch (const cuda::CudaError&) {
@@ -52,6 +57,7 @@ class GpuExecutor final : public Executor {
     }
     ++call_;
     device_->make_current();
+    copy_back_pending();
     // Every array in: the host may have changed any of them since the last call.
     std::vector<cuda::DeviceArray*> arrays(args.array_count, nullptr);
     pointers_host_.assign(args.array_count, 0);
@@ -81,17 +87,79 @@ class GpuExecutor final : public Executor {
           launch(kernel, n, writes == MapWrites::Shared, scalars_at, endpoints_at);
     }
     // Every array the kernel wrote back out, also after a failed check (the interpreter's
-    // run leaves the fields the elements before it wrote).
+    // run leaves the fields the elements before it wrote); after a deferred run that
+    // succeeded, once finish_deferred has added the deferred blocks on the device, and then
+    // without the deferred blocks themselves.
+    const bool later = writes == MapWrites::Deferred && code == 0;
     for (size_t i = 0; i < args.array_count; ++i)
       if (args.array_written[i] && arrays[i]) {
         arrays[i]->device_dirty = true;
-        device_->to_host(*arrays[i]);
-        traffic_.bytes_to_host += static_cast<long long>(arrays[i]->bytes);
+        if (later)
+          pending_.push_back(args.arrays[i]);
+        else
+          copy_back(*arrays[i]);
       }
     evict();
     out.code = code;
     out.element = code ? element : -1;
     return out;
+  }
+
+  // Each result's deferred blocks added on the device, one thread per block that has some
+  // (the gather kernel; emulated, its host equivalent over the "device" memory), then the
+  // arrays the map wrote copied back but for the deferred blocks, which the host never reads.
+  void finish_deferred(const DeferredPlan& plan, const std::vector<double*>& values) override {
+    device_->make_current();
+    const std::vector<DeferredPlan::Gather> gathers = plan.gathers();
+    const IndexUpload& index = upload_index(plan, gathers);
+    bool launched = false;
+    for (size_t g = 0; g < gathers.size(); ++g) {
+      const DeferredPlan::Gather& d = gathers[g];
+      double* host = static_cast<size_t>(d.result) < values.size()
+                         ? values[static_cast<size_t>(d.result)]
+                         : nullptr;
+      if (!host || d.blocks == 0) continue;
+      const cuda::DeviceArray* to = mirror_of(host);
+      const cuda::DeviceArray* from = mirror_of(d.deferred);
+      if (!to || !from) throw std::logic_error("a deferred assembly's result is not on the device");
+      GatherArgs a;
+      a.values = reinterpret_cast<double*>(to->device);
+      a.deferred = reinterpret_cast<const double*>(from->device);
+      a.block = reinterpret_cast<const int32_t*>(index.arrays[3 * g].device);
+      a.start = reinterpret_cast<const int32_t*>(index.arrays[3 * g + 1].device);
+      a.k = reinterpret_cast<const int32_t*>(index.arrays[3 * g + 2].device);
+      a.blocks = static_cast<uint32_t>(d.blocks);
+      a.components = static_cast<uint32_t>(d.components);
+      if (emulated_) {
+        // Host memory under the host driver: the device addresses are host addresses.
+        gather_on_host(a, 0, a.blocks);
+      } else {
+        const cuda::KernelArg params[] = {cuda::KernelArg::of(to->device),
+                                          cuda::KernelArg::of(from->device),
+                                          cuda::KernelArg::of(index.arrays[3 * g].device),
+                                          cuda::KernelArg::of(index.arrays[3 * g + 1].device),
+                                          cuda::KernelArg::of(index.arrays[3 * g + 2].device),
+                                          cuda::KernelArg::of(a.blocks),
+                                          cuda::KernelArg::of(a.components)};
+        device_->launch(gather_function(), cuda::Dim3{(a.blocks + kBlock - 1) / kBlock},
+                        cuda::Dim3{kBlock}, params);
+        launched = true;
+      }
+      ++traffic_.launches;
+      ++traffic_.gather_launches;
+    }
+    if (launched) device_->synchronize();
+    for (const void* host : pending_) {
+      auto it = mirrors_.find(host);
+      if (it == mirrors_.end()) continue;
+      const bool scratch = std::any_of(gathers.begin(), gathers.end(),
+                                       [&](const auto& d) { return d.deferred == host; });
+      if (scratch)
+        it->second.array.device_dirty = false;  // the next call copies -0.0 over it
+      else
+        copy_back(it->second.array);
+    }
+    pending_.clear();
   }
 
   GpuTraffic traffic_;
@@ -102,6 +170,75 @@ class GpuExecutor final : public Executor {
     cuda::DeviceArray array;
     long used = 0;  // the call that last used it
   };
+  // A plan's gather index in device memory: per gather, its block, start and k arrays.
+  struct IndexUpload {
+    uint64_t build = 0;  // DeferredPlan::build_id of what was uploaded
+    long used = 0;
+    std::vector<cuda::DeviceArray> arrays;
+  };
+
+  void copy_back(cuda::DeviceArray& array) {
+    device_->to_host(array);
+    traffic_.bytes_to_host += static_cast<long long>(array.bytes);
+  }
+
+  // The arrays of a deferred run whose finish_deferred did not come: copied back whole (the
+  // host then holds what the launch left, as after any other run).
+  void copy_back_pending() {
+    for (const void* host : pending_)
+      if (auto it = mirrors_.find(host); it != mirrors_.end()) copy_back(it->second.array);
+    pending_.clear();
+  }
+
+  const cuda::DeviceArray* mirror_of(const void* host) const {
+    auto it = mirrors_.find(host);
+    return it == mirrors_.end() || it->second.array.device == 0 ? nullptr : &it->second.array;
+  }
+
+  // The plan's gather index on the device: uploaded when the plan's tables were built anew
+  // since the last upload (a new topology, chunk or pattern), else the copy already there.
+  const IndexUpload& upload_index(const DeferredPlan& plan,
+                                  const std::vector<DeferredPlan::Gather>& gathers) {
+    IndexUpload& u = uploads_[&plan];
+    u.used = call_;
+    if (u.build == plan.build_id() && u.arrays.size() == 3 * gathers.size()) return u;
+    free_index(u);
+    u.build = plan.build_id();
+    for (const DeferredPlan::Gather& d : gathers) {
+      const size_t ks = d.blocks > 0 ? static_cast<size_t>(d.start[d.blocks]) : 0;
+      const std::pair<const int32_t*, size_t> parts[] = {
+          {d.block, d.blocks}, {d.start, d.blocks + 1}, {d.k, ks}};
+      for (const auto& [host, count] : parts) {
+        // Nothing to upload where no block has deferred blocks (the kernel is not launched).
+        cuda::DeviceArray a =
+            device_->alloc(const_cast<int32_t*>(host), d.blocks > 0 ? count * sizeof(int32_t) : 0);
+        if (a.device != 0) {
+          ++traffic_.allocations;
+          device_->to_device(a);
+          traffic_.bytes_to_device += static_cast<long long>(a.bytes);
+        }
+        a.host = nullptr;  // device-only from here: the plan may rebuild its tables
+        u.arrays.push_back(a);
+      }
+    }
+    ++traffic_.index_uploads;
+    return u;
+  }
+
+  void free_index(IndexUpload& u) {
+    for (cuda::DeviceArray& a : u.arrays) device_->free(a);
+    u.arrays.clear();
+  }
+
+  // The gather kernel, loaded on first use, for the architecture and PTX ISA of the map
+  // kernels this executor loaded (their `.target` and `.version`; sm_90 when they name none).
+  cuda::CUfunction gather_function() {
+    if (!gather_) {
+      cuda::CUmodule module = device_->load_module(gather_ptx(arch_, ptx_version_));
+      gather_ = device_->function(module, kGatherEntry);
+    }
+    return gather_;
+  }
 
   // The device copy of `host` (`bytes` long), refreshed; null for an empty array.
   cuda::DeviceArray* to_device(void* host, size_t bytes) {
@@ -129,12 +266,24 @@ class GpuExecutor final : public Executor {
         ++it;
       }
     }
+    for (auto it = uploads_.begin(); it != uploads_.end();) {
+      if (call_ - it->second.used > kKeepCalls) {
+        free_index(it->second);
+        it = uploads_.erase(it);
+      } else {
+        ++it;
+      }
+    }
   }
 
   cuda::CUfunction function_for(const Kernel& kernel) {
     if (auto it = functions_.find(&kernel); it != functions_.end()) return it->second;
     const auto* ptx = dynamic_cast<const PtxKernel*>(&kernel);
     if (!ptx) throw std::logic_error("the GPU executor was given a kernel compiled for the CPU");
+    if (arch_.empty()) {
+      arch_ = ptx_directive(ptx->ptx, ".target");
+      ptx_version_ = ptx_directive(ptx->ptx, ".version");
+    }
     cuda::CUmodule module = device_->load_module(ptx->ptx);
     return functions_[&kernel] = device_->function(module, ptx->entry);
   }
@@ -184,6 +333,12 @@ class GpuExecutor final : public Executor {
   std::unique_ptr<cuda::Device> device_;
   std::map<const void*, Mirror> mirrors_;
   std::map<const Kernel*, cuda::CUfunction> functions_;
+  // Per plan (by address; its build id tells a rebuilt or new plan there), its gather index.
+  std::map<const DeferredPlan*, IndexUpload> uploads_;
+  // Host arrays a deferred run wrote, copied back by finish_deferred.
+  std::vector<const void*> pending_;
+  cuda::CUfunction gather_ = nullptr;
+  std::string arch_, ptx_version_;  // of the map kernels ("": not seen yet)
   std::vector<cuda::CUdeviceptr> pointers_host_;
   cuda::DeviceArray pointers_, failure_;
   uint64_t failure_word_ = kNoFailure;

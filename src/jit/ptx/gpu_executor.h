@@ -5,17 +5,22 @@
 // A map that adds into shared blocks runs with deferred writes in chunks of one element
 // (jit/defer_assembly.h): each block's first element adds in place and every later
 // contribution lands in a deferred block of its own, so no two threads write one address and
-// no floating-point atomic is needed; the deferred blocks are then added in element order.
+// no floating-point atomic is needed; the deferred blocks are then added in element order on
+// the device (finish_deferred: the gather kernel, jit/ptx/gather_kernel.h, one thread per
+// block that has deferred blocks, from the plan's gather index, uploaded once per plan build).
 //
 // Data: each array the kernel reads is copied to the device before the launch and each array
 // it writes is copied back after it (the host copy stays the one the rest of the program
-// reads). Device memory is kept per host array between calls and reused while its size holds.
+// reads); a deferred map's written arrays are copied back after the gather, all but the
+// deferred blocks, which never leave the device. Device memory is kept per host array between
+// calls and reused while its size holds.
 //
 // Emulated: a driver table over host memory (jit/ptx/host_driver.h) stands in for the GPU,
-// and the kernels are the CPU target's, called on the copies in that "device" memory: every
-// step of the data path (what is copied, when, the pointer table, the one-element chunks,
-// the failure report) runs as on a GPU, and its results are compared with the interpreter's
-// where no GPU is (the corpus and the random programs under SIMIT_TEST_GPU_EMULATION).
+// and the kernels are the CPU target's, called on the copies in that "device" memory (the
+// gather kernel's host equivalent likewise): every step of the data path (what is copied,
+// when, the pointer table, the one-element chunks, the gather index, the failure report) runs
+// as on a GPU, and its results are compared with the interpreter's where no GPU is (the
+// corpus and the random programs under SIMIT_TEST_GPU_EMULATION).
 #pragma once
 
 #include <memory>
@@ -52,6 +57,8 @@ struct GpuTraffic {
   long long bytes_to_device = 0;
   long long bytes_to_host = 0;
   long allocations = 0;
+  long gather_launches = 0;  // of the gather kernel (counted in launches too)
+  long index_uploads = 0;    // gather indices copied to the device (once per plan build)
 };
 GpuTraffic gpu_traffic(const Executor& executor);
 
