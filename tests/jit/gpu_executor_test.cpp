@@ -1,6 +1,7 @@
 // The GPU executor (jit/ptx/gpu_executor.h) without a GPU: its launch path and copies against
-// a fake driver table, and its whole data path over host memory (the emulation) giving the
-// interpreter's bits for a program that assembles, applies and reduces.
+// a fake driver table (the gather kernel of a deferred assembly among them), the gather
+// kernel's PTX through ptxas, and its whole data path over host memory (the emulation) giving
+// the interpreter's bits for programs that assemble, apply and reduce.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,8 +15,12 @@
 #include "api/compiled_program.h"
 #include "api/engine.h"
 #include "interp/runtime_error.h"
+#include "jit/defer_assembly.h"
+#include "jit/deferred_plan.h"
 #include "jit/ptx/cuda_driver.h"
+#include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/gpu_executor.h"
+#include "jit/ptx/ptx_check.h"
 #include "jit/ptx/ptx_target.h"
 #include "runtime/set.h"
 
@@ -24,16 +29,23 @@ namespace {
 
 using namespace simit::jit::cuda;
 
-// A driver whose device memory is host memory and whose launches call `on_launch`.
+// A driver whose device memory is host memory and whose launches call `on_launch`. Its two
+// functions: the map kernel's entry and the gather kernel's, told apart by their handles.
+int map_function = 0, gather_function = 0;
 struct Launch {
+  bool gather = false;
   unsigned grid = 0, block = 0;
+  // A map kernel's parameters.
   CUdeviceptr table = 0, scalars = 0, endpoints = 0, failure = 0;
   int32_t begin = 0, end = 0;
+  // The gather kernel's.
+  GatherArgs g;
 };
 struct Fake {
   int allocations = 0, frees = 0;
   long long to_device = 0, to_host = 0;
-  std::string ptx;
+  std::string ptx;                   // the last module loaded
+  std::vector<std::string> modules;  // every module loaded, in order
   std::vector<Launch> launches;
   std::function<void(const Launch&)> on_launch;
 };
@@ -87,15 +99,16 @@ DriverTable fake_table() {
   t.cuCtxSynchronize = [] { return CUDA_SUCCESS; };
   t.cuModuleLoadDataEx = [](CUmodule* m, const void* image, unsigned, CUjit_option*, void**) {
     fake->ptx = static_cast<const char*>(image);
+    fake->modules.push_back(fake->ptx);
     static int module;
     *m = reinterpret_cast<CUmodule>(&module);
     return CUDA_SUCCESS;
   };
   t.cuModuleUnload = [](CUmodule) { return CUDA_SUCCESS; };
   t.cuModuleGetFunction = [](CUfunction* f, CUmodule, const char* name) {
-    if (std::string(name) != kMapEntry) return CUDA_ERROR_NOT_FOUND;
-    static int function;
-    *f = reinterpret_cast<CUfunction>(&function);
+    const std::string n = name;
+    if (n != kMapEntry && n != kGatherEntry) return CUDA_ERROR_NOT_FOUND;
+    *f = reinterpret_cast<CUfunction>(n == kMapEntry ? &map_function : &gather_function);
     return CUDA_SUCCESS;
   };
   t.cuMemAlloc = [](CUdeviceptr* p, std::size_t bytes) {
@@ -118,17 +131,28 @@ DriverTable fake_table() {
     std::memcpy(to, reinterpret_cast<const void*>(from), bytes);
     return CUDA_SUCCESS;
   };
-  t.cuLaunchKernel = [](CUfunction, unsigned gx, unsigned, unsigned, unsigned bx, unsigned,
+  t.cuLaunchKernel = [](CUfunction f, unsigned gx, unsigned, unsigned, unsigned bx, unsigned,
                         unsigned, unsigned, CUstream, void** params, void**) {
     Launch l;
     l.grid = gx;
     l.block = bx;
-    l.table = param<CUdeviceptr>(params, 0);
-    l.scalars = param<CUdeviceptr>(params, 1);
-    l.endpoints = param<CUdeviceptr>(params, 2);
-    l.begin = param<int32_t>(params, 3);
-    l.end = param<int32_t>(params, 4);
-    l.failure = param<CUdeviceptr>(params, 5);
+    l.gather = f == reinterpret_cast<CUfunction>(&gather_function);
+    if (l.gather) {
+      l.g.values = reinterpret_cast<double*>(param<CUdeviceptr>(params, 0));
+      l.g.deferred = reinterpret_cast<const double*>(param<CUdeviceptr>(params, 1));
+      l.g.block = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 2));
+      l.g.start = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 3));
+      l.g.k = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 4));
+      l.g.blocks = param<uint32_t>(params, 5);
+      l.g.components = param<uint32_t>(params, 6);
+    } else {
+      l.table = param<CUdeviceptr>(params, 0);
+      l.scalars = param<CUdeviceptr>(params, 1);
+      l.endpoints = param<CUdeviceptr>(params, 2);
+      l.begin = param<int32_t>(params, 3);
+      l.end = param<int32_t>(params, 4);
+      l.failure = param<CUdeviceptr>(params, 5);
+    }
     fake->launches.push_back(l);
     if (fake->on_launch) fake->on_launch(l);
     return CUDA_SUCCESS;
@@ -178,6 +202,7 @@ TEST_F(GpuExecutorFake, CopiesInLaunchesOneThreadPerElementAndCopiesWritesBack) 
     for (int i = 0; i < 3; ++i) at<double>(table[1])[i] = 10 + i;
     *at<uint64_t>(l.failure) = (uint64_t{7} << 32) | 2;  // element 7 failed check 2
   };
+  // A failed check copies every written array back, a deferred map's too.
   const MapOutcome o = executor->run_map(kernel, args, 300, 1, MapWrites::Deferred, {});
   EXPECT_EQ(state.ptx, kernel.ptx);
   ASSERT_EQ(state.launches.size(), 1u);
@@ -202,7 +227,7 @@ TEST_F(GpuExecutorFake, CopiesInLaunchesOneThreadPerElementAndCopiesWritesBack) 
   const int allocations = state.allocations;
   in[3] = -4;
   state.on_launch = [&](const Launch& l) { seen_in = at<double>(at<CUdeviceptr>(l.table)[0])[3]; };
-  const MapOutcome again = executor->run_map(kernel, args, 300, 1, MapWrites::Deferred, {});
+  const MapOutcome again = executor->run_map(kernel, args, 300, 1, MapWrites::Disjoint, {});
   EXPECT_EQ(again.code, 0);
   EXPECT_EQ(again.element, -1);
   EXPECT_EQ(seen_in, -4.0);
@@ -259,6 +284,265 @@ TEST_F(GpuExecutorFake, ACpuKernelIsRefused) {
   args.array_bytes = bytes;
   args.array_written = written;
   EXPECT_THROW(executor->run_map(cpu, args, 10, 1, MapWrites::Disjoint, {}), std::logic_error);
+}
+
+// ---- A deferred assembly: the map kernel, then the gather kernel, on the device.
+
+// A trace adding a value at both endpoints of each edge into a vector result of one
+// component, rewritten with deferred writes (slots: the result, its member table, its
+// deferred blocks).
+Trace deferred_edge_sum() {
+  Trace t;
+  t.arity = 2;
+  t.reduce = true;
+  ArraySlot r;
+  r.kind = ArraySlot::Kind::Result;
+  r.written = true;
+  r.name = "f";
+  t.arrays.push_back(r);
+  t.pairs = {0};
+  for (int k = 0; k < 2; ++k) {
+    auto at = std::make_shared<Expr>();
+    at->kind = ExprKind::Endpoint;
+    at->ty = Ty::I32;
+    at->slot = k;
+    auto one = std::make_shared<Expr>();
+    one->f = 1.0;
+    Stmt s;
+    s.kind = StmtKind::Assemble;
+    s.index = at;
+    s.value = one;
+    t.body.push_back(s);
+  }
+  EXPECT_EQ(defer_assembly(t), "");
+  return t;
+}
+
+// Element e's contribution at its endpoint m: values whose sums round, so that a sum in
+// another order shows in the bits.
+double contribution(int e, int m) { return 1.0 / (3.0 + e) + (m ? 0.1 : 1e-17 * e); }
+
+// The interpreter's sums: each vertex's contributions added in element order from 0.
+std::vector<double> sums_in_element_order(const std::vector<int32_t>& ends, int verts) {
+  std::vector<double> f(static_cast<size_t>(verts), 0.0);
+  for (size_t e = 0; 2 * e < ends.size(); ++e)
+    for (int m = 0; m < 2; ++m) f[static_cast<size_t>(ends[2 * e + m])] += contribution(e, m);
+  return f;
+}
+
+// Runs the deferred map over `edges` (its plan prepared for chunks of one) through
+// `executor`, the fake's map kernel doing what the compiled kernel does on the device
+// copies, then finish_deferred. Returns the result's values.
+struct DeferredRun {
+  std::vector<double> f;
+  std::vector<double> deferred_after;    // the host's deferred blocks afterwards
+  long long to_device = 0, to_host = 0;  // the fake's copies during this run
+};
+// A map kernel whose PTX names an architecture other than the default (the gather module
+// follows it). Static: the executor keeps its loaded function by the kernel's address.
+const PtxKernel& sm90a_kernel() {
+  static const PtxKernel k = [] {
+    PtxKernel p;
+    p.ptx = "//\n.version 8.0\n.target sm_90a\n.address_size 64\n";
+    p.entry = kMapEntry;
+    return p;
+  }();
+  return k;
+}
+
+DeferredRun run_deferred(Executor& executor, const Trace& t, DeferredPlan& plan,
+                         const runtime::Set& edges, int verts) {
+  std::vector<DeferredPlan::Source> sources(1);
+  sources[0].blocks = verts;
+  EXPECT_TRUE(plan.prepare(t, edges, sources, executor.chunk_for(edges.size()), true));
+  DeferredRun run;
+  run.f.assign(static_cast<size_t>(verts), 0.0);
+  void* arrays[3] = {run.f.data(), const_cast<int32_t*>(plan.table(0)), plan.deferred(0)};
+  const size_t bytes[3] = {run.f.size() * sizeof(double), plan.table_entries(0) * sizeof(int32_t),
+                           plan.deferred_values(0) * sizeof(double)};
+  uint8_t written[3];
+  for (int i = 0; i < 3; ++i) written[i] = t.arrays[static_cast<size_t>(i)].written ? 1 : 0;
+  EXPECT_EQ(written[0] + written[1] * 2 + written[2] * 4, 1 + 4);
+  MapArgs args{arrays, nullptr, edges.endpoints()};
+  args.array_count = 3;
+  args.array_bytes = bytes;
+  args.array_written = written;
+  args.arity = 2;
+  fake->on_launch = [](const Launch& l) {
+    if (l.gather) return;
+    const CUdeviceptr* table = at<CUdeviceptr>(l.table);
+    double* f = at<double>(table[0]);
+    const int32_t* entries = at<int32_t>(table[1]);
+    double* deferred = at<double>(table[2]);
+    for (int32_t e = l.begin; e < l.end; ++e)
+      for (int m = 0; m < 2; ++m) {
+        const int32_t to = entries[3 * e + 1 + m];
+        (to >= 0 ? f[to] : deferred[-1 - to]) += contribution(e, m);
+      }
+  };
+  const long long to_device = fake->to_device, to_host = fake->to_host;
+  const MapOutcome o = executor.run_map(sm90a_kernel(), args, edges.size(),
+                                        executor.chunk_for(edges.size()), MapWrites::Deferred, {});
+  EXPECT_EQ(o.code, 0);
+  // The gather launch adds on the "device" copies; the fake does it as finish does (deferred
+  // blocks outside, components inside).
+  fake->on_launch = [](const Launch& l) {
+    if (!l.gather) return;
+    for (uint32_t i = 0; i < l.g.blocks; ++i)
+      for (int32_t j = l.g.start[i]; j < l.g.start[i + 1]; ++j)
+        for (uint32_t c = 0; c < l.g.components; ++c)
+          l.g.values[static_cast<size_t>(l.g.block[i]) * l.g.components + c] +=
+              l.g.deferred[static_cast<size_t>(l.g.k[j]) * l.g.components + c];
+  };
+  executor.finish_deferred(plan, {run.f.data()});
+  run.to_device = fake->to_device - to_device;
+  run.to_host = fake->to_host - to_host;
+  run.deferred_after.assign(plan.deferred(0), plan.deferred(0) + plan.deferred_values(0));
+  return run;
+}
+
+TEST_F(GpuExecutorFake, ADeferredMapLaunchesTheGatherAndCopiesBackOnlyTheResults) {
+  auto executor = make_gpu_executor_over(fake_table());
+  const Trace t = deferred_edge_sum();
+  ASSERT_EQ(t.arrays.size(), 3u);
+  ASSERT_EQ(t.arrays[2].kind, ArraySlot::Kind::Deferred);
+  // Vertex 0 in five edges, the others in two or three: many deferred blocks per block.
+  runtime::Set v("v");
+  v.add_many(6);
+  runtime::Set e("e", {&v, &v});
+  const std::vector<int32_t> ends = {0, 1, 2, 0, 0, 3, 1, 2, 4, 0, 2, 3, 0, 5, 5, 4};
+  e.add_edges(ends);
+  DeferredPlan plan;
+  const DeferredRun run = run_deferred(*executor, t, plan, e, 6);
+
+  // The map kernel over every element, then one gather: one thread per block that has
+  // deferred blocks (vertices 0 to 5 all do), over the device copies of the result and the
+  // deferred blocks, with the plan's gather index copied to the device.
+  ASSERT_EQ(state.launches.size(), 2u);
+  EXPECT_FALSE(state.launches[0].gather);
+  EXPECT_EQ(state.launches[0].begin, 0);
+  EXPECT_EQ(state.launches[0].end, 8);
+  const Launch& g = state.launches[1];
+  ASSERT_TRUE(g.gather);
+  EXPECT_EQ(g.grid, 1u);
+  EXPECT_EQ(g.block, 128u);
+  const std::vector<DeferredPlan::Gather> gathers = plan.gathers();
+  ASSERT_EQ(gathers.size(), 1u);
+  const DeferredPlan::Gather& d = gathers[0];
+  EXPECT_EQ(d.blocks, 6u);
+  EXPECT_EQ(plan.deferred_blocks(), 10);  // 16 contributions, 6 of them in place
+  EXPECT_EQ(g.g.blocks, 6u);
+  EXPECT_EQ(g.g.components, 1u);
+  const CUdeviceptr* table = at<CUdeviceptr>(state.launches[0].table);
+  EXPECT_EQ(reinterpret_cast<CUdeviceptr>(g.g.values), table[0]);
+  EXPECT_EQ(reinterpret_cast<CUdeviceptr>(g.g.deferred), table[2]);
+  for (const void* p : {static_cast<const void*>(g.g.block), static_cast<const void*>(g.g.start),
+                        static_cast<const void*>(g.g.k)})
+    for (const void* host : {static_cast<const void*>(d.block), static_cast<const void*>(d.start),
+                             static_cast<const void*>(d.k)})
+      EXPECT_NE(p, host);  // device copies, not the plan's
+  EXPECT_EQ(std::vector<int32_t>(g.g.block, g.g.block + 6),
+            std::vector<int32_t>(d.block, d.block + 6));
+  EXPECT_EQ(std::vector<int32_t>(g.g.start, g.g.start + 7),
+            std::vector<int32_t>(d.start, d.start + 7));
+  EXPECT_EQ(g.g.start[6], 10);
+  EXPECT_EQ(std::vector<int32_t>(g.g.k, g.g.k + 10), std::vector<int32_t>(d.k, d.k + 10));
+
+  // The interpreter's sums, bit for bit, from the device.
+  EXPECT_EQ(run.f, sums_in_element_order(ends, 6));
+  // Copied back: the result (and the failure word); the deferred blocks stayed on the device
+  // (the host's are the -0.0 they were prepared with).
+  const long long result_bytes = 6 * sizeof(double);
+  EXPECT_EQ(run.to_host, result_bytes + static_cast<long long>(sizeof(uint64_t)));
+  for (double x : run.deferred_after) EXPECT_TRUE(x == 0.0 && std::signbit(x));
+  GpuTraffic traffic = gpu_traffic(*executor);
+  EXPECT_EQ(traffic.bytes_to_host, result_bytes);
+  EXPECT_EQ(traffic.launches, 2);
+  EXPECT_EQ(traffic.gather_launches, 1);
+  EXPECT_EQ(traffic.index_uploads, 1);
+  // The gather module is written for the map kernels' architecture and PTX version.
+  ASSERT_EQ(state.modules.size(), 2u);
+  EXPECT_NE(state.modules[1].find(".entry simit_gather("), std::string::npos);
+  EXPECT_NE(state.modules[1].find(".target sm_90a\n"), std::string::npos) << state.modules[1];
+  EXPECT_NE(state.modules[1].find(".version 8.0\n"), std::string::npos) << state.modules[1];
+
+  // Again on the same topology: the index is not uploaded again (the copies in are those of
+  // the first run less the index: block, start and k), the module not loaded again.
+  const long long index_bytes = (6 + 7 + 10) * static_cast<long long>(sizeof(int32_t));
+  const DeferredRun again = run_deferred(*executor, t, plan, e, 6);
+  EXPECT_EQ(again.f, run.f);
+  EXPECT_EQ(again.to_device, run.to_device - index_bytes);
+  EXPECT_EQ(again.to_host, run.to_host);
+  traffic = gpu_traffic(*executor);
+  EXPECT_EQ(traffic.index_uploads, 1);
+  EXPECT_EQ(traffic.gather_launches, 2);
+  EXPECT_EQ(traffic.bytes_to_host, 2 * result_bytes);
+  EXPECT_EQ(state.modules.size(), 2u);
+
+  // A new topology (an edge more): the plan is built anew and its index uploaded again.
+  std::vector<int32_t> more = ends;
+  more.insert(more.end(), {3, 0});
+  e.add_edges(std::vector<int32_t>{3, 0});
+  const DeferredRun grown = run_deferred(*executor, t, plan, e, 6);
+  EXPECT_EQ(grown.f, sums_in_element_order(more, 6));
+  traffic = gpu_traffic(*executor);
+  EXPECT_EQ(traffic.index_uploads, 2);
+  EXPECT_EQ(state.launches.size(), 6u);
+  EXPECT_EQ(state.launches[5].g.start[6], 12);  // both new contributions deferred
+  executor.reset();
+  EXPECT_EQ(state.frees, state.allocations);  // the index arrays too
+}
+
+TEST_F(GpuExecutorFake, TheGatherKernelsPtxAddsCorrectlyRoundedAndPtxasAcceptsIt) {
+  const std::string p = gather_ptx();
+  EXPECT_NE(p.find(".version 7.8\n"), std::string::npos) << p;
+  EXPECT_NE(p.find(".target sm_90\n"), std::string::npos) << p;
+  EXPECT_NE(p.find(".visible .entry simit_gather("), std::string::npos) << p;
+  EXPECT_NE(p.find("add.rn.f64"), std::string::npos) << p;
+  EXPECT_EQ(p.find("fma"), std::string::npos) << p;
+  EXPECT_EQ(p.find("atom"), std::string::npos) << p;
+  EXPECT_NE(gather_ptx("sm_100", "8.6").find(".version 8.6\n.target sm_100\n"), std::string::npos);
+  EXPECT_EQ(ptx_directive(p, ".target"), "sm_90");
+  EXPECT_EQ(ptx_directive("// none\n", ".target"), "");
+  std::string why;
+  const std::string ptxas = find_ptxas(why);
+  if (ptxas.empty()) GTEST_SKIP() << "ptxas not found: " << why;
+  std::string message;
+  EXPECT_TRUE(assemble(ptxas, p, kDefaultGpuArch, message)) << message;
+}
+
+// The host equivalent the emulation runs adds what finish adds, bit for bit, on a result of
+// three components whose deferred blocks hold values whose sums round.
+TEST(GatherOnHost, AddsAsDeferredPlanFinishDoes) {
+  const Trace t = deferred_edge_sum();
+  runtime::Set v("v");
+  v.add_many(7);
+  runtime::Set e("e", {&v, &v});
+  std::vector<int32_t> ends;
+  for (int i = 0; i < 40; ++i) ends.insert(ends.end(), {(i * 3) % 7, i % 2 ? 0 : (i * 5 + 1) % 7});
+  for (size_t i = 0; i < ends.size(); i += 2)
+    if (ends[i] == ends[i + 1]) ends[i + 1] = (ends[i] + 1) % 7;
+  e.add_edges(ends);
+  DeferredPlan plan;
+  std::vector<DeferredPlan::Source> sources(1);
+  sources[0].blocks = 7;
+  sources[0].components = 3;
+  ASSERT_TRUE(plan.prepare(t, e, sources, 1, true));
+  double* deferred = plan.deferred(0);
+  for (size_t i = 0; i < plan.deferred_values(0); ++i) deferred[i] = std::sin(1.0 + i) * 1e3;
+  std::vector<double> by_finish(21), by_gather(21);
+  for (size_t i = 0; i < by_finish.size(); ++i) by_finish[i] = by_gather[i] = 1.0 / (1.0 + i);
+  plan.finish({by_finish.data()});
+  const DeferredPlan::Gather d = plan.gathers().at(0);
+  ASSERT_GT(d.blocks, 0u);
+  GatherArgs a{
+      by_gather.data(), d.deferred, d.block, d.start, d.k, static_cast<uint32_t>(d.blocks), 3};
+  gather_on_host(a, 0, 2);  // threads apart, in any split, as the GPU's blocks run
+  gather_on_host(a, 2, 1000);
+  EXPECT_EQ(std::memcmp(by_finish.data(), by_gather.data(), 21 * sizeof(double)), 0);
+  std::vector<double> before(21);
+  for (size_t i = 0; i < before.size(); ++i) before[i] = 1.0 / (1.0 + i);
+  EXPECT_NE(by_finish, before);  // something was added
 }
 
 // ---- The emulation: a program's bits under `gpu` over host memory against the interpreter.
@@ -379,6 +663,89 @@ TEST_F(GpuEmulation, AFailedCheckNamesTheElementAsTheInterpreterDoes) {
   const Outcome gpu = run_program(api::ExecutorKind::Gpu, 300, 123);
   ASSERT_NE(interp.error, "");
   EXPECT_EQ(gpu.error, interp.error);
+}
+
+// A tet mesh where every tet holds vertex 0 and tets share their other vertices with their
+// neighbours: vertex 0's blocks take one contribution per tet (one in place, the rest
+// deferred), so the gather adds hundreds of deferred blocks into one block, in order.
+const char* kFanProgram = R"(
+element V
+  x : vector[3](float);
+end
+element T
+  k : float;
+end
+extern verts : set{V};
+extern tets : set{T}(verts, verts, verts, verts);
+
+func stiffness(t : T, v : (V*4)) -> (K : matrix[verts, verts](matrix[3,3](float)),
+                                     f : vector[verts](vector[3](float)))
+  for i in 0:4
+    d = v(i).x - 0.5 * v(0).x;
+    s = t.k / (d' * d + 0.3);
+    f(v(i)) = s * d;
+    for j in 0:4
+      K(v(i), v(j)) = (s * sin(v(j).x(1) + 0.1)) * (d * d');
+    end
+  end
+end
+
+export func step() -> (s : float)
+  K, f = map stiffness to tets reduce +;
+  verts.x = verts.x + 1e-3 * (K * verts.x + f);
+  s = verts.x' * verts.x;
+end
+)";
+
+Outcome run_fan(api::ExecutorKind kind, int tets) {
+  auto compiled = api::CompiledProgram::from_source("fan.sim", kFanProgram);
+  EXPECT_TRUE(compiled->ok()) << compiled->compilation()->diagnostics.render_all();
+  const int n = tets + 3;
+  runtime::Set v("verts");
+  runtime::Set t("tets", {&v, &v, &v, &v});
+  v.add_many(n);
+  v.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) v.field(0).at<double>(i)[c] = std::sin(0.7 * i + c) + 0.01 * c;
+  std::vector<int32_t> ends;
+  for (int i = 0; i < tets; ++i) ends.insert(ends.end(), {0, i + 1, i + 2, i + 3});
+  t.add_edges(ends);
+  t.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
+  for (int i = 0; i < t.size(); ++i) *t.field(0).at<double>(i) = 1.0 + 0.37 * std::cos(i);
+  api::EngineOptions o;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
+  o.executor.threads = 1;
+  api::Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("verts"), v);
+  engine.bind_set(*compiled->find_extern("tets"), t);
+  Outcome out;
+  try {
+    for (int f = 0; f < 3; ++f) out.s = engine.call(*compiled->find_func("step"), {})[0].as_float();
+  } catch (const interp::RuntimeError& err) {
+    out.error = err.what();
+  }
+  std::ostringstream stats;
+  engine.print_jit_stats(stats);
+  out.stats = stats.str();
+  out.fields.assign(v.field(0).data<double>(), v.field(0).data<double>() + 3 * n);
+  return out;
+}
+
+TEST_F(GpuEmulation, ManyDeferredBlocksPerBlockGiveTheInterpretersBits) {
+  const Outcome interp = run_fan(api::ExecutorKind::Interpreter, 400);
+  const Outcome gpu = run_fan(api::ExecutorKind::Gpu, 400);
+  ASSERT_EQ(interp.error, "");
+  ASSERT_EQ(gpu.error, "");
+  ASSERT_EQ(interp.fields.size(), gpu.fields.size());
+  EXPECT_EQ(
+      std::memcmp(interp.fields.data(), gpu.fields.data(), interp.fields.size() * sizeof(double)),
+      0);
+  EXPECT_EQ(std::memcmp(&interp.s, &gpu.s, sizeof gpu.s), 0);
+  EXPECT_TRUE(std::isfinite(gpu.s));
+  EXPECT_NE(gpu.stats.find("stiffness (line"), std::string::npos) << gpu.stats;
+  EXPECT_NE(gpu.stats.find("on the GPU (emulated)"), std::string::npos) << gpu.stats;
+  EXPECT_NE(gpu.stats.find("deferred blocks added on the device"), std::string::npos) << gpu.stats;
 }
 
 }  // namespace
