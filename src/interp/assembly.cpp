@@ -8,6 +8,7 @@
 #include "interp/map_context.h"
 #include "interp/set_binding.h"
 #include "interp/system_values.h"
+#include "runtime/dense_linalg.h"
 #include "runtime/system_ops.h"
 
 namespace simit::interp {
@@ -58,6 +59,15 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
     // Writes stored blocks of blocks level by level, as the dense block values are laid out.
     if (ctx.is_matrix[i] && out.back().matrix())
       runtime::unnest_blocks(*out.back().matrix(), ctx.blocks[i]);
+    // --float32: an assembled sum is one operation's, rounded once when it is complete
+    // (docs/arithmetic.md). The results are the map's own.
+    if (options_.float32) {
+      Value& r = out.back();
+      if (r.kind() == Value::Kind::Matrix && r.matrix())
+        runtime::round_to_float32(*r.matrix());
+      else if (r.is_tensor())
+        runtime::round_to_float32(r.tensor());
+    }
   }
   return out;
 }

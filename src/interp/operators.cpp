@@ -6,6 +6,7 @@
 
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
+#include "runtime/system_ops.h"
 
 namespace simit::interp {
 
@@ -442,6 +443,15 @@ void round_to_float32(Value& v) {
       break;
     }
     case Value::Kind::Tensor: runtime::round_to_float32(v.tensor()); break;
+    case Value::Kind::Matrix:
+      // An operator's matrix is its own, but a call's may be shared with a variable (or
+      // bound by the host): a copy is rounded, and only when some value is not binary32.
+      if (v.matrix() && !runtime::is_binary32(*v.matrix())) {
+        auto m = std::make_shared<runtime::SystemMatrix>(*v.matrix());
+        runtime::round_to_float32(*m);
+        v = Value::of_matrix(std::move(m));
+      }
+      break;
     default: break;
   }
 }

@@ -69,9 +69,10 @@ struct TraceController::LoopEntry {
   std::map<const ast::Variable*, PrunedMatrix> pruned;
   int64_t kept = 0, total = 0;  // blocks streamed and blocks in the patterns, over all calls
   double prune_cpu_ms = 0.0;
-  std::vector<int64_t> sizes;                // the lengths it was traced for
-  std::vector<bool> writes_scalar;           // per scalar local
-  long handed_back = 0;                      // calls that reached an error statement
+  std::vector<int64_t> sizes;       // the lengths it was traced for
+  std::vector<bool> writes_scalar;  // per scalar local
+  long handed_back = 0;             // calls that reached an error statement
+  long not_binary32 = 0;  // float32 calls left to the interpreter: a matrix not in binary32
   std::vector<std::vector<double>> scratch;  // per array slot: a scratch vector's storage
   TraceStats stats;
 };

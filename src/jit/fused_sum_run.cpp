@@ -25,11 +25,12 @@ const FusedSums& TraceController::fused_sums(const interp::ExecState& in) {
   return *fused_;
 }
 
-// `A = M - s * K` in K's storage (jit/matrix_sum.h). Declined under float32 and check-finite,
-// where the interpreter looks at s * K on its own, and when M has a block outside K's pattern.
+// `A = M - s * K` in K's storage (jit/matrix_sum.h). Under float32 s * K and the sum are each
+// rounded to binary32, as the interpreter rounds them. Declined under check-finite, where the
+// interpreter looks at s * K on its own, and when M has a block outside K's pattern.
 bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
                                     interp::ExecState& in) {
-  if (!target_ || options_.float32 || options_.check_finite || checking_run_) return false;
+  if (!target_ || options_.check_finite || checking_run_) return false;
   SumState& s = sums_[&stmt];
   if (s.stats.site.empty()) {
     s.stats.line = static_cast<int>(stmt.span.start().line);
@@ -52,13 +53,23 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   const std::shared_ptr<runtime::SystemMatrix> k = kv.matrix();
   const std::shared_ptr<runtime::SystemMatrix> m = mv.matrix();
   std::optional<runtime::SystemMatrix> want;
-  if (options_.check) want = runtime::add(*m, *k, 1.0, beta, &in.patterns());
+  if (options_.check && options_.float32) {
+    // The interpreter's float32 order: s * K rounded, then M -/+ it rounded.
+    runtime::SystemMatrix scaled = runtime::scaled(factor.as_float(), *k);
+    runtime::round_to_float32(scaled);
+    want = runtime::add(*m, scaled, 1.0, sum.subtract ? -1.0 : 1.0, &in.patterns());
+    runtime::round_to_float32(*want);
+  } else if (options_.check) {
+    want = runtime::add(*m, *k, 1.0, beta, &in.patterns());
+  }
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
-  if (!runtime::add_into(*m, 1.0, *k, beta,
-                         [this](int64_t tasks, const std::function<void(int64_t)>& task) {
-                           executor_->for_each(tasks, task);
-                         })) {
+  if (!runtime::add_into(
+          *m, 1.0, *k, beta,
+          [this](int64_t tasks, const std::function<void(int64_t)>& task) {
+            executor_->for_each(tasks, task);
+          },
+          options_.float32)) {
     s.stats.status =
         "interpreted: " + sum.base->name + " has blocks outside the pattern of " + sum.scaled->name;
     return false;

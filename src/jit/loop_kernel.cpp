@@ -130,6 +130,26 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   const double cpu = thread_cpu_ms();
   const SystemBinding& b = e->traced.binding;
   const SystemTrace& t = *e->traced.trace;
+  // The matrices are constant while the loop runs: their zero blocks are dropped once, before
+  // anything is bound. Under --float32 the copy is binary32; a matrix with a value that is
+  // not one (bound by the host) leaves the call to the interpreter.
+  if (!t.matrices_in_place)
+    for (size_t i = 0; i < b.arrays.size(); ++i) {
+      if (b.arrays[i].part != SystemBinding::Array::Part::Values) continue;
+      const double before = thread_cpu_ms();
+      PrunedMatrix& p = e->pruned[b.arrays[i].var];
+      const bool exact = p.assign(*in.variable(*b.arrays[i].var).matrix(), t.arrays[i].single);
+      e->prune_cpu_ms += thread_cpu_ms() - before;
+      if (!exact) {
+        ++e->not_binary32;
+        e->stats.note = "; " + std::to_string(e->not_binary32) + " call" +
+                        (e->not_binary32 > 1 ? "s" : "") + " ran interpreted: '" +
+                        b.arrays[i].var->name + "' holds values that are not binary32";
+        return false;
+      }
+      e->kept += p.kept;
+      e->total += p.total;
+    }
   Saved saved;
   if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
   // A vector first assigned in the loop or run is made with the shape of its model: a value
@@ -165,29 +185,23 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
           arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
                                           : const_cast<double*>(v.tensor().floats());
           break;
-        case Part::RowPtr: {
-          if (t.matrices_in_place) {
-            arrays[i] = const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data());
-            break;
-          }
-          // The matrix is constant while the loop runs: its zero blocks are dropped once.
-          const double before = thread_cpu_ms();
-          PrunedMatrix& p = e->pruned[b.arrays[i].var];
-          p.assign(*v.matrix());
-          e->kept += p.kept;
-          e->total += p.total;
-          e->prune_cpu_ms += thread_cpu_ms() - before;
-          arrays[i] = p.row_ptr.data();
+        case Part::RowPtr:
+          arrays[i] = t.matrices_in_place
+                          ? const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data())
+                          : e->pruned[b.arrays[i].var].row_ptr.data();
           break;
-        }
         case Part::Cols:
           arrays[i] = t.matrices_in_place
                           ? const_cast<int32_t*>(v.matrix()->pattern().col_idx().data())
                           : e->pruned[b.arrays[i].var].cols.data();
           break;
         case Part::Values:
-          arrays[i] = t.matrices_in_place ? const_cast<double*>(std::as_const(*v.matrix()).values())
-                                          : e->pruned[b.arrays[i].var].values.data();
+          if (t.matrices_in_place)
+            arrays[i] = const_cast<double*>(std::as_const(*v.matrix()).values());
+          else if (t.arrays[i].single)
+            arrays[i] = e->pruned[b.arrays[i].var].values32.data();
+          else
+            arrays[i] = e->pruned[b.arrays[i].var].values.data();
           break;
         case Part::Field: {
           runtime::Field& f = bound_field(b.arrays[i], in);
@@ -244,6 +258,10 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
                   e->prune_cpu_ms);
     e->stats.note = note;
   }
+  if (e->not_binary32 > 0)
+    e->stats.note += "; " + std::to_string(e->not_binary32) + " call" +
+                     (e->not_binary32 > 1 ? "s" : "") +
+                     " ran interpreted: a matrix held values that are not binary32";
   if (e->handed_back > 0)
     e->stats.note += "; " + std::to_string(e->handed_back) + " call" +
                      (e->handed_back > 1 ? "s" : "") +

@@ -2,6 +2,7 @@
 #include "jit/pruned_matrix.h"
 
 #include <bit>
+#include <type_traits>
 
 namespace simit::jit {
 
@@ -40,10 +41,11 @@ void fit(std::vector<T>& v, size_t n) {
 // Rows with N x N blocks; n is the run-time size when N is 0. Two passes: the first counts
 // the non-zero blocks, so that the arrays hold only those (on a first call, when the matrix
 // is still on its full pattern, more than half of its blocks may be zero); the second copies
-// each of them (by columns: a compiled product reads block column j as one vector).
-template <int N>
-void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v, size_t rows,
-           int n) {
+// each of them (by columns: a compiled product reads block column j as one vector), as
+// binary32 when T is float (false if a value is not one).
+template <int N, class T>
+bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int32_t* ci,
+           const double* v, size_t rows, int n) {
   const int m = N ? N : n;
   const int bs = m * m;
   const size_t blocks = static_cast<size_t>(rp[rows]);
@@ -51,29 +53,48 @@ void prune(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* 
   for (size_t k = 0; k < blocks; ++k)
     nonzero += zero_block<N>(v + k * static_cast<size_t>(bs), bs) ? 0 : 1;
   fit(p.cols, nonzero);
-  fit(p.values, nonzero * static_cast<size_t>(bs) +
-                    (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
+  fit(values, nonzero * static_cast<size_t>(bs) +
+                  (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
-  double* out = p.values.data();
+  T* out = values.data();
+  bool exact = true;
   int32_t at = 0;
   p.row_ptr[0] = 0;
   for (size_t r = 0; r < rows; ++r) {
     for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
       const double* blk = v + static_cast<size_t>(k) * bs;
       if (zero_block<N>(blk, bs)) continue;
-      double* o = out + static_cast<size_t>(at) * bs;
+      T* o = out + static_cast<size_t>(at) * bs;
       for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) o[j * m + i] = blk[i * m + j];
+        for (int i = 0; i < m; ++i) {
+          const double x = blk[i * m + j];
+          o[j * m + i] = static_cast<T>(x);
+          // A NaN stays a NaN (its payload is not the interpreter's concern).
+          if constexpr (std::is_same_v<T, float>)
+            exact = exact && (static_cast<double>(o[j * m + i]) == x || x != x);
+        }
       cols[at++] = ci[k];
     }
     p.row_ptr[r + 1] = at;
   }
   p.kept = at;
+  return exact;
+}
+
+template <int N>
+bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* ci, const double* v,
+                size_t rows, int n) {
+  if (single) {
+    std::vector<double>().swap(p.values);
+    return prune<N>(p, p.values32, rp, ci, v, rows, n);
+  }
+  std::vector<float>().swap(p.values32);
+  return prune<N>(p, p.values, rp, ci, v, rows, n);
 }
 
 }  // namespace
 
-void PrunedMatrix::assign(const runtime::SystemMatrix& m) {
+bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single) {
   const auto& rp = m.pattern().row_ptr();
   const int32_t* ci = m.pattern().col_idx().data();
   const size_t rows = rp.size() - 1;
@@ -81,10 +102,10 @@ void PrunedMatrix::assign(const runtime::SystemMatrix& m) {
   total = m.pattern().nnz();
   const int n = m.block_rows();
   switch (n) {
-    case 1: return prune<1>(*this, rp.data(), ci, m.values(), rows, n);
-    case 2: return prune<2>(*this, rp.data(), ci, m.values(), rows, n);
-    case 3: return prune<3>(*this, rp.data(), ci, m.values(), rows, n);
-    default: return prune<0>(*this, rp.data(), ci, m.values(), rows, n);
+    case 1: return prune_into<1>(*this, single, rp.data(), ci, m.values(), rows, n);
+    case 2: return prune_into<2>(*this, single, rp.data(), ci, m.values(), rows, n);
+    case 3: return prune_into<3>(*this, single, rp.data(), ci, m.values(), rows, n);
+    default: return prune_into<0>(*this, single, rp.data(), ci, m.values(), rows, n);
   }
 }
 

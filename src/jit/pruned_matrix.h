@@ -18,10 +18,16 @@ struct PrunedMatrix {
   // at the end: a compiled product reads each n-component column as a vector of bit_ceil(n)
   // lanes, the last column of the last block reaching into them.
   std::vector<double> values;
+  // Under --float32 every value a program makes is a binary32 value (docs/arithmetic.md), so
+  // the copy holds them as binary32, laid out as `values`: half the bytes a product streams.
+  std::vector<float> values32;
   int64_t kept = 0, total = 0;  // blocks
 
-  // Rebuilds the arrays from `m` (float components), reusing their storage while it fits.
-  void assign(const runtime::SystemMatrix& m);
+  // Rebuilds the arrays from `m` (float components), reusing their storage while it fits:
+  // into values32 when `single`, else into values. False (and the arrays not to be used)
+  // when `single` and some value of `m` is not a binary32 value (a matrix the host bound
+  // with binary64 values), which a binary32 copy would change.
+  bool assign(const runtime::SystemMatrix& m, bool single = false);
 };
 
 }  // namespace simit::jit

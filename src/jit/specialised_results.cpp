@@ -55,7 +55,7 @@ std::vector<const int32_t*> TraceController::prepare_results(
 void TraceController::guard_results(Entry& e, interp::SiteCall& call,
                                     const std::vector<double>& scalars) {
   const Trace& t = *e.traced.trace;
-  if (t.writes_fields || options_.float32) return;
+  if (t.writes_fields) return;
   if (!e.deciders) {
     e.deciders = write_deciders(t);
     if (!e.deciders->unguardable.empty()) e.full_why = e.deciders->unguardable;

@@ -396,11 +396,23 @@ bool blocks_within(const MatrixPattern& a, const MatrixPattern& b) {
 
 }  // namespace
 
-bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
-              const ForEachTask& for_each) {
-  if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
-      a.block_cols() != b.block_cols())
-    return false;
+namespace {
+
+// add_into's arithmetic for one component: x + beta * o, with x the A part of the union's
+// sum (0.0 + alpha a, or alpha a where the patterns are one); under --float32 the product and
+// the sum are each rounded to binary32, as the interpreter rounds `beta * B` and the sum.
+template <bool F32>
+double sum_component(double x, double beta, double o) {
+  if constexpr (F32) {
+    return static_cast<float>(x + static_cast<double>(static_cast<float>(beta * o)));
+  } else {
+    return x + beta * o;
+  }
+}
+
+template <bool F32>
+void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
+                     const ForEachTask& for_each) {
   const int bs = b.block_size();
   double* vb = b.values();
   const double* va = a.values();
@@ -417,11 +429,11 @@ bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
     const int64_t n = static_cast<int64_t>(b.value_count());
     run((n + kValuesPerTask - 1) / kValuesPerTask, [&](int64_t t) {
       const int64_t end = std::min(n, (t + 1) * kValuesPerTask);
-      for (int64_t i = t * kValuesPerTask; i < end; ++i) vb[i] = alpha * va[i] + beta * vb[i];
+      for (int64_t i = t * kValuesPerTask; i < end; ++i)
+        vb[i] = sum_component<F32>(alpha * va[i], beta, vb[i]);
     });
-    return true;
+    return;
   }
-  if (!blocks_within(a.pattern(), b.pattern())) return false;
   // add()'s sum over the union, whose blocks are b's: 0.0 + alpha a where a has the block
   // (+0.0 where it has none), then + beta b.
   const MatrixPattern &pa = a.pattern(), &pb = b.pattern();
@@ -434,13 +446,59 @@ bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
         double* o = vb + static_cast<size_t>(k) * bs;
         if (i < pa.row_ptr()[r + 1] && pa.col_idx()[i] == pb.col_idx()[k]) {
           const double* x = va + static_cast<size_t>(i++) * bs;
-          for (int c = 0; c < bs; ++c) o[c] = (0.0 + alpha * x[c]) + beta * o[c];
+          for (int c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0 + alpha * x[c], beta, o[c]);
         } else {
-          for (int c = 0; c < bs; ++c) o[c] = 0.0 + beta * o[c];
+          for (int c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0, beta, o[c]);
         }
       }
     }
   });
+}
+
+template <class T>
+bool binary32_values(const T* v, size_t n) {
+  auto is32 = [](double x) { return static_cast<double>(static_cast<float>(x)) == x || x != x; };
+  bool all = true;
+  for (size_t i = 0; i < n; ++i) {
+    if constexpr (std::is_same_v<T, Complex>) {
+      all = all && is32(v[i].real()) && is32(v[i].imag());
+    } else {
+      all = all && is32(v[i]);
+    }
+  }
+  return all;
+}
+
+}  // namespace
+
+bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
+              const ForEachTask& for_each, bool float32) {
+  if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
+      a.block_cols() != b.block_cols())
+    return false;
+  if (a.shared_pattern() != b.shared_pattern() && !blocks_within(a.pattern(), b.pattern()))
+    return false;
+  if (float32)
+    add_into_values<true>(a, alpha, b, beta, for_each);
+  else
+    add_into_values<false>(a, alpha, b, beta, for_each);
+  return true;
+}
+
+void round_to_float32(SystemMatrix& m) {
+  if (m.kind() == ComponentKind::Float) {
+    double* v = m.values();
+    for (size_t i = 0; i < m.value_count(); ++i) v[i] = static_cast<float>(v[i]);
+  } else if (m.kind() == ComponentKind::Complex) {
+    Complex* c = m.complexes();
+    for (size_t i = 0; i < m.value_count(); ++i)
+      c[i] = Complex(static_cast<float>(c[i].real()), static_cast<float>(c[i].imag()));
+  }
+}
+
+bool is_binary32(const SystemMatrix& m) {
+  if (m.kind() == ComponentKind::Float) return binary32_values(m.values(), m.value_count());
+  if (m.kind() == ComponentKind::Complex) return binary32_values(m.complexes(), m.value_count());
   return true;
 }
 

@@ -36,9 +36,15 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha = 1.
 // leaves B alone otherwise. The JIT computes `A = M - s * K` so in the matrix K's map made.
 // `for_each(tasks, task)`, when given, runs task(0 .. tasks-1) on the caller's threads (each
 // task computes its own rows: the bits do not depend on how the tasks run).
+// With `float32` (the --float32 mode), the bits of the interpreter's `A + beta * B` there:
+// beta * B rounded to binary32, then the sum rounded (docs/arithmetic.md).
 using ForEachTask = std::function<void(int64_t, const std::function<void(int64_t)>&)>;
 bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
-              const ForEachTask& for_each = {});
+              const ForEachTask& for_each = {}, bool float32 = false);
+// --float32: rounds every float component (and complex part) to the nearest binary32 value,
+// and whether every one is one already (a NaN counts as one).
+void round_to_float32(SystemMatrix& m);
+bool is_binary32(const SystemMatrix& m);
 // A .* B: component products over the union of the patterns.
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry = nullptr);

@@ -142,6 +142,8 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
   // instruction rather than three.
   const unsigned width = std::bit_ceil(static_cast<unsigned>(bs));
   auto* vec = llvm::FixedVectorType::get(f64, width);
+  auto* vec32 = llvm::FixedVectorType::get(b_.getFloatTy(), width);
+  const bool single = slots_[static_cast<size_t>(op.values)].single;
   Value* sums;
   {
     llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
@@ -178,6 +180,13 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
                               b_.CreateInBoundsGEP(f64, arrays_[op.values],
                                                    b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
                 static_cast<uint64_t>(i));
+        } else if (single) {
+          // Under float32 the copy holds binary32 values: widened exactly, half the bytes.
+          llvm::LoadInst* column =
+              b_.CreateLoad(vec32, b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.values],
+                                                        b_.CreateAdd(blk, b_.getInt64(j * bs))));
+          column->setAlignment(llvm::Align(4));
+          a = b_.CreateFPExt(column, vec);
         } else {
           llvm::LoadInst* column =
               b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],

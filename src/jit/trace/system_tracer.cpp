@@ -30,6 +30,11 @@ TracedSystem SystemTracer::run() {
     // made once per call for all iterations; a run without a loop multiplies once and reads
     // the matrix where it is, as the interpreter does.
     t_.matrices_in_place = !loop;
+    // Under float32 that copy is binary32 (PrunedMatrix::values32): every value of a
+    // program's matrix is a binary32 value then (docs/arithmetic.md).
+    if (loop && float32_)
+      for (const auto& [var, mat] : matrix_)
+        t_.arrays[static_cast<size_t>(mat.values)].single = true;
     // A kernel that reaches an error statement puts the variables back for the interpreter
     // to run the statements again; it could not put a field back.
     if (!t_.errors.empty() && first_field_write_ < run_.size()) {
