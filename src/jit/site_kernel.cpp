@@ -4,7 +4,11 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <initializer_list>
+#include <memory>
+#include <mutex>
 #include <sstream>
+#include <unordered_map>
 
 #include "interp/exec_state.h"
 #include "interp/runtime_error.h"
@@ -58,6 +62,68 @@ bool find_positions(const ArraySlot& a, const interp::SiteCall& call, std::vecto
       out[k++] = p.find(row, col);
     }
   return true;
+}
+
+// ---- Stamps (MapArgs::array_version_in): for an executor that keeps copies of the arrays
+// between calls, a number naming an array's contents for good, hashed from what decides them
+// with a tag per kind of array; never 0 (unknown). Two contents share a stamp only by a
+// 64-bit hash collision.
+
+enum StampKind : uint64_t {
+  kFieldStamp = 1,
+  kEndpointStamp,
+  kPatternStamp,
+  kSpecialStamp,
+  kSplitStamp
+};
+
+uint64_t mixed(uint64_t h) {  // splitmix64's finaliser
+  h ^= h >> 30;
+  h *= 0xbf58476d1ce4e5b9ULL;
+  h ^= h >> 27;
+  h *= 0x94d049bb133111ebULL;
+  return h ^ (h >> 31);
+}
+
+uint64_t stamp(std::initializer_list<uint64_t> parts) {
+  uint64_t h = 0;
+  for (uint64_t p : parts) h = mixed(h ^ mixed(p + 0x9e3779b97f4a7c15ULL));
+  return h ? h : 1;
+}
+
+// A field's contents: its set (a process-wide identity), its number there and its write
+// version, which every mutable access counts. A set whose fields are pinned has handed its
+// host pointers it writes through without counting (a scene's stepper): unknown.
+uint64_t field_stamp(const runtime::Set& set, int field) {
+  if (set.fields_pinned()) return 0;
+  return stamp(
+      {kFieldStamp, set.id(), static_cast<uint64_t>(field), set.field(field).write_version()});
+}
+
+// A number naming the pattern `p` for good: the same while it lives, never another
+// pattern's (its address alone may be a later pattern's once it is freed). A pattern never
+// changes its tables, so the number names them.
+uint64_t pattern_number(const runtime::PatternPtr& p) {
+  struct Known {
+    std::weak_ptr<const runtime::MatrixPattern> pattern;
+    uint64_t number = 0;
+  };
+  static std::mutex mutex;
+  static std::unordered_map<const runtime::MatrixPattern*, Known> known;
+  static uint64_t next = 0;
+  static size_t sweep_at = 256;
+  std::lock_guard<std::mutex> lock(mutex);
+  Known& k = known[p.get()];
+  if (k.number == 0 || k.pattern.owner_before(p) || p.owner_before(k.pattern)) {
+    k.pattern = p;
+    k.number = ++next;
+  }
+  const uint64_t number = k.number;
+  if (known.size() >= sweep_at) {  // forget the patterns freed since
+    std::erase_if(known, [](const auto& entry) { return entry.second.pattern.expired(); });
+    sweep_at = std::max<size_t>(256, 2 * known.size());
+  }
+  return number;
 }
 
 }  // namespace
@@ -150,6 +216,18 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   // another memory (a GPU's).
   std::vector<size_t> bytes(t.arrays.size(), 0);
   std::vector<uint8_t> written(t.arrays.size(), 0);
+  // For an executor that keeps copies between calls (the GPU's), each array's stamps and
+  // whether it is a zeroed result (MapArgs::array_version_in). A field's "in" before this
+  // call's own mutable access (which counts as a write), its "out" after all of them.
+  const bool resident = e.on_device;
+  std::vector<uint64_t> version_in(t.arrays.size(), 0), version_out(t.arrays.size(), 0);
+  std::vector<uint8_t> zeroed(t.arrays.size(), 0);
+  auto field_slot_stamp = [&](const ArraySlot& a) {
+    return field_stamp(runtime::member_set(call.target, a.member), a.index);
+  };
+  if (resident)
+    for (size_t i = 0; i < t.arrays.size(); ++i)
+      if (t.arrays[i].kind == ArraySlot::Kind::Field) version_in[i] = field_slot_stamp(t.arrays[i]);
   // Writable arrays first: taking one for writing may copy it (copy-on-write), and the
   // pointers read afterwards then see the copy.
   for (int pass = 0; pass < 2; ++pass)
@@ -185,6 +263,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           } else {
             return false;
           }
+          zeroed[i] = 1;  // the interpreter's results and prepare_results' are zeroed
           break;
         }
         case ArraySlot::Kind::Table: {
@@ -194,6 +273,20 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           bytes[i] = (table ? e.plan->table_entries(a.index)
                             : (full ? full->assembly().table.size() : 0)) *
                      sizeof(int32_t);
+          if (!resident) break;
+          // A split table: named by the plan's build; a pattern's table (full, or
+          // specialised: the full pattern's positions in the specialised one): by the
+          // patterns; a vector result's member table of an unsplit call: unknown.
+          if (table && writes == MapWrites::Deferred)
+            version_in[i] =
+                stamp({kSplitStamp, e.plan->build_id(), static_cast<uint64_t>(a.index)});
+          else if (arrays[i] == tables[a.index] && full &&
+                   tables[a.index] == full->assembly().table.data())
+            version_in[i] = stamp({kPatternStamp, pattern_number(full)});
+          else if (arrays[i] == tables[a.index] && full && patterns[a.index])
+            version_in[i] =
+                stamp({kSpecialStamp, pattern_number(full), pattern_number(patterns[a.index])});
+          version_out[i] = version_in[i];
           break;
         }
         case ArraySlot::Kind::Deferred:
@@ -230,6 +323,18 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   args.array_written = written.data();
   args.scalar_count = scalars.size();
   args.arity = call.target.arity();
+  if (resident) {
+    for (size_t i = 0; i < t.arrays.size(); ++i)
+      if (t.arrays[i].kind == ArraySlot::Kind::Field)
+        version_out[i] = field_slot_stamp(t.arrays[i]);
+    args.array_version_in = version_in.data();
+    args.array_version_out = version_out.data();
+    args.array_zeroed = zeroed.data();
+    // The endpoint table: only ever appended to, which counts in the topology version.
+    args.endpoints_version =
+        stamp({kEndpointStamp, call.target.id(), call.target.topology_version(),
+               static_cast<uint64_t>(call.target.size())});
+  }
   interp::Trap& trap = call.interpreter.trap();
   const MapOutcome out = executor.run_map(*e.kernel, args, call.target.size(), chunk, writes,
                                           [&trap] { return trap.interrupt_pending(); });

@@ -28,6 +28,18 @@ struct MapArgs {
   const uint8_t* array_written = nullptr;
   size_t scalar_count = 0;
   int32_t arity = 0;
+  // Residency, for such an executor that keeps its copies between calls: per array, a stamp
+  // naming the host copy's contents before this call's own access (array_version_in) and
+  // after the caller bound it (array_version_out; they differ where binding a field for
+  // writing counts as a write). Equal stamps mean equal contents, for good (a stamp is never
+  // reused for other contents, not even at the address of a freed array); 0 means unknown:
+  // copied every call. array_zeroed: per array, nonzero when the host zeroed it for this call
+  // (a result): the copy is zeroed where it lies rather than copied. Likewise the endpoint
+  // table's stamp. Null arrays: every stamp 0, nothing zeroed.
+  const uint64_t* array_version_in = nullptr;
+  const uint64_t* array_version_out = nullptr;
+  const uint8_t* array_zeroed = nullptr;
+  uint64_t endpoints_version = 0;
 };
 
 // The elements [begin, end) of a map's target set.

@@ -39,6 +39,7 @@ struct Launch {
 struct Fake {
   int allocations = 0, frees = 0;
   long long to_device = 0, to_host = 0;
+  long long zeroed = 0;              // bytes set to zero (cuMemsetD8, cuMemsetD32)
   std::string ptx;                   // the last module loaded
   std::vector<std::string> modules;  // every module loaded, in order
   std::vector<Launch> launches;
@@ -124,6 +125,16 @@ DriverTable fake_table() {
   t.cuMemcpyDtoH = [](void* to, CUdeviceptr from, std::size_t bytes) {
     fake->to_host += static_cast<long long>(bytes);
     std::memcpy(to, reinterpret_cast<const void*>(from), bytes);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemsetD8 = [](CUdeviceptr to, unsigned char value, std::size_t count) {
+    fake->zeroed += value == 0 ? static_cast<long long>(count) : 0;
+    std::memset(reinterpret_cast<void*>(to), value, count);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemsetD32 = [](CUdeviceptr to, unsigned int value, std::size_t count) {
+    fake->zeroed += value == 0 ? static_cast<long long>(4 * count) : 0;
+    for (std::size_t i = 0; i < count; ++i) reinterpret_cast<unsigned int*>(to)[i] = value;
     return CUDA_SUCCESS;
   };
   t.cuLaunchKernel = [](CUfunction f, unsigned gx, unsigned, unsigned, unsigned bx, unsigned,

@@ -107,7 +107,15 @@ std::optional<Table> resolve_table(const GetProcAddress& get, std::string& why, 
   return table;
 }
 
+// The memory set entries: resolved apart from the others (DriverTable's comment says why).
+template <class Table, class Visit>
+void for_each_memset_entry(Table& t, Visit&& visit) {
+  visit("cuMemsetD8", 3020, t.cuMemsetD8);
+  visit("cuMemsetD32", 3020, t.cuMemsetD32);
+}
+
 const auto driver_entries = [](auto& table, auto&& visit) { for_each_entry(table, visit); };
+const auto memset_entries = [](auto& table, auto&& visit) { for_each_memset_entry(table, visit); };
 const auto stream_entries = [](auto& table, auto&& visit) { for_each_stream_entry(table, visit); };
 
 // dlopen(library) and its cuGetProcAddress; `handle` is the library's on success (null
@@ -168,6 +176,14 @@ std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string
   return resolve_table<DriverTable>(get, why, driver_entries);
 }
 
+bool resolve_memset(const GetProcAddress& get, DriverTable& table, std::string& why) {
+  const auto found = resolve_table<DriverTable>(get, why, memset_entries);
+  if (!found) return false;
+  table.cuMemsetD8 = found->cuMemsetD8;
+  table.cuMemsetD32 = found->cuMemsetD32;
+  return true;
+}
+
 std::optional<StreamTable> resolve_streams(const GetProcAddress& get, std::string& why) {
   return resolve_table<StreamTable>(get, why, stream_entries);
 }
@@ -184,6 +200,7 @@ std::optional<DriverTable> load_driver(std::string& why) {
   const auto get = open_library("libcuda.so.1", why, lib);
   if (!get) return std::nullopt;
   auto table = resolve_driver(*get, why);
+  if (table && !resolve_memset(*get, *table, why)) table.reset();
   // On success the library stays loaded for the process's life: the table points into it.
   if (!table) dlclose(lib);
   return table;
@@ -315,6 +332,23 @@ void Device::to_host(DeviceArray& array) {
           "of " + std::to_string(array.bytes) + " bytes");
   }
   array.device_dirty = false;
+}
+
+void Device::zero(DeviceArray& array) {
+  check_single_writer(array);
+  if (array.bytes != 0) {
+    require_open("zero");
+    if (!driver_.cuMemsetD8 || !driver_.cuMemsetD32)
+      throw std::logic_error("zero on a CUDA driver table without cuMemsetD8 and cuMemsetD32");
+    // cuMemAlloc's memory is aligned for any type: words wherever the size allows.
+    if (array.bytes % 4 == 0)
+      check(driver_.cuMemsetD32(array.device, 0u, array.bytes / 4), "cuMemsetD32",
+            "of " + std::to_string(array.bytes) + " bytes");
+    else
+      check(driver_.cuMemsetD8(array.device, 0, array.bytes), "cuMemsetD8",
+            "of " + std::to_string(array.bytes) + " bytes");
+  }
+  array.host_dirty = false;
 }
 
 CUmodule Device::load_module(const std::string& ptx) {

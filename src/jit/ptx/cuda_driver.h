@@ -88,6 +88,10 @@ using PFN_cuMemcpyHtoD_v3020 = CUresult (*)(CUdeviceptr destination, const void*
                                             std::size_t bytes);
 using PFN_cuMemcpyDtoH_v3020 = CUresult (*)(void* destination, CUdeviceptr source,
                                             std::size_t bytes);
+using PFN_cuMemsetD8_v3020 = CUresult (*)(CUdeviceptr destination, unsigned char value,
+                                          std::size_t count);
+using PFN_cuMemsetD32_v3020 = CUresult (*)(CUdeviceptr destination, unsigned int value,
+                                           std::size_t count);
 using PFN_cuLaunchKernel_v4000 = CUresult (*)(CUfunction function, unsigned int grid_x,
                                               unsigned int grid_y, unsigned int grid_z,
                                               unsigned int block_x, unsigned int block_y,
@@ -124,6 +128,12 @@ struct DriverTable {
   PFN_cuMemcpyHtoD_v3020 cuMemcpyHtoD = nullptr;      // cuMemcpyHtoD_v2
   PFN_cuMemcpyDtoH_v3020 cuMemcpyDtoH = nullptr;      // cuMemcpyDtoH_v2
   PFN_cuLaunchKernel_v4000 cuLaunchKernel = nullptr;  // the legacy default stream
+  // Device memory set to a value (the GPU executor zeroes results with them rather than
+  // copying zeros over). Not among the entries a Device needs to open (missing_entry does
+  // not list them, resolve_driver does not ask for them): load_driver resolves them apart
+  // (resolve_memset), and Device::zero refuses a table without them.
+  PFN_cuMemsetD8_v3020 cuMemsetD8 = nullptr;    // cuMemsetD8_v2
+  PFN_cuMemsetD32_v3020 cuMemsetD32 = nullptr;  // cuMemsetD32_v2
 };
 
 // ---- Streams, events, graphs, pinned host memory and device-to-device copies: what timing
@@ -192,6 +202,10 @@ using GetProcAddress =
 // first entry that failed and how, when one is missing.
 std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why);
 
+// Resolves the table's memory set entries (cuMemsetD8, cuMemsetD32) through `get` as
+// resolve_driver resolves the others; false with `why` when one is missing.
+bool resolve_memset(const GetProcAddress& get, DriverTable& table, std::string& why);
+
 // Resolves every entry of the stream table as resolve_driver does the driver table's.
 std::optional<StreamTable> resolve_streams(const GetProcAddress& get, std::string& why);
 // The first entry of `streams` that is not set, or nullptr when all are.
@@ -202,9 +216,9 @@ const char* missing_stream_entry(const StreamTable& streams);
 // or has no cuGetProcAddress. load_driver is this on "libcuda.so.1", then resolve_driver.
 std::optional<GetProcAddress> open_driver_library(const std::string& library, std::string& why);
 
-// dlopen("libcuda.so.1") (kept loaded for the process's life), then resolve_driver through
-// the driver's cuGetProcAddress. nullopt with `why` when there is no driver, when it is too
-// old to have cuGetProcAddress, or when an entry is missing.
+// dlopen("libcuda.so.1") (kept loaded for the process's life), then resolve_driver and
+// resolve_memset through the driver's cuGetProcAddress. nullopt with `why` when there is no driver,
+// when it is too old to have cuGetProcAddress, or when an entry is missing.
 std::optional<DriverTable> load_driver(std::string& why);
 
 // A failed driver call: the message names the call and the driver's error string, e.g.
@@ -293,6 +307,10 @@ class Device {
   void to_device(DeviceArray& array);
   // Copies device to host only when the device side is dirty; clears device_dirty.
   void to_host(DeviceArray& array);
+  // Sets the device copy's bytes to zero (cuMemsetD32 where the size is a whole number of
+  // words, else cuMemsetD8), for an array whose host copy is all zeros: clears host_dirty
+  // as a copy would. Throws std::logic_error when the table has no memory set entries.
+  void zero(DeviceArray& array);
 
   // A PTX module; a PTX the driver rejects throws with the driver's JIT error log.
   CUmodule load_module(const std::string& ptx);

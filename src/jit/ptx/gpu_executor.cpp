@@ -58,18 +58,27 @@ class GpuExecutor final : public Executor {
     ++call_;
     device_->make_current();
     copy_back_pending();
-    // Every array in: the host may have changed any of them since the last call.
+    // Each array in unless the device already holds what the host holds (its stamp), a
+    // zeroed result zeroed on the device.
+    auto stamp = [](const uint64_t* stamps, size_t i) { return stamps ? stamps[i] : 0; };
     std::vector<cuda::DeviceArray*> arrays(args.array_count, nullptr);
     pointers_host_.assign(args.array_count, 0);
     for (size_t i = 0; i < args.array_count; ++i) {
-      arrays[i] = to_device(args.arrays[i], args.array_bytes[i]);
+      const bool zeroed = args.array_zeroed && args.array_zeroed[i];
+      arrays[i] = to_device(args.arrays[i], args.array_bytes[i], stamp(args.array_version_in, i),
+                            zeroed ? Refresh::Zero : Refresh::Copy);
       pointers_host_[i] = arrays[i] ? arrays[i]->device : 0;
     }
     cuda::DeviceArray* scalars =
-        to_device(const_cast<double*>(args.scalars), args.scalar_count * sizeof(double));
+        to_device(const_cast<double*>(args.scalars), args.scalar_count * sizeof(double), 0);
     cuda::DeviceArray* endpoints =
         to_device(const_cast<int32_t*>(args.endpoints),
-                  static_cast<size_t>(n) * static_cast<size_t>(args.arity) * sizeof(int32_t));
+                  static_cast<size_t>(n) * static_cast<size_t>(args.arity) * sizeof(int32_t),
+                  args.endpoints_version);
+    // Until the launch is over, an array it writes holds nothing known (a launch that throws
+    // leaves it so).
+    for (size_t i = 0; i < args.array_count; ++i)
+      if (args.array_written[i] && arrays[i]) holder(args.arrays[i]).version = 0;
     const cuda::CUdeviceptr scalars_at = scalars ? scalars->device : 0;
     const cuda::CUdeviceptr endpoints_at = endpoints ? endpoints->device : 0;
 
@@ -90,6 +99,11 @@ class GpuExecutor final : public Executor {
     // run leaves the fields the elements before it wrote); after a deferred run that
     // succeeded, once finish_deferred has added the deferred blocks on the device, and then
     // without the deferred blocks themselves.
+    //
+    // Copied back at once rather than when the host reads them: the host reads fields,
+    // vectors and matrices through many paths (the interpreter, tensors read from fields,
+    // output, the finite check, the API's views), and each would need a hook that brings the
+    // device's copy back first.
     const bool later = writes == MapWrites::Deferred && code == 0;
     for (size_t i = 0; i < args.array_count; ++i)
       if (args.array_written[i] && arrays[i]) {
@@ -99,6 +113,10 @@ class GpuExecutor final : public Executor {
         else
           copy_back(*arrays[i]);
       }
+    // The host's copies as they are now (a deferred map's once finish_deferred has copied
+    // back what it wrote): what the device holds too.
+    for (size_t i = 0; i < args.array_count; ++i)
+      if (arrays[i]) holder(args.arrays[i]).version = stamp(args.array_version_out, i);
     evict();
     out.code = code;
     out.element = code ? element : -1;
@@ -169,7 +187,12 @@ class GpuExecutor final : public Executor {
   struct Mirror {
     cuda::DeviceArray array;
     long used = 0;  // the call that last used it
+    // The stamp (MapArgs::array_version_in) of the host contents the device copy holds; 0:
+    // not known to be the host's (never skipped).
+    uint64_t version = 0;
+    long refreshed = 0;  // the call that last copied or zeroed it (once per call)
   };
+  enum class Refresh { Copy, Zero };
   // A plan's gather index in device memory: per gather, its block, start and k arrays.
   struct IndexUpload {
     uint64_t build = 0;  // DeferredPlan::build_id of what was uploaded
@@ -240,22 +263,45 @@ class GpuExecutor final : public Executor {
     return gather_;
   }
 
-  // The device copy of `host` (`bytes` long), refreshed; null for an empty array.
-  cuda::DeviceArray* to_device(void* host, size_t bytes) {
+  // The device copy of `host` (`bytes` long) as the host has it: copied (or with Zero,
+  // zeroed) unless it already holds the host contents stamped `version` (0: unknown, always
+  // copied); an array two slots name is refreshed once per call. A new host address or size
+  // is a fresh mirror, which holds nothing known. Null for an empty array.
+  cuda::DeviceArray* to_device(void* host, size_t bytes, uint64_t version,
+                               Refresh how = Refresh::Copy) {
     if (!host || bytes == 0) return nullptr;
     Mirror& m = mirrors_[host];
     if (m.array.bytes != bytes || m.array.device == 0) {
       device_->free(m.array);
       m.array = device_->alloc(host, bytes);
+      m.version = 0;
+      m.refreshed = 0;
       ++traffic_.allocations;
     }
     m.used = call_;
-    m.array.host_dirty = true;
+    if (m.refreshed == call_) return &m.array;
+    m.refreshed = call_;
     m.array.device_dirty = false;
-    device_->to_device(m.array);
-    traffic_.bytes_to_device += static_cast<long long>(bytes);
+    if (how == Refresh::Zero) {
+      m.array.host_dirty = false;
+      device_->zero(m.array);
+      ++traffic_.zeroed;
+      traffic_.bytes_zeroed += static_cast<long long>(bytes);
+    } else if (version != 0 && m.version == version) {
+      m.array.host_dirty = false;
+      ++traffic_.uploads_skipped;
+      traffic_.bytes_skipped += static_cast<long long>(bytes);
+    } else {
+      m.array.host_dirty = true;
+      device_->to_device(m.array);
+      ++traffic_.uploads;
+      traffic_.bytes_to_device += static_cast<long long>(bytes);
+    }
+    m.version = how == Refresh::Zero ? 0 : version;
     return &m.array;
   }
+
+  Mirror& holder(const void* host) { return mirrors_.at(host); }
 
   void evict() {
     for (auto it = mirrors_.begin(); it != mirrors_.end();) {
@@ -346,6 +392,8 @@ class GpuExecutor final : public Executor {
 };
 
 std::unique_ptr<Executor> open(const cuda::DriverTable& table, bool emulated) {
+  if (!table.cuMemsetD8 || !table.cuMemsetD32)
+    throw std::invalid_argument("a GPU executor needs the driver's cuMemsetD8 and cuMemsetD32");
   auto device = std::make_unique<cuda::Device>(table);
   device->open(0);
   return std::make_unique<GpuExecutor>(std::move(device), emulated);

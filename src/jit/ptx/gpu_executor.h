@@ -9,11 +9,19 @@
 // the device (finish_deferred: the gather kernel, jit/ptx/gather_kernel.h, one thread per
 // block that has deferred blocks, from the plan's gather index, uploaded once per plan build).
 //
-// Data: each array the kernel reads is copied to the device before the launch and each array
-// it writes is copied back after it (the host copy stays the one the rest of the program
-// reads); a deferred map's written arrays are copied back after the gather, all but the
-// deferred blocks, which never leave the device. Device memory is kept per host array between
-// calls and reused while its size holds.
+// Data: device memory is kept per host array between calls (a mirror, reused while the
+// array's address and size hold), and remembers which host contents it holds by the stamp
+// the caller gives each array (MapArgs::array_version_in and _out: a field's write version
+// with its set's identity, a pattern's table by the pattern, the endpoint table by the set's
+// topology). Before a launch an array is copied to the device only when its stamp differs
+// from the mirror's (or is 0, unknown: vectors, matrices, the deferred blocks, the scalars);
+// a result the host zeroed is zeroed on the device (cuMemsetD32) rather than copied. Each
+// array the kernel writes is copied back after the launch, and its mirror takes the stamp
+// the host's copy has then (the host copy stays the one the rest of the program reads); a
+// deferred map's written arrays are copied back after the gather, all but the deferred
+// blocks, which never leave the device. Copying back only when the host reads an array is
+// not done: every host read (fields, tensors, the interpreter, output, the API's views)
+// would need a hook that first brings the device's copy back.
 //
 // Emulated: a driver table over host memory (jit/ptx/host_driver.h) stands in for the GPU,
 // and the kernels are the CPU target's, called on the copies in that "device" memory (the
@@ -54,9 +62,16 @@ bool is_emulated_gpu_executor(const Executor& executor);
 // Figures of a GPU executor's data path so far (for --jit-stats and the tests).
 struct GpuTraffic {
   long launches = 0;
-  long long bytes_to_device = 0;
+  long long bytes_to_device = 0;  // map arguments copied in, and gather indices
   long long bytes_to_host = 0;
   long allocations = 0;
+  // Map arguments (arrays, scalars, endpoint tables): copied in; not copied because the
+  // device held the host's contents already; zeroed on the device (results).
+  long uploads = 0;
+  long uploads_skipped = 0;
+  long long bytes_skipped = 0;
+  long zeroed = 0;
+  long long bytes_zeroed = 0;
   long gather_launches = 0;  // of the gather kernel (counted in launches too)
   long index_uploads = 0;    // gather indices copied to the device (once per plan build)
 };

@@ -79,6 +79,15 @@ CUresult dtoh(void* to, CUdeviceptr from, std::size_t bytes) {
   std::memcpy(to, reinterpret_cast<const void*>(from), bytes);
   return CUDA_SUCCESS;
 }
+CUresult memset8(CUdeviceptr to, unsigned char value, std::size_t count) {
+  std::memset(reinterpret_cast<void*>(to), value, count);
+  return CUDA_SUCCESS;
+}
+CUresult memset32(CUdeviceptr to, unsigned int value, std::size_t count) {
+  auto* words = reinterpret_cast<unsigned int*>(to);
+  for (std::size_t i = 0; i < count; ++i) words[i] = value;
+  return CUDA_SUCCESS;
+}
 CUresult launch(CUfunction, unsigned int, unsigned int, unsigned int, unsigned int, unsigned int,
                 unsigned int, unsigned int, CUstream, void**, void**) {
   return CUDA_ERROR_NOT_SUPPORTED;
@@ -108,6 +117,8 @@ DriverTable host_driver_table() {
   t.cuMemcpyHtoD = htod;
   t.cuMemcpyDtoH = dtoh;
   t.cuLaunchKernel = launch;
+  t.cuMemsetD8 = memset8;
+  t.cuMemsetD32 = memset32;
   return t;
 }
 
