@@ -4,18 +4,16 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
-#include <initializer_list>
-#include <memory>
-#include <mutex>
 #include <sstream>
-#include <unordered_map>
 
 #include "interp/exec_state.h"
 #include "interp/runtime_error.h"
 #include "interp/set_binding.h"
+#include "jit/array_stamps.h"
 #include "jit/controller_state.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
+#include "jit/ptx/gpu_executor.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
 #include "runtime/system_ops.h"
@@ -64,66 +62,30 @@ bool find_positions(const ArraySlot& a, const interp::SiteCall& call, std::vecto
   return true;
 }
 
-// ---- Stamps (MapArgs::array_version_in): for an executor that keeps copies of the arrays
-// between calls, a number naming an array's contents for good, hashed from what decides them
-// with a tag per kind of array; never 0 (unknown). Two contents share a stamp only by a
-// 64-bit hash collision.
-
-enum StampKind : uint64_t {
-  kFieldStamp = 1,
-  kEndpointStamp,
-  kPatternStamp,
-  kSpecialStamp,
-  kSplitStamp
-};
-
-uint64_t mixed(uint64_t h) {  // splitmix64's finaliser
-  h ^= h >> 30;
-  h *= 0xbf58476d1ce4e5b9ULL;
-  h ^= h >> 27;
-  h *= 0x94d049bb133111ebULL;
-  return h ^ (h >> 31);
+// "812 bytes", "41.5 KB", "18.4 MB".
+std::string bytes_text(long long bytes) {
+  std::ostringstream os;
+  os.precision(1);
+  if (bytes < 10 * 1024)
+    os << bytes << " bytes";
+  else if (bytes < 10 * 1024 * 1024)
+    os << std::fixed << static_cast<double>(bytes) / 1024.0 << " KB";
+  else
+    os << std::fixed << static_cast<double>(bytes) / (1024.0 * 1024.0) << " MB";
+  return os.str();
 }
 
-uint64_t stamp(std::initializer_list<uint64_t> parts) {
-  uint64_t h = 0;
-  for (uint64_t p : parts) h = mixed(h ^ mixed(p + 0x9e3779b97f4a7c15ULL));
-  return h ? h : 1;
-}
-
-// A field's contents: its set (a process-wide identity), its number there and its write
-// version, which every mutable access counts. A set whose fields are pinned has handed its
-// host pointers it writes through without counting (a scene's stepper): unknown.
-uint64_t field_stamp(const runtime::Set& set, int field) {
-  if (set.fields_pinned()) return 0;
-  return stamp(
-      {kFieldStamp, set.id(), static_cast<uint64_t>(field), set.field(field).write_version()});
-}
-
-// A number naming the pattern `p` for good: the same while it lives, never another
-// pattern's (its address alone may be a later pattern's once it is freed). A pattern never
-// changes its tables, so the number names them.
-uint64_t pattern_number(const runtime::PatternPtr& p) {
-  struct Known {
-    std::weak_ptr<const runtime::MatrixPattern> pattern;
-    uint64_t number = 0;
-  };
-  static std::mutex mutex;
-  static std::unordered_map<const runtime::MatrixPattern*, Known> known;
-  static uint64_t next = 0;
-  static size_t sweep_at = 256;
-  std::lock_guard<std::mutex> lock(mutex);
-  Known& k = known[p.get()];
-  if (k.number == 0 || k.pattern.owner_before(p) || p.owner_before(k.pattern)) {
-    k.pattern = p;
-    k.number = ++next;
+// --jit-stats for a site on the GPU: what its last call copied to the device, found there
+// already and zeroed there (in place of what an earlier call noted).
+void note_traffic(std::string& note, const ptx::GpuTraffic& before, const ptx::GpuTraffic& after) {
+  static const std::string kHead = "; last call to the device: ";
+  if (const size_t at = note.find(kHead); at != std::string::npos) {
+    const size_t end = note.find("; ", at + 2);
+    note.erase(at, end == std::string::npos ? std::string::npos : end - at);
   }
-  const uint64_t number = k.number;
-  if (known.size() >= sweep_at) {  // forget the patterns freed since
-    std::erase_if(known, [](const auto& entry) { return entry.second.pattern.expired(); });
-    sweep_at = std::max<size_t>(256, 2 * known.size());
-  }
-  return number;
+  note += kHead + bytes_text(after.bytes_to_device - before.bytes_to_device) + " copied, " +
+          bytes_text(after.bytes_skipped - before.bytes_skipped) + " there already, " +
+          bytes_text(after.bytes_zeroed - before.bytes_zeroed) + " zeroed";
 }
 
 }  // namespace
@@ -279,13 +241,13 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           // patterns; a vector result's member table of an unsplit call: unknown.
           if (table && writes == MapWrites::Deferred)
             version_in[i] =
-                stamp({kSplitStamp, e.plan->build_id(), static_cast<uint64_t>(a.index)});
+                stamp(StampKind::Split, {e.plan->build_id(), static_cast<uint64_t>(a.index)});
           else if (arrays[i] == tables[a.index] && full &&
                    tables[a.index] == full->assembly().table.data())
-            version_in[i] = stamp({kPatternStamp, pattern_number(full)});
+            version_in[i] = stamp(StampKind::Pattern, {pattern_number(full)});
           else if (arrays[i] == tables[a.index] && full && patterns[a.index])
-            version_in[i] =
-                stamp({kSpecialStamp, pattern_number(full), pattern_number(patterns[a.index])});
+            version_in[i] = stamp(StampKind::Specialised,
+                                  {pattern_number(full), pattern_number(patterns[a.index])});
           version_out[i] = version_in[i];
           break;
         }
@@ -330,11 +292,9 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     args.array_version_in = version_in.data();
     args.array_version_out = version_out.data();
     args.array_zeroed = zeroed.data();
-    // The endpoint table: only ever appended to, which counts in the topology version.
-    args.endpoints_version =
-        stamp({kEndpointStamp, call.target.id(), call.target.topology_version(),
-               static_cast<uint64_t>(call.target.size())});
+    args.endpoints_version = endpoints_stamp(call.target);
   }
+  const ptx::GpuTraffic before = resident ? ptx::gpu_traffic(executor) : ptx::GpuTraffic{};
   interp::Trap& trap = call.interpreter.trap();
   const MapOutcome out = executor.run_map(*e.kernel, args, call.target.size(), chunk, writes,
                                           [&trap] { return trap.interrupt_pending(); });
@@ -373,6 +333,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     }
     executor.finish_deferred(*e.plan, values);
   }
+  if (resident) note_traffic(e.stats.note, before, ptx::gpu_traffic(executor));
   specialise_results(e, call);
   return true;
 }

@@ -1,0 +1,177 @@
+// A fake CUDA driver table for the GPU executor's tests (gpu_executor_test.cpp,
+// gpu_residency_test.cpp): device memory is host memory, every copy and memory set is counted,
+// and each launch is recorded and handed to the test's `on_launch`.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "jit/ptx/cuda_driver.h"
+#include "jit/ptx/gather_kernel.h"
+#include "jit/ptx/ptx_target.h"
+
+namespace simit::jit::ptx::fake_gpu {
+
+using namespace simit::jit::cuda;
+
+// A driver whose device memory is host memory and whose launches call `on_launch`. Its two
+// functions: the map kernel's entry and the gather kernel's, told apart by their handles.
+inline int map_function = 0, gather_function = 0;
+struct Launch {
+  bool gather = false;
+  unsigned grid = 0, block = 0;
+  // A map kernel's parameters.
+  CUdeviceptr table = 0, scalars = 0, endpoints = 0, failure = 0;
+  int32_t begin = 0, end = 0;
+  // The gather kernel's.
+  GatherArgs g;
+};
+struct Fake {
+  int allocations = 0, frees = 0;
+  long long to_device = 0, to_host = 0;
+  long long zeroed = 0;              // bytes set to zero (cuMemsetD8, cuMemsetD32)
+  std::string ptx;                   // the last module loaded
+  std::vector<std::string> modules;  // every module loaded, in order
+  std::vector<Launch> launches;
+  std::function<void(const Launch&)> on_launch;
+};
+inline Fake* fake = nullptr;
+
+template <class T>
+T param(void** params, int i) {
+  T v;
+  std::memcpy(&v, params[i], sizeof v);
+  return v;
+}
+
+inline DriverTable fake_table() {
+  DriverTable t;
+  t.cuInit = [](unsigned) { return CUDA_SUCCESS; };
+  t.cuDriverGetVersion = [](int* v) {
+    *v = 13000;
+    return CUDA_SUCCESS;
+  };
+  t.cuGetErrorString = [](CUresult, const char** s) {
+    *s = "fake error";
+    return CUDA_SUCCESS;
+  };
+  t.cuDeviceGet = [](CUdevice* d, int) {
+    *d = 0;
+    return CUDA_SUCCESS;
+  };
+  t.cuDeviceGetCount = [](int* n) {
+    *n = 1;
+    return CUDA_SUCCESS;
+  };
+  t.cuDeviceGetName = [](char* name, int len, CUdevice) {
+    std::snprintf(name, static_cast<size_t>(len), "Fake GPU");
+    return CUDA_SUCCESS;
+  };
+  t.cuDeviceGetAttribute = [](int* v, CUdevice_attribute, CUdevice) {
+    *v = 9;
+    return CUDA_SUCCESS;
+  };
+  t.cuDeviceTotalMem = [](std::size_t* b, CUdevice) {
+    *b = 1 << 30;
+    return CUDA_SUCCESS;
+  };
+  t.cuDevicePrimaryCtxRetain = [](CUcontext* c, CUdevice) {
+    static int context;
+    *c = reinterpret_cast<CUcontext>(&context);
+    return CUDA_SUCCESS;
+  };
+  t.cuDevicePrimaryCtxRelease = [](CUdevice) { return CUDA_SUCCESS; };
+  t.cuCtxSetCurrent = [](CUcontext) { return CUDA_SUCCESS; };
+  t.cuCtxSynchronize = [] { return CUDA_SUCCESS; };
+  t.cuModuleLoadDataEx = [](CUmodule* m, const void* image, unsigned, CUjit_option*, void**) {
+    fake->ptx = static_cast<const char*>(image);
+    fake->modules.push_back(fake->ptx);
+    static int module;
+    *m = reinterpret_cast<CUmodule>(&module);
+    return CUDA_SUCCESS;
+  };
+  t.cuModuleUnload = [](CUmodule) { return CUDA_SUCCESS; };
+  t.cuModuleGetFunction = [](CUfunction* f, CUmodule, const char* name) {
+    const std::string n = name;
+    if (n != kMapEntry && n != kGatherEntry) return CUDA_ERROR_NOT_FOUND;
+    *f = reinterpret_cast<CUfunction>(n == kMapEntry ? &map_function : &gather_function);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemAlloc = [](CUdeviceptr* p, std::size_t bytes) {
+    ++fake->allocations;
+    *p = reinterpret_cast<CUdeviceptr>(std::malloc(bytes));
+    return CUDA_SUCCESS;
+  };
+  t.cuMemFree = [](CUdeviceptr p) {
+    ++fake->frees;
+    std::free(reinterpret_cast<void*>(p));
+    return CUDA_SUCCESS;
+  };
+  t.cuMemcpyHtoD = [](CUdeviceptr to, const void* from, std::size_t bytes) {
+    fake->to_device += static_cast<long long>(bytes);
+    std::memcpy(reinterpret_cast<void*>(to), from, bytes);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemcpyDtoH = [](void* to, CUdeviceptr from, std::size_t bytes) {
+    fake->to_host += static_cast<long long>(bytes);
+    std::memcpy(to, reinterpret_cast<const void*>(from), bytes);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemsetD8 = [](CUdeviceptr to, unsigned char value, std::size_t count) {
+    fake->zeroed += value == 0 ? static_cast<long long>(count) : 0;
+    std::memset(reinterpret_cast<void*>(to), value, count);
+    return CUDA_SUCCESS;
+  };
+  t.cuMemsetD32 = [](CUdeviceptr to, unsigned int value, std::size_t count) {
+    fake->zeroed += value == 0 ? static_cast<long long>(4 * count) : 0;
+    for (std::size_t i = 0; i < count; ++i) reinterpret_cast<unsigned int*>(to)[i] = value;
+    return CUDA_SUCCESS;
+  };
+  t.cuLaunchKernel = [](CUfunction f, unsigned gx, unsigned, unsigned, unsigned bx, unsigned,
+                        unsigned, unsigned, CUstream, void** params, void**) {
+    Launch l;
+    l.grid = gx;
+    l.block = bx;
+    l.gather = f == reinterpret_cast<CUfunction>(&gather_function);
+    if (l.gather) {
+      l.g.values = reinterpret_cast<double*>(param<CUdeviceptr>(params, 0));
+      l.g.deferred = reinterpret_cast<const double*>(param<CUdeviceptr>(params, 1));
+      l.g.block = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 2));
+      l.g.start = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 3));
+      l.g.k = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 4));
+      l.g.blocks = param<uint32_t>(params, 5);
+      l.g.components = param<uint32_t>(params, 6);
+    } else {
+      l.table = param<CUdeviceptr>(params, 0);
+      l.scalars = param<CUdeviceptr>(params, 1);
+      l.endpoints = param<CUdeviceptr>(params, 2);
+      l.begin = param<int32_t>(params, 3);
+      l.end = param<int32_t>(params, 4);
+      l.failure = param<CUdeviceptr>(params, 5);
+    }
+    fake->launches.push_back(l);
+    if (fake->on_launch) fake->on_launch(l);
+    return CUDA_SUCCESS;
+  };
+  return t;
+}
+
+class GpuExecutorFake : public ::testing::Test {
+ protected:
+  void SetUp() override { fake = &state; }
+  void TearDown() override { fake = nullptr; }
+  Fake state;
+};
+
+template <class T>
+T* at(CUdeviceptr p) {
+  return reinterpret_cast<T*>(p);
+}
+
+}  // namespace simit::jit::ptx::fake_gpu
