@@ -1,6 +1,7 @@
 // The GPU executor (jit/ptx/gpu_executor.h) without a GPU: its launch path and copies against
 // a fake driver table (the gather kernel of a deferred assembly among them), and the gather
-// kernel's PTX through ptxas. Its whole data path over host memory: gpu_emulation_test.cpp.
+// kernel's PTX through ptxas. Its whole data path over host memory: gpu_emulation_test.cpp;
+// what stays on the device between calls: gpu_residency_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
