@@ -52,11 +52,16 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
       r.stride = r.vector ? target.arity() + 1 : t.pairs[static_cast<size_t>(index)];
       r.source = results[static_cast<size_t>(index)].table;
       if (r.vector) {
-        r.plain.assign(static_cast<size_t>(target.size()) * static_cast<size_t>(r.stride), 0);
-        for (int e = 0; e < target.size(); ++e)
+        // Entry m of an element: the element itself (m = 0) or its endpoint m - 1.
+        const size_t stride = static_cast<size_t>(r.stride);
+        const size_t arity = static_cast<size_t>(target.arity());
+        const int32_t* ends = target.endpoints();
+        r.plain.assign(static_cast<size_t>(target.size()) * stride, 0);
+        int32_t* plain = r.plain.data();
+        for (int32_t e = 0; e < target.size(); ++e)
           for (int m : r.written)
-            r.plain[static_cast<size_t>(e) * static_cast<size_t>(r.stride) + m] =
-                runtime::member_element(target, e, m);
+            plain[static_cast<size_t>(e) * stride + static_cast<size_t>(m)] =
+                m == 0 ? e : ends[static_cast<size_t>(e) * arity + static_cast<size_t>(m - 1)];
         r.source = r.plain.data();
       }
       results_.push_back(std::move(r));
@@ -64,7 +69,9 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
   }
   split_ = false;
   if (!split) return true;
+  bool fresh = false;  // build leaves the deferred blocks at -0.0
   if (!built_split_ || chunk_ != chunk) {
+    fresh = true;
     chunk_ = chunk;
     built_split_ = true;
     split_ok_ = true;
@@ -76,7 +83,8 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
   }
   if (!split_ok_) return false;
   split_ = true;
-  for (Result& r : results_) std::fill(r.scratch.begin(), r.scratch.end(), -0.0);
+  if (!fresh)
+    for (Result& r : results_) std::fill(r.scratch.begin(), r.scratch.end(), -0.0);
   return true;
 }
 
@@ -89,51 +97,70 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
 // knows the call does not write (jit/specialise.h); they point at the sink, which is never
 // added anywhere.
 bool DeferredPlan::build(Result& r, const runtime::Set& target, int64_t blocks) {
+  // Hot: a plan is built on a site's first split call and again whenever its pattern changes
+  // (a specialised result's, on the call after the one that recorded it), serially, once per
+  // table entry (a fem stiffness on 160k tets: 2.6 million). Hence raw pointers (the stores
+  // into the tables would otherwise make the compiler reload every vector's data) and a
+  // per-block record of the last element that wrote it rather than a search of the
+  // element's blocks.
   const size_t stride = static_cast<size_t>(r.stride);
-  r.split.assign(static_cast<size_t>(target.size()) * stride, 0);
+  const int32_t n = target.size();
+  r.split.assign(static_cast<size_t>(n) * stride, 0);
   r.dest.assign(1, -1);
-  std::vector<int32_t> owner(static_cast<size_t>(blocks), -1);
-  std::vector<int32_t> mine;  // the blocks of the element at hand
-  for (int e = 0; e < target.size(); ++e) {
-    const int32_t c = e / chunk_;
-    mine.clear();
-    for (int p : r.written) {
-      const size_t at = static_cast<size_t>(e) * stride + static_cast<size_t>(p);
-      const int32_t b = r.source[at];
-      if (b < 0) {
-        r.split[at] = -1;  // the sink
-        continue;
-      }
-      if (b >= blocks) return false;
-      if (std::find(mine.begin(), mine.end(), b) != mine.end()) return false;
-      mine.push_back(b);
-      int32_t& o = owner[static_cast<size_t>(b)];
-      if (o < 0) o = c;
-      if (o == c) {
-        r.split[at] = b;
-      } else {
-        r.split[at] = -1 - static_cast<int32_t>(r.dest.size());
-        r.dest.push_back(b);
+  struct Seen {
+    int32_t owner = -1;  // the chunk that adds into the block in place
+    int32_t last = -1;   // the last element that wrote it
+  };
+  std::vector<Seen> seen(static_cast<size_t>(blocks));
+  Seen* const state = seen.data();
+  const int32_t* const source = r.source;
+  int32_t* const split = r.split.data();
+  const int* const written = r.written.data();
+  const size_t places = r.written.size();
+  for (int32_t c = 0, first = 0; first < n; ++c, first += chunk_) {
+    const int32_t end = first + std::min(chunk_, n - first);
+    for (int32_t e = first; e < end; ++e) {
+      const size_t row = static_cast<size_t>(e) * stride;
+      for (size_t w = 0; w < places; ++w) {
+        const size_t at = row + static_cast<size_t>(written[w]);
+        const int32_t b = source[at];
+        if (b < 0) {
+          split[at] = -1;  // the sink
+          continue;
+        }
+        if (b >= blocks) return false;
+        Seen& s = state[b];
+        if (s.last == e) return false;  // the element writes the block through two members
+        s.last = e;
+        if (s.owner < 0) s.owner = c;
+        if (s.owner == c) {
+          split[at] = b;
+        } else {
+          split[at] = -1 - static_cast<int32_t>(r.dest.size());
+          r.dest.push_back(b);
+        }
       }
     }
   }
   r.scratch.assign(r.dest.size() * static_cast<size_t>(r.components), -0.0);
   // The gather index, by a counting sort of the deferred blocks by their block (k ascending
   // within each).
-  std::vector<int32_t> count(static_cast<size_t>(blocks) + 1, 0);
-  for (size_t k = 1; k < r.dest.size(); ++k) ++count[static_cast<size_t>(r.dest[k])];
+  const size_t deferred = r.dest.size();
+  std::vector<int32_t> count(static_cast<size_t>(blocks), 0);
+  for (size_t k = 1; k < deferred; ++k) ++count[static_cast<size_t>(r.dest[k])];
   r.gather_block.clear();
   r.gather_start.assign(1, 0);
-  std::vector<int32_t> slot(static_cast<size_t>(blocks), -1);
-  for (int64_t b = 0; b < blocks; ++b)
-    if (count[static_cast<size_t>(b)] > 0) {
-      slot[static_cast<size_t>(b)] = r.gather_start.back();
-      r.gather_block.push_back(static_cast<int32_t>(b));
-      r.gather_start.push_back(r.gather_start.back() + count[static_cast<size_t>(b)]);
-    }
-  r.gather_k.assign(r.dest.size() > 0 ? r.dest.size() - 1 : 0, 0);
-  for (size_t k = 1; k < r.dest.size(); ++k)
-    r.gather_k[static_cast<size_t>(slot[static_cast<size_t>(r.dest[k])]++)] =
+  for (int64_t b = 0; b < blocks; ++b) {
+    int32_t& c = count[static_cast<size_t>(b)];
+    if (c == 0) continue;
+    r.gather_block.push_back(static_cast<int32_t>(b));
+    const int32_t start = r.gather_start.back();
+    r.gather_start.push_back(start + c);
+    c = start;  // from here on: the block's next slot in gather_k
+  }
+  r.gather_k.assign(deferred > 0 ? deferred - 1 : 0, 0);
+  for (size_t k = 1; k < deferred; ++k)
+    r.gather_k[static_cast<size_t>(count[static_cast<size_t>(r.dest[k])]++)] =
         static_cast<int32_t>(k);
   return true;
 }

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <vector>
 
 #include "jit/defer_assembly.h"
@@ -159,6 +160,176 @@ TEST(DeferAssembly, SendsLaterChunksContributionsToDeferredBlocksInElementOrder)
   ASSERT_TRUE(plan.prepare(t, e, sources, 2, false));
   EXPECT_EQ(plan.table(0)[2 * 3 + 1], 2);
   EXPECT_EQ(plan.table(0)[4 * 3 + 2], 0);
+}
+
+// A trace adding 1.0 into each of `pairs` blocks of a matrix result per element.
+Trace matrix_sum_trace(int arity, int pairs) {
+  Trace t;
+  t.arity = arity;
+  t.reduce = true;
+  ArraySlot r;
+  r.kind = ArraySlot::Kind::Result;
+  r.written = true;
+  r.name = "K";
+  t.arrays.push_back(r);
+  t.pairs = {pairs};
+  for (int p = 0; p < pairs; ++p) {
+    auto one = std::make_shared<Expr>();
+    one->f = 1.0;
+    Stmt s;
+    s.kind = StmtKind::Assemble;
+    s.pair = p;
+    s.value = one;
+    t.body.push_back(s);
+  }
+  return t;
+}
+
+// The split tables of a plan, computed here the plain way: walking the elements in order, a
+// block's entries point at it while they lie in the chunk of its first writer, and every
+// later one takes the next deferred block; the gather index lists, per block in ascending
+// order, its deferred blocks in ascending order.
+struct ReferenceSplit {
+  std::vector<int32_t> table;
+  std::vector<int32_t> dest = {-1};
+  std::vector<int32_t> gather_block, gather_start = {0}, gather_k;
+};
+
+ReferenceSplit reference_split(const std::vector<int32_t>& source, int stride,
+                               const std::vector<int>& written, int32_t n, int32_t chunk,
+                               int32_t blocks) {
+  ReferenceSplit r;
+  r.table.assign(source.size(), 0);
+  std::vector<int32_t> first(static_cast<size_t>(blocks), -1);
+  for (int32_t e = 0; e < n; ++e)
+    for (int w : written) {
+      const size_t at = static_cast<size_t>(e) * static_cast<size_t>(stride) + w;
+      const int32_t b = source[at];
+      if (b < 0) {
+        r.table[at] = -1;
+        continue;
+      }
+      if (first[static_cast<size_t>(b)] < 0) first[static_cast<size_t>(b)] = e;
+      if (first[static_cast<size_t>(b)] / chunk == e / chunk) {
+        r.table[at] = b;
+      } else {
+        r.table[at] = -1 - static_cast<int32_t>(r.dest.size());
+        r.dest.push_back(b);
+      }
+    }
+  std::vector<std::vector<int32_t>> of(static_cast<size_t>(blocks));
+  for (size_t k = 1; k < r.dest.size(); ++k)
+    of[static_cast<size_t>(r.dest[k])].push_back(static_cast<int32_t>(k));
+  for (int32_t b = 0; b < blocks; ++b) {
+    if (of[static_cast<size_t>(b)].empty()) continue;
+    r.gather_k.insert(r.gather_k.end(), of[static_cast<size_t>(b)].begin(),
+                      of[static_cast<size_t>(b)].end());
+    r.gather_block.push_back(b);
+    r.gather_start.push_back(static_cast<int32_t>(r.gather_k.size()));
+  }
+  return r;
+}
+
+void expect_split(const DeferredPlan& plan, const ReferenceSplit& want, const std::string& what) {
+  const int32_t* table = plan.table(0);
+  ASSERT_NE(table, nullptr) << what;
+  for (size_t i = 0; i < want.table.size(); ++i)
+    ASSERT_EQ(table[i], want.table[i]) << what << ", entry " << i;
+  EXPECT_EQ(plan.deferred_blocks(), static_cast<int64_t>(want.dest.size()) - 1) << what;
+  const std::vector<DeferredPlan::Gather> g = plan.gathers();
+  ASSERT_EQ(g.size(), 1u) << what;
+  ASSERT_EQ(g[0].blocks, want.gather_block.size()) << what;
+  for (size_t i = 0; i < g[0].blocks; ++i) {
+    ASSERT_EQ(g[0].block[i], want.gather_block[i]) << what << ", gathered block " << i;
+    ASSERT_EQ(g[0].start[i + 1], want.gather_start[i + 1]) << what << ", gathered block " << i;
+  }
+  for (size_t j = 0; j < want.gather_k.size(); ++j)
+    ASSERT_EQ(g[0].k[j], want.gather_k[j]) << what << ", gather entry " << j;
+  for (size_t v = 0; v < g[0].deferred_values; ++v)
+    ASSERT_TRUE(g[0].deferred[v] == 0.0 && std::signbit(g[0].deferred[v])) << what;
+}
+
+// Triangles over a strip of vertices (each near the one before, as a renumbered mesh's are)
+// in chunks of every size from one element to all of them, written as a vector (through the
+// endpoints) and as a matrix whose table leaves some blocks out (the sink).
+TEST(DeferredPlan, SplitTablesMatchTheElementOrderOnRandomTopologies) {
+  std::mt19937 rng(7);
+  for (int round = 0; round < 4; ++round) {
+    const int32_t verts = 40 + round * 150, n = verts * 2;
+    runtime::Set v("v");
+    v.add_many(verts);
+    runtime::Set tri("tri", {&v, &v, &v});
+    std::vector<int32_t> ends;
+    for (int32_t e = 0; e < n; ++e) {
+      const int32_t base = std::min(e / 2, verts - 12);  // 12 vertices to pick 3 from
+      std::vector<int32_t> picked;
+      while (picked.size() < 3) {
+        const int32_t x = base + static_cast<int32_t>(rng() % 12);
+        if (std::find(picked.begin(), picked.end(), x) == picked.end()) picked.push_back(x);
+      }
+      ends.insert(ends.end(), picked.begin(), picked.end());
+    }
+    tri.add_edges(ends);
+    // The vector: its member table (element, then each endpoint), endpoints written.
+    Trace vt = edge_sum_trace();
+    vt.arity = 3;
+    vt.body.push_back(vt.body[0]);
+    auto third = std::make_shared<Expr>(*vt.body[0].index);
+    third->slot = 2;
+    vt.body[2].index = third;
+    ASSERT_EQ(defer_assembly(vt), "");
+    std::vector<int32_t> members(static_cast<size_t>(n) * 4, 0);
+    for (int32_t e = 0; e < n; ++e)
+      for (int k = 0; k < 3; ++k)
+        members[static_cast<size_t>(e) * 4 + 1 + k] = ends[static_cast<size_t>(e) * 3 + k];
+    // The matrix: 6 blocks per element, each a block of its own or (one in five) left out.
+    const int pairs = 6;
+    Trace mt = matrix_sum_trace(3, pairs);
+    ASSERT_EQ(defer_assembly(mt), "");
+    const int32_t blocks = n * 2;
+    std::vector<int32_t> table(static_cast<size_t>(n) * pairs);
+    for (int32_t e = 0; e < n; ++e) {
+      std::vector<int32_t> mine;
+      for (int p = 0; p < pairs; ++p) {
+        int32_t b = -1;
+        if (rng() % 5 != 0) {
+          do {
+            b = std::min(blocks - 1, e + static_cast<int32_t>(rng() % 40));
+          } while (std::find(mine.begin(), mine.end(), b) != mine.end());
+          mine.push_back(b);
+        }
+        table[static_cast<size_t>(e) * pairs + p] = b;
+      }
+    }
+    for (int32_t chunk : {1, 2, 3, 7, 16, 61, n - 1, n}) {
+      const std::string what =
+          "round " + std::to_string(round) + ", chunk " + std::to_string(chunk);
+      DeferredPlan vp;
+      std::vector<DeferredPlan::Source> vs(1);
+      vs[0].blocks = verts;
+      ASSERT_TRUE(vp.prepare(vt, tri, vs, chunk, true)) << what;
+      expect_split(vp, reference_split(members, 4, {1, 2, 3}, n, chunk, verts), what + " (vector)");
+      DeferredPlan mp;
+      std::vector<DeferredPlan::Source> ms(1);
+      ms[0].table = table.data();
+      ms[0].blocks = blocks;
+      ms[0].components = 4;
+      ASSERT_TRUE(mp.prepare(mt, tri, ms, chunk, true)) << what;
+      expect_split(mp, reference_split(table, pairs, {0, 1, 2, 3, 4, 5}, n, chunk, blocks),
+                   what + " (matrix)");
+      // Prepared again for the next call: the same tables, the deferred blocks at -0.0 again.
+      mp.deferred(0)[0] = 3.0;
+      ASSERT_TRUE(mp.prepare(mt, tri, ms, chunk, true)) << what;
+      expect_split(mp, reference_split(table, pairs, {0, 1, 2, 3, 4, 5}, n, chunk, blocks),
+                   what + " (matrix, again)");
+      // A block written twice by one element cannot be split.
+      std::vector<int32_t> twice = table;
+      twice[static_cast<size_t>(n / 2) * pairs + 1] = 0;
+      twice[static_cast<size_t>(n / 2) * pairs + 4] = 0;
+      ms[0].table = twice.data();
+      EXPECT_FALSE(mp.prepare(mt, tri, ms, chunk, true)) << what;
+    }
+  }
 }
 
 TEST(DeferAssembly, RefusesWhatChunksCouldNotSplit) {
