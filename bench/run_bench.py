@@ -40,7 +40,9 @@ the first frame, the baseline's too): they run a copy of cloth.sim with the step
                unpreconditioned CG; the scene_*_vs_baseline tests compare converged runs.
 
 Executors (--executors, comma-separated, default interpreter,jit): interpreter, jit and gpu
-(`simit run --executor gpu`: the compiled maps on an NVIDIA GPU, solver loops on the CPU).
+(`simit run --executor gpu`: the compiled maps on an NVIDIA GPU, solver loops on the CPU),
+and jit-float32 and gpu-float32, the same under `--float32` (their error column is against
+the first executor's float64 positions).
 An executor this simit cannot run (no JIT, no GPU: `simit run --executor gpu` says why) is
 left out of every case with a note giving the reason. --only SUBSTRING, repeatable, keeps
 the cases whose example/mesh contains any of them.
@@ -122,6 +124,10 @@ EXECUTORS = {
             lambda simit: executor_unavailable(simit, "jit"), True),
     "gpu": (scene_run("gpu", ["--jit-threshold", "0", "--jit-stats"]),
             lambda simit: executor_unavailable(simit, "gpu"), True),
+    "jit-float32": (scene_run("jit", ["--float32", "--jit-threshold", "0", "--jit-stats"]),
+                    lambda simit: executor_unavailable(simit, "jit"), True),
+    "gpu-float32": (scene_run("gpu", ["--float32", "--jit-threshold", "0", "--jit-stats"]),
+                    lambda simit: executor_unavailable(simit, "gpu"), True),
 }
 DEFAULT_EXECUTORS = "interpreter,jit"
 

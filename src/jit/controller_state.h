@@ -74,6 +74,9 @@ struct TraceController::LoopEntry {
   long handed_back = 0;             // calls that reached an error statement
   long not_binary32 = 0;  // float32 calls left to the interpreter: a matrix not in binary32
   std::vector<std::vector<double>> scratch;  // per array slot: a scratch vector's storage
+  // Per array slot under float32: a vector's binary32 storage (the program's vectors are
+  // copied in before the call and out after it; the scratch vectors live there).
+  std::vector<std::vector<float>> single;
   TraceStats stats;
 };
 

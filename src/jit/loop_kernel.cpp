@@ -150,6 +150,20 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       e->kept += p.kept;
       e->total += p.total;
     }
+  // Under float32 the loop's vectors are binary32 copies: each value must be a binary32 value.
+  for (size_t i = 0; i < b.arrays.size(); ++i) {
+    if (!t.arrays[i].single || b.arrays[i].part != SystemBinding::Array::Part::Vector) continue;
+    const Value& v = in.variable(*b.arrays[i].var);
+    if (v.empty() || !v.is_tensor() || v.tensor().kind() != runtime::ComponentKind::Float)
+      continue;  // created below
+    if (!runtime::is_binary32(std::span(v.tensor().floats(), v.tensor().size()))) {
+      ++e->not_binary32;
+      e->stats.note = "; " + std::to_string(e->not_binary32) + " call" +
+                      (e->not_binary32 > 1 ? "s" : "") + " ran interpreted: '" +
+                      b.arrays[i].var->name + "' holds values that are not binary32";
+      return false;
+    }
+  }
   Saved saved;
   if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
   // A vector first assigned in the loop or run is made with the shape of its model: a value
@@ -174,14 +188,30 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       if (t.arrays[i].written != (pass == 0)) continue;
       using Part = SystemBinding::Array::Part;
       if (b.arrays[i].part == Part::Scratch) {
+        const size_t n = static_cast<size_t>(e->sizes[static_cast<size_t>(b.arrays[i].size)]);
+        if (t.arrays[i].single) {
+          e->single.resize(b.arrays.size());
+          e->single[i].resize(n);
+          arrays[i] = e->single[i].data();
+          continue;
+        }
         e->scratch.resize(b.arrays.size());
-        e->scratch[i].resize(static_cast<size_t>(e->sizes[static_cast<size_t>(b.arrays[i].size)]));
+        e->scratch[i].resize(n);
         arrays[i] = e->scratch[i].data();
         continue;
       }
       Value& v = in.variable(*b.arrays[i].var);
       switch (b.arrays[i].part) {
         case Part::Vector:
+          if (t.arrays[i].single) {  // copied in (exactly: checked above)
+            const runtime::Tensor& x = v.tensor();
+            e->single.resize(b.arrays.size());
+            std::vector<float>& s = e->single[i];
+            s.resize(x.size());
+            for (size_t k = 0; k < x.size(); ++k) s[k] = static_cast<float>(x.floats()[k]);
+            arrays[i] = s.data();
+            break;
+          }
           arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
                                           : const_cast<double*>(v.tensor().floats());
           break;
@@ -229,6 +259,17 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
   // the scalars go back to their variables, and the interrupt is raised below.
   const bool interrupted = rc == kSystemInterrupted;
+  // The binary32 copies of the vectors the call wrote go back (widened exactly), also when an
+  // interrupt stopped it between iterations: what they hold then stays, as in place.
+  if (rc == 0 || interrupted)
+    for (size_t i = 0; i < b.arrays.size(); ++i) {
+      if (!t.arrays[i].single || !t.arrays[i].written ||
+          b.arrays[i].part != SystemBinding::Array::Part::Vector)
+        continue;
+      double* x = in.variable(*b.arrays[i].var).tensor().mutable_floats();
+      const std::vector<float>& s = e->single[i];
+      for (size_t k = 0; k < s.size(); ++k) x[k] = s[k];
+    }
   if (rc != 0 && !interrupted) {
     for (auto& [var, value] : saved) in.variable(*var) = std::move(value);
     ++e->handed_back;
@@ -261,7 +302,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   if (e->not_binary32 > 0)
     e->stats.note += "; " + std::to_string(e->not_binary32) + " call" +
                      (e->not_binary32 > 1 ? "s" : "") +
-                     " ran interpreted: a matrix held values that are not binary32";
+                     " ran interpreted: a matrix or vector held values that are not binary32";
   if (e->handed_back > 0)
     e->stats.note += "; " + std::to_string(e->handed_back) + " call" +
                      (e->handed_back > 1 ? "s" : "") +

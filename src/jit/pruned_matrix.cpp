@@ -4,6 +4,8 @@
 #include <bit>
 #include <type_traits>
 
+#include "runtime/system_ops.h"
+
 namespace simit::jit {
 
 namespace {
@@ -70,8 +72,7 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
           const double x = blk[i * m + j];
           o[j * m + i] = static_cast<T>(x);
           // A NaN stays a NaN (its payload is not the interpreter's concern).
-          if constexpr (std::is_same_v<T, float>)
-            exact = exact && (static_cast<double>(o[j * m + i]) == x || x != x);
+          if constexpr (std::is_same_v<T, float>) exact = exact && runtime::is_binary32(x);
         }
       cols[at++] = ci[k];
     }

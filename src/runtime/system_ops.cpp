@@ -457,13 +457,12 @@ void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, doubl
 
 template <class T>
 bool binary32_values(const T* v, size_t n) {
-  auto is32 = [](double x) { return static_cast<double>(static_cast<float>(x)) == x || x != x; };
   bool all = true;
   for (size_t i = 0; i < n; ++i) {
     if constexpr (std::is_same_v<T, Complex>) {
-      all = all && is32(v[i].real()) && is32(v[i].imag());
+      all = all && is_binary32(v[i].real()) && is_binary32(v[i].imag());
     } else {
-      all = all && is32(v[i]);
+      all = all && is_binary32(v[i]);
     }
   }
   return all;
@@ -494,6 +493,10 @@ void round_to_float32(SystemMatrix& m) {
     for (size_t i = 0; i < m.value_count(); ++i)
       c[i] = Complex(static_cast<float>(c[i].real()), static_cast<float>(c[i].imag()));
   }
+}
+
+bool is_binary32(std::span<const double> values) {
+  return binary32_values(values.data(), values.size());
 }
 
 bool is_binary32(const SystemMatrix& m) {

@@ -45,6 +45,10 @@ bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
 // and whether every one is one already (a NaN counts as one).
 void round_to_float32(SystemMatrix& m);
 bool is_binary32(const SystemMatrix& m);
+inline bool is_binary32(double x) {
+  return static_cast<double>(static_cast<float>(x)) == x || x != x;
+}
+bool is_binary32(std::span<const double> values);
 // A .* B: component products over the union of the patterns.
 SystemMatrix multiply_elementwise(const SystemMatrix& a, const SystemMatrix& b,
                                   PatternRegistry* registry = nullptr);

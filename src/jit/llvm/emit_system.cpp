@@ -125,6 +125,18 @@ Value* SystemEmitter::lane_at(size_t k, Value* lane) {
       b_.CreateAdd(b_.getInt64(static_cast<int64_t>(k * runtime::kSumLanes)), lane));
 }
 
+Value* SystemEmitter::load_component(int slot, Value* k) {
+  const ArraySlot& a = slots_[static_cast<size_t>(slot)];
+  Value* v = b_.CreateLoad(storage(a), b_.CreateInBoundsGEP(storage(a), arrays_[slot], k));
+  return a.single ? b_.CreateFPExt(v, b_.getDoubleTy()) : v;
+}
+
+void SystemEmitter::store_component(int slot, Value* k, Value* v) {
+  const ArraySlot& a = slots_[static_cast<size_t>(slot)];
+  if (a.single) v = b_.CreateFPTrunc(v, b_.getFloatTy());
+  b_.CreateStore(v, b_.CreateInBoundsGEP(storage(a), arrays_[slot], k));
+}
+
 // arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
 // component of the row just computed.
 void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
@@ -194,8 +206,7 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
           column->setAlignment(llvm::Align(8));
           a = column;
         }
-        Value* x = b_.CreateLoad(
-            f64, b_.CreateInBoundsGEP(f64, arrays_[op.x], b_.CreateAdd(xc, b_.getInt64(j))));
+        Value* x = load_component(op.x, b_.CreateAdd(xc, b_.getInt64(j)));
         Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
         part = part ? b_.CreateFAdd(part, term) : term;
       }
@@ -204,8 +215,8 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
     Value* row = b_.CreateMul(r, b_.getInt64(bs));
     Value* total = b_.CreateLoad(vec, sums);
     for (int i = 0; i < bs; ++i)
-      b_.CreateStore(b_.CreateExtractElement(total, static_cast<uint64_t>(i)),
-                     b_.CreateInBoundsGEP(f64, arrays_[op.y], b_.CreateAdd(row, b_.getInt64(i))));
+      store_component(op.y, b_.CreateAdd(row, b_.getInt64(i)),
+                      b_.CreateExtractElement(total, static_cast<uint64_t>(i)));
     run_of(op, row, bs, lane);
   };
   if (op.sums.empty()) {
@@ -243,8 +254,7 @@ bool SystemEmitter::pass_in_lanes(const VectorOp& op) const {
       case ExprKind::Const: return e.ty == Ty::F64;
       case ExprKind::Local: return e.ty == Ty::F64 && !is_sum(e.slot);
       case ExprKind::Load:
-        return e.ty == Ty::F64 && !slots_[static_cast<size_t>(e.slot)].single &&
-               slots_[static_cast<size_t>(e.slot)].components == 1 &&
+        return e.ty == Ty::F64 && slots_[static_cast<size_t>(e.slot)].components == 1 &&
                e.ops[0]->kind == ExprKind::Element;
       case ExprKind::Unary:
       case ExprKind::Binary:
@@ -259,7 +269,7 @@ bool SystemEmitter::pass_in_lanes(const VectorOp& op) const {
   for (const Stmt& s : op.body) {
     if (s.kind == StmtKind::Store) {
       const ArraySlot& a = slots_[static_cast<size_t>(s.slot)];
-      if (a.ty != Ty::F64 || a.single || a.components != 1 || s.comp != 0 ||
+      if (a.ty != Ty::F64 || a.components != 1 || s.comp != 0 ||
           s.index->kind != ExprKind::Element || !lane_wise(*s.value))
         return false;
     } else if (s.kind == StmtKind::SetLocal && is_sum(s.slot)) {
@@ -282,6 +292,14 @@ Value* SystemEmitter::pass_lanes(const Expr& e, Value* first) {
     case ExprKind::Const: return llvm::ConstantFP::get(vec, e.f);
     case ExprKind::Local: return b_.CreateVectorSplat(kLanes, b_.CreateLoad(f64, locals_[e.slot]));
     case ExprKind::Load: {
+      if (slots_[static_cast<size_t>(e.slot)].single) {  // binary32, widened exactly
+        auto* vec32 = llvm::FixedVectorType::get(b_.getFloatTy(), kLanes);
+        llvm::LoadInst* v = b_.CreateLoad(
+            vec32,
+            b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[static_cast<size_t>(e.slot)], first));
+        v->setAlignment(llvm::Align(4));
+        return b_.CreateFPExt(v, vec);
+      }
       llvm::LoadInst* v = b_.CreateLoad(
           vec, b_.CreateInBoundsGEP(f64, arrays_[static_cast<size_t>(e.slot)], first));
       v->setAlignment(llvm::Align(8));
@@ -306,10 +324,13 @@ void SystemEmitter::runs_in_lanes(const VectorOp& op, Value* first, Value* lane)
     Value* at = b_.CreateAdd(first, b_.getInt64(kLanes * v));
     for (const Stmt& s : op.body) {
       if (s.kind == StmtKind::Store) {
-        llvm::StoreInst* st = b_.CreateStore(
-            pass_lanes(*s.value, at),
-            b_.CreateInBoundsGEP(b_.getDoubleTy(), arrays_[static_cast<size_t>(s.slot)], at));
-        st->setAlignment(llvm::Align(8));
+        const bool single = slots_[static_cast<size_t>(s.slot)].single;
+        Value* v = pass_lanes(*s.value, at);
+        if (single) v = b_.CreateFPTrunc(v, llvm::FixedVectorType::get(b_.getFloatTy(), kLanes));
+        llvm::StoreInst* st =
+            b_.CreateStore(v, b_.CreateInBoundsGEP(single ? b_.getFloatTy() : b_.getDoubleTy(),
+                                                   arrays_[static_cast<size_t>(s.slot)], at));
+        st->setAlignment(llvm::Align(single ? 4 : 8));
         continue;
       }
       const size_t k =

@@ -196,6 +196,10 @@ class SystemEmitter : public Emitter {
   void write_scalars(Value* scalars);
   void while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt);
   std::vector<Value*> load_sizes(Value* sizes_in);
+  // Component `k` (an i64) of a one-component vector array, as binary64 (a binary32 array's
+  // widened); the store rounds to a binary32 array's storage.
+  Value* load_component(int slot, Value* k);
+  void store_component(int slot, Value* k, Value* v);
 
   // Parallel passes (emit_parallel.cpp). A unit is a chunk of runtime::kSumChunk elements for
   // an op with sums or a product's rows, kPassUnit components for a pass without sums.

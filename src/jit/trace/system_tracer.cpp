@@ -3,9 +3,11 @@
 // sizes and scalar locals; and the entry points of jit/system_trace.h.
 #include "jit/trace/system_tracer.h"
 
+#include <functional>
 #include <utility>
 
 #include "interp/set_binding.h"
+#include "runtime/system_ops.h"
 
 namespace simit::jit::trace_detail {
 
@@ -32,9 +34,11 @@ TracedSystem SystemTracer::run() {
     t_.matrices_in_place = !loop;
     // Under float32 that copy is binary32 (PrunedMatrix::values32): every value of a
     // program's matrix is a binary32 value then (docs/arithmetic.md).
-    if (loop && float32_)
+    if (loop && float32_) {
       for (const auto& [var, mat] : matrix_)
         t_.arrays[static_cast<size_t>(mat.values)].single = true;
+      mark_binary32_vectors();
+    }
     // A kernel that reaches an error statement puts the variables back for the interpreter
     // to run the statements again; it could not put a field back.
     if (!t_.errors.empty() && first_field_write_ < run_.size()) {
@@ -145,6 +149,69 @@ void SystemTracer::collect_stmt(const ast::Stmt& s,
   } else {
     give_up(s.span, AbortReason::StatementKindInLoop, ast::node_kind_name(s.kind));
   }
+}
+
+namespace {
+
+void visit_stores(const std::vector<Stmt>& body, const std::function<void(const Stmt&)>& f) {
+  for (const Stmt& s : body) {
+    if (s.kind == StmtKind::Store) f(s);
+    visit_stores(s.body, f);
+    visit_stores(s.orelse, f);
+  }
+}
+
+}  // namespace
+
+// Under float32, the vectors the run writes (the program's, copied in and out around the
+// call, and the trace's scratch vectors) that only ever hold binary32 values are binary32 in
+// the kernel,
+// half the bytes. A stored value is one when it is an operator's (rounded), a binary32
+// constant, or a read of a binary32 array; not a copy of a binary64 field or of a scalar the
+// host bound, which the interpreter does not round. A product's rows are stored as they are
+// rounded. Vectors copied in hold binary32 values or the call is left to the interpreter
+// (loop_kernel.cpp).
+void SystemTracer::mark_binary32_vectors() {
+  using Part = SystemBinding::Array::Part;
+  std::vector<bool> ok(t_.arrays.size(), false);
+  // A vector the run only reads holds whatever the caller passed: binary32 values (an
+  // operator's), or wider ones (a binary64 field read as it is, `cg(A, points.b, ...)`),
+  // which a binary32 copy could not hold. Its value now decides; a later call whose values
+  // are wider runs interpreted (loop_kernel.cpp).
+  auto binary32_now = [&](const ast::Variable* v) {
+    const Value& val = in_.variable(*v);
+    if (val.empty() || !val.is_tensor() || val.tensor().kind() != runtime::ComponentKind::Float)
+      return false;
+    return runtime::is_binary32(std::span(val.tensor().floats(), val.tensor().size()));
+  };
+  for (size_t i = 0; i < b_.arrays.size(); ++i)
+    ok[i] = b_.arrays[i].part == Part::Scratch ||
+            (b_.arrays[i].part == Part::Vector &&
+             (t_.arrays[i].written || binary32_now(b_.arrays[i].var)));
+  std::function<bool(const Expr&)> binary32 = [&](const Expr& e) {
+    switch (e.kind) {
+      case ExprKind::Const: return runtime::is_binary32(e.f);
+      case ExprKind::Load:
+        return t_.arrays[static_cast<size_t>(e.slot)].single || ok[static_cast<size_t>(e.slot)];
+      case ExprKind::Unary: return static_cast<UnOp>(e.op) == UnOp::Round32;
+      default: return false;
+    }
+  };
+  // A vector stays binary32 while every store into it is; one that is not can make the
+  // vectors copied from it wide in turn, so repeat until nothing changes.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const auto* ops : {&t_.before, &t_.body, &t_.after})
+      for (const VectorOp& op : *ops)
+        visit_stores(op.body, [&](const Stmt& s) {
+          if (ok[static_cast<size_t>(s.slot)] && !binary32(*s.value)) {
+            ok[static_cast<size_t>(s.slot)] = false;
+            changed = true;
+          }
+        });
+  }
+  for (size_t i = 0; i < ok.size(); ++i)
+    if (ok[i]) t_.arrays[i].single = true;
 }
 
 void SystemTracer::note(const ast::Variable& v, const SourceSpan& at) {

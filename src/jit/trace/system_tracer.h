@@ -62,6 +62,7 @@ class SystemTracer {
 
   // The run and its variables (system_tracer.cpp).
   void name(const ast::While* loop);
+  void mark_binary32_vectors();
   void trace_loop(const ast::While& loop);
   void end_section();
   void collect();
