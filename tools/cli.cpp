@@ -91,8 +91,8 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
                    ": interpreter (default), jit (hot map and apply sites, solver loops and "
                    "other system statements compiled to native code with LLVM; the rest "
                    "interpreted) or gpu (as jit, with the compiled maps run on an NVIDIA GPU "
-                   "through the CUDA driver, their data copied there and back at each call; "
-                   "solver loops stay on the CPU). --backend is another name of this option")
+                   "through the CUDA driver: an array is copied there only when the host changed it, "
+                   "what a map writes comes back after each call; solver loops stay on the CPU). --backend is another name of this option")
                ->type_name("interpreter|jit|gpu");
   t.threads = add_parsed(
                   sub, "--threads",
