@@ -80,20 +80,22 @@ CLI::Option* add_parsed(CLI::App& sub, const std::string& names, Parse parse,
 void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& runs,
                           const std::string& stats_when) {
   ExecutorChoice& x = *t.choice;
-  t.kind = add_parsed(
-               sub, "--executor,--backend",
-               [&x](const std::string& s, std::string& error) {
-                 std::optional<ExecutorKind> k = parse_executor_kind(s, error);
-                 if (k) x.kind = *k;
-                 return k.has_value();
-               },
-               "What runs " + runs +
-                   ": interpreter (default), jit (hot map and apply sites, solver loops and "
-                   "other system statements compiled to native code with LLVM; the rest "
-                   "interpreted) or gpu (as jit, with the compiled maps run on an NVIDIA GPU "
-                   "through the CUDA driver: an array is copied there only when the host changed it, "
-                   "what a map writes comes back after each call; solver loops stay on the CPU). --backend is another name of this option")
-               ->type_name("interpreter|jit|gpu");
+  t.kind =
+      add_parsed(
+          sub, "--executor,--backend",
+          [&x](const std::string& s, std::string& error) {
+            std::optional<ExecutorKind> k = parse_executor_kind(s, error);
+            if (k) x.kind = *k;
+            return k.has_value();
+          },
+          "What runs " + runs +
+              ": interpreter (default), jit (hot map and apply sites, solver loops and "
+              "other system statements compiled to native code with LLVM; the rest "
+              "interpreted) or gpu (as jit, with the compiled maps run on an NVIDIA GPU "
+              "through the CUDA driver: an array is copied there only when the host changed it, "
+              "what a map writes comes back after each call; solver loops stay on the CPU). "
+              "--backend is another name of this option")
+          ->type_name("interpreter|jit|gpu");
   t.threads = add_parsed(
                   sub, "--threads",
                   [&x](const std::string& s, std::string& error) {
