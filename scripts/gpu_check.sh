@@ -642,7 +642,7 @@ run_benchmark() {
         --only springs/bunny --only cloth/square64)
     else
       label="beside the JIT (rel. err against its positions)"
-      only=(--executors jit,gpu --only fem/dragon160k --only cloth/square256)
+      only=(--executors jit,gpu,gpu-float32 --only fem/dragon160k --only cloth/square256)
     fi
     out_of_time "benchmark, $part cases" 30 && continue
     status=0
