@@ -444,9 +444,12 @@ void round_to_float32(Value& v) {
     }
     case Value::Kind::Tensor: runtime::round_to_float32(v.tensor()); break;
     case Value::Kind::Matrix:
-      // An operator's matrix is its own, but a call's may be shared with a variable (or
-      // bound by the host): a copy is rounded, and only when some value is not binary32.
-      if (v.matrix() && !runtime::is_binary32(*v.matrix())) {
+      // An operator's matrix is its own and is rounded in place; a call's may be shared with
+      // a variable (or bound by the host): a copy is rounded, only when some value is not
+      // binary32.
+      if (v.matrix() && v.matrix().use_count() == 1) {
+        runtime::round_to_float32(*v.matrix());
+      } else if (v.matrix() && !runtime::is_binary32(*v.matrix())) {
         auto m = std::make_shared<runtime::SystemMatrix>(*v.matrix());
         runtime::round_to_float32(*m);
         v = Value::of_matrix(std::move(m));
