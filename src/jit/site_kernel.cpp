@@ -76,7 +76,7 @@ std::string bytes_text(long long bytes) {
 }
 
 // --jit-stats for a site on the GPU: what its last call copied to the device, found there
-// already and zeroed there (in place of what an earlier call noted).
+// already, zeroed there and set to -0.0 there (in place of what an earlier call noted).
 void note_traffic(std::string& note, const ptx::GpuTraffic& before, const ptx::GpuTraffic& after) {
   static const std::string kHead = "; last call to the device: ";
   if (const size_t at = note.find(kHead); at != std::string::npos) {
@@ -85,7 +85,8 @@ void note_traffic(std::string& note, const ptx::GpuTraffic& before, const ptx::G
   }
   note += kHead + bytes_text(after.bytes_to_device - before.bytes_to_device) + " copied, " +
           bytes_text(after.bytes_skipped - before.bytes_skipped) + " there already, " +
-          bytes_text(after.bytes_zeroed - before.bytes_zeroed) + " zeroed";
+          bytes_text(after.bytes_zeroed - before.bytes_zeroed) + " zeroed, " +
+          bytes_text(after.bytes_filled - before.bytes_filled) + " set to -0.0";
 }
 
 }  // namespace
@@ -179,11 +180,12 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   std::vector<size_t> bytes(t.arrays.size(), 0);
   std::vector<uint8_t> written(t.arrays.size(), 0);
   // For an executor that keeps copies between calls (the GPU's), each array's stamps and
-  // whether it is a zeroed result (MapArgs::array_version_in). A field's "in" before this
-  // call's own mutable access (which counts as a write), its "out" after all of them.
+  // what the host set it to for this call (MapArgs::array_version_in, array_fill). A
+  // field's "in" before this call's own mutable access (which counts as a write), its "out"
+  // after all of them.
   const bool resident = e.on_device;
   std::vector<uint64_t> version_in(t.arrays.size(), 0), version_out(t.arrays.size(), 0);
-  std::vector<uint8_t> zeroed(t.arrays.size(), 0);
+  std::vector<ArrayFill> fill(t.arrays.size(), ArrayFill::Copy);
   auto field_slot_stamp = [&](const ArraySlot& a) {
     return field_stamp(runtime::member_set(call.target, a.member), a.index);
   };
@@ -225,7 +227,8 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           } else {
             return false;
           }
-          zeroed[i] = 1;  // the interpreter's results and prepare_results' are zeroed
+          // The interpreter's results and prepare_results' are zeroed.
+          fill[i] = ArrayFill::Zero;
           break;
         }
         case ArraySlot::Kind::Table: {
@@ -254,6 +257,10 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         case ArraySlot::Kind::Deferred:
           arrays[i] = e.plan->deferred(a.index);
           bytes[i] = e.plan->deferred_values(a.index) * sizeof(double);
+          // DeferredPlan::prepare of a split run leaves every deferred block of every result
+          // it writes at -0.0 (built so, or reset); an unsplit run's are not reset (its
+          // kernel adds nothing there but into the sink, which no gather reads): copied.
+          if (writes == MapWrites::Deferred) fill[i] = ArrayFill::NegativeZero;
           break;
         case ArraySlot::Kind::Marks: {
           const size_t r = static_cast<size_t>(a.index);
@@ -291,7 +298,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         version_out[i] = field_slot_stamp(t.arrays[i]);
     args.array_version_in = version_in.data();
     args.array_version_out = version_out.data();
-    args.array_zeroed = zeroed.data();
+    args.array_fill = fill.data();
     args.endpoints_version = endpoints_stamp(call.target);
   }
   const ptx::GpuTraffic before = resident ? ptx::gpu_traffic(executor) : ptx::GpuTraffic{};

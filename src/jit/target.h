@@ -14,6 +14,15 @@
 
 namespace simit::jit {
 
+// How an executor that keeps its own copy of an array (a GPU's) brings it up to date for a
+// call (MapArgs::array_fill): by copying the host's, or, where the host set every value to
+// one constant for this call, by setting its copy to that constant where it lies.
+enum class ArrayFill : uint8_t {
+  Copy = 0,
+  Zero = 1,          // the host zeroed it (a result): every byte 0
+  NegativeZero = 2,  // the host set every double to -0.0 (a split run's deferred blocks)
+};
+
 // A map kernel's arguments: one pointer per ArraySlot, one double per scalar argument (ints
 // and booleans converted exactly), the target set's endpoint table.
 struct MapArgs {
@@ -33,12 +42,13 @@ struct MapArgs {
   // after the caller bound it (array_version_out; they differ where binding a field for
   // writing counts as a write). Equal stamps mean equal contents, for good (a stamp is never
   // reused for other contents, not even at the address of a freed array); 0 means unknown:
-  // copied every call. array_zeroed: per array, nonzero when the host zeroed it for this call
-  // (a result): the copy is zeroed where it lies rather than copied. Likewise the endpoint
-  // table's stamp. Null arrays: every stamp 0, nothing zeroed.
+  // copied every call. array_fill: per array, what the host set it to for this call when it
+  // set every value to one constant (a result zeroed, deferred blocks at -0.0): the copy is
+  // set where it lies rather than copied. Likewise the endpoint table's stamp. Null arrays:
+  // every stamp 0, every array copied.
   const uint64_t* array_version_in = nullptr;
   const uint64_t* array_version_out = nullptr;
-  const uint8_t* array_zeroed = nullptr;
+  const ArrayFill* array_fill = nullptr;
   uint64_t endpoints_version = 0;
 };
 

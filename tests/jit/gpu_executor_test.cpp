@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gpu_fake_driver.h"
+#include "jit/array_stamps.h"
 #include "jit/defer_assembly.h"
 #include "jit/deferred_plan.h"
 #include "jit/ptx/cuda_driver.h"
@@ -191,6 +192,7 @@ std::vector<double> sums_in_element_order(const std::vector<int32_t>& ends, int 
 struct DeferredRun {
   std::vector<double> f;
   std::vector<double> deferred_after;    // the host's deferred blocks afterwards
+  std::vector<uint64_t> deferred_seen;   // the device's, as the map kernel found them
   long long to_device = 0, to_host = 0;  // the fake's copies during this run
 };
 // A map kernel whose PTX names an architecture other than the default (the gather module
@@ -205,8 +207,11 @@ const PtxKernel& sm90a_kernel() {
   return k;
 }
 
+// With `bound`, the arrays bound as the trace controller binds a split run (site_kernel.cpp):
+// the result zeroed, the split table stamped by the plan's build, the deferred blocks at
+// -0.0, the endpoint table stamped by the topology.
 DeferredRun run_deferred(Executor& executor, const Trace& t, DeferredPlan& plan,
-                         const runtime::Set& edges, int verts) {
+                         const runtime::Set& edges, int verts, bool bound = false) {
   std::vector<DeferredPlan::Source> sources(1);
   sources[0].blocks = verts;
   EXPECT_TRUE(plan.prepare(t, edges, sources, executor.chunk_for(edges.size()), true));
@@ -223,12 +228,23 @@ DeferredRun run_deferred(Executor& executor, const Trace& t, DeferredPlan& plan,
   args.array_bytes = bytes;
   args.array_written = written;
   args.arity = 2;
-  fake->on_launch = [](const Launch& l) {
+  const uint64_t split = stamp(StampKind::Split, {plan.build_id(), 0});
+  const uint64_t versions[3] = {0, split, 0};
+  const ArrayFill fill[3] = {ArrayFill::Zero, ArrayFill::Copy, ArrayFill::NegativeZero};
+  if (bound) {
+    args.array_version_in = args.array_version_out = versions;
+    args.array_fill = fill;
+    args.endpoints_version = endpoints_stamp(edges);
+  }
+  const size_t deferred_values = plan.deferred_values(0);
+  fake->on_launch = [&run, deferred_values](const Launch& l) {
     if (l.gather) return;
     const CUdeviceptr* table = at<CUdeviceptr>(l.table);
     double* f = at<double>(table[0]);
     const int32_t* entries = at<int32_t>(table[1]);
     double* deferred = at<double>(table[2]);
+    run.deferred_seen.resize(deferred_values);
+    std::memcpy(run.deferred_seen.data(), deferred, deferred_values * sizeof(double));
     for (int32_t e = l.begin; e < l.end; ++e)
       for (int m = 0; m < 2; ++m) {
         const int32_t to = entries[3 * e + 1 + m];
@@ -346,6 +362,60 @@ TEST_F(GpuExecutorFake, ADeferredMapLaunchesTheGatherAndCopiesBackOnlyTheResults
   EXPECT_EQ(state.launches[5].g.start[6], 12);  // both new contributions deferred
   executor.reset();
   EXPECT_EQ(state.frees, state.allocations);  // the index arrays too
+}
+
+// Bound as the controller binds a split run: the deferred blocks are never copied in, but set
+// to -0.0 on the device (every word zeroed, then each double's high word, at byte 4, set to
+// the sign bit by a 2D set of one word per 8-byte row), so that the kernel finds -0.0 in every
+// component, on the first call (fresh device memory) as on the second (what the last call's
+// kernel left there). A second call copies in nothing but the pointer table and failure word.
+TEST_F(GpuExecutorFake, ADeferredMapsDeferredBlocksAreSetToNegativeZeroOnTheDevice) {
+  auto executor = make_gpu_executor_over(fake_table());
+  const Trace t = deferred_edge_sum();
+  runtime::Set v("v");
+  v.add_many(6);
+  runtime::Set e("e", {&v, &v});
+  const std::vector<int32_t> ends = {0, 1, 2, 0, 0, 3, 1, 2, 4, 0, 2, 3, 0, 5, 5, 4};
+  e.add_edges(ends);
+  DeferredPlan plan;
+  // From the shape: 8 edges, a table of 3 entries an edge, 16 contributions of which 6 in
+  // place, so 10 deferred blocks and the sink of one component, 6 result blocks, the gather
+  // index of 6 blocks (block, start, k), 3 array pointers.
+  const long long table_bytes = 8 * 3 * 4, ends_bytes = 8 * 2 * 4, deferred_bytes = 11 * 8,
+                  result_bytes = 6 * 8, index_bytes = (6 + 7 + 10) * 4, launch_in = 3 * 8 + 8;
+  const uint64_t negative_zero = 0x8000000000000000ull;
+  for (int call = 0; call < 2; ++call) {
+    const GpuTraffic t0 = gpu_traffic(*executor);
+    const long long zeroed0 = state.zeroed;
+    const size_t sets0 = state.sets_2d.size();
+    const DeferredRun run = run_deferred(*executor, t, plan, e, 6, true);
+    const GpuTraffic t1 = gpu_traffic(*executor);
+    ASSERT_EQ(plan.deferred_values(0), 11u);
+    EXPECT_EQ(run.f, sums_in_element_order(ends, 6)) << call;
+    ASSERT_EQ(run.deferred_seen.size(), 11u);
+    for (uint64_t bits : run.deferred_seen) EXPECT_EQ(bits, negative_zero) << call;
+    // Copied in: the split table, the endpoints and the index on the first call only.
+    EXPECT_EQ(t1.bytes_to_device - t0.bytes_to_device,
+              call == 0 ? table_bytes + ends_bytes + index_bytes : 0);
+    EXPECT_EQ(run.to_device, (call == 0 ? table_bytes + ends_bytes + index_bytes : 0) + launch_in);
+    EXPECT_EQ(t1.bytes_skipped - t0.bytes_skipped, call == 0 ? 0 : table_bytes + ends_bytes);
+    EXPECT_EQ(t1.filled - t0.filled, 1);
+    EXPECT_EQ(t1.bytes_filled - t0.bytes_filled, deferred_bytes);
+    EXPECT_EQ(t1.bytes_zeroed - t0.bytes_zeroed, result_bytes);
+    // The fake's memory sets: the result and the deferred blocks' words zeroed, then one 2D
+    // set over the deferred blocks' high words.
+    EXPECT_EQ(state.zeroed - zeroed0, result_bytes + deferred_bytes);
+    ASSERT_EQ(state.sets_2d.size(), sets0 + 1);
+    const Set2D& s = state.sets_2d.back();
+    const CUdeviceptr* table = at<CUdeviceptr>(state.launches[state.launches.size() - 2].table);
+    EXPECT_EQ(s.to, table[2] + 4);
+    EXPECT_EQ(s.pitch, 8u);
+    EXPECT_EQ(s.value, 0x80000000u);
+    EXPECT_EQ(s.width, 1u);
+    EXPECT_EQ(s.height, 11u);
+  }
+  executor.reset();
+  EXPECT_EQ(state.frees, state.allocations);
 }
 
 TEST_F(GpuExecutorFake, TheGatherKernelsPtxAddsCorrectlyRoundedAndPtxasAcceptsIt) {

@@ -32,10 +32,18 @@ struct Launch {
   // The gather kernel's.
   GatherArgs g;
 };
+// One cuMemsetD2D32: `height` rows of `width` words set to `value`, `pitch` bytes apart.
+struct Set2D {
+  CUdeviceptr to = 0;
+  std::size_t pitch = 0;
+  unsigned value = 0;
+  std::size_t width = 0, height = 0;
+};
 struct Fake {
   int allocations = 0, frees = 0;
   long long to_device = 0, to_host = 0;
   long long zeroed = 0;              // bytes set to zero (cuMemsetD8, cuMemsetD32)
+  std::vector<Set2D> sets_2d;        // every cuMemsetD2D32, in order
   std::string ptx;                   // the last module loaded
   std::vector<std::string> modules;  // every module loaded, in order
   std::vector<Launch> launches;
@@ -131,6 +139,14 @@ inline DriverTable fake_table() {
   t.cuMemsetD32 = [](CUdeviceptr to, unsigned int value, std::size_t count) {
     fake->zeroed += value == 0 ? static_cast<long long>(4 * count) : 0;
     for (std::size_t i = 0; i < count; ++i) reinterpret_cast<unsigned int*>(to)[i] = value;
+    return CUDA_SUCCESS;
+  };
+  t.cuMemsetD2D32 = [](CUdeviceptr to, std::size_t pitch, unsigned value, std::size_t width,
+                       std::size_t height) {
+    fake->sets_2d.push_back(Set2D{to, pitch, value, width, height});
+    for (std::size_t row = 0; row < height; ++row)
+      for (std::size_t i = 0; i < width; ++i)
+        reinterpret_cast<unsigned int*>(to + row * pitch)[i] = value;
     return CUDA_SUCCESS;
   };
   t.cuLaunchKernel = [](CUfunction f, unsigned gx, unsigned, unsigned, unsigned bx, unsigned,

@@ -49,7 +49,8 @@ struct Scene {
   std::vector<size_t> bytes = std::vector<size_t>(Slots);
   std::vector<uint8_t> written = {0, 0, 1, 1, 0, 0};
   std::vector<uint64_t> in = std::vector<uint64_t>(Slots), out = std::vector<uint64_t>(Slots);
-  std::vector<uint8_t> zeroed = {0, 0, 0, 1, 0, 0};
+  std::vector<ArrayFill> fill = {ArrayFill::Copy, ArrayFill::Copy, ArrayFill::Copy,
+                                 ArrayFill::Zero, ArrayFill::Copy, ArrayFill::Copy};
 
   MapArgs bind() {
     in[X] = field_stamp(verts, 0);
@@ -77,7 +78,7 @@ struct Scene {
     args.arity = 2;
     args.array_version_in = in.data();
     args.array_version_out = out.data();
-    args.array_zeroed = zeroed.data();
+    args.array_fill = fill.data();
     args.endpoints_version = endpoints_stamp(edges);
     return args;
   }
@@ -233,7 +234,7 @@ TEST_F(GpuResidency, WithoutStampsEveryArrayIsCopiedEveryCall) {
   call(*executor, s);
   MapArgs args = s.bind();
   args.array_version_in = args.array_version_out = nullptr;
-  args.array_zeroed = nullptr;
+  args.array_fill = nullptr;
   args.endpoints_version = 0;
   const GpuTraffic t0 = gpu_traffic(*executor);
   executor->run_map(kernel, args, 4, 1, MapWrites::Disjoint, {});
@@ -247,6 +248,9 @@ TEST_F(GpuResidency, WithoutStampsEveryArrayIsCopiedEveryCall) {
 TEST_F(GpuResidency, ADriverTableWithoutMemorySetsIsRefused) {
   DriverTable t = fake_table();
   t.cuMemsetD32 = nullptr;
+  EXPECT_THROW(make_gpu_executor_over(t), std::invalid_argument);
+  t = fake_table();
+  t.cuMemsetD2D32 = nullptr;
   EXPECT_THROW(make_gpu_executor_over(t), std::invalid_argument);
 }
 

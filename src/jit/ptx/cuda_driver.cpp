@@ -112,6 +112,7 @@ template <class Table, class Visit>
 void for_each_memset_entry(Table& t, Visit&& visit) {
   visit("cuMemsetD8", 3020, t.cuMemsetD8);
   visit("cuMemsetD32", 3020, t.cuMemsetD32);
+  visit("cuMemsetD2D32", 3020, t.cuMemsetD2D32);
 }
 
 const auto driver_entries = [](auto& table, auto&& visit) { for_each_entry(table, visit); };
@@ -181,6 +182,7 @@ bool resolve_memset(const GetProcAddress& get, DriverTable& table, std::string& 
   if (!found) return false;
   table.cuMemsetD8 = found->cuMemsetD8;
   table.cuMemsetD32 = found->cuMemsetD32;
+  table.cuMemsetD2D32 = found->cuMemsetD2D32;
   return true;
 }
 
@@ -347,6 +349,29 @@ void Device::zero(DeviceArray& array) {
     else
       check(driver_.cuMemsetD8(array.device, 0, array.bytes), "cuMemsetD8",
             "of " + std::to_string(array.bytes) + " bytes");
+  }
+  array.host_dirty = false;
+}
+
+// Two memory sets rather than a fill kernel: no module to load, no launch to configure, and
+// the driver's own set kernels. First every word zero (cuMemsetD32), then the high word of
+// each double (at byte 4 of its 8: both the device and the host are little-endian) set to
+// 0x80000000, the sign bit, by a 2D set of one word per row with a pitch of 8 bytes.
+void Device::fill_negative_zero(DeviceArray& array) {
+  check_single_writer(array);
+  if (array.bytes != 0) {
+    require_open("fill_negative_zero");
+    if (array.bytes % sizeof(double) != 0)
+      throw std::logic_error("fill_negative_zero of " + std::to_string(array.bytes) +
+                             " bytes: not a whole number of doubles");
+    if (!driver_.cuMemsetD32 || !driver_.cuMemsetD2D32)
+      throw std::logic_error(
+          "fill_negative_zero on a CUDA driver table without cuMemsetD32 and cuMemsetD2D32");
+    const std::string what = "of " + std::to_string(array.bytes) + " bytes";
+    check(driver_.cuMemsetD32(array.device, 0u, array.bytes / 4), "cuMemsetD32", what);
+    check(driver_.cuMemsetD2D32(array.device + 4, sizeof(double), 0x80000000u, 1,
+                                array.bytes / sizeof(double)),
+          "cuMemsetD2D32", what);
   }
   array.host_dirty = false;
 }

@@ -92,6 +92,10 @@ using PFN_cuMemsetD8_v3020 = CUresult (*)(CUdeviceptr destination, unsigned char
                                           std::size_t count);
 using PFN_cuMemsetD32_v3020 = CUresult (*)(CUdeviceptr destination, unsigned int value,
                                            std::size_t count);
+// Rows of `width` 32-bit words set to `value`, `height` rows `pitch` bytes apart.
+using PFN_cuMemsetD2D32_v3020 = CUresult (*)(CUdeviceptr destination, std::size_t pitch,
+                                             unsigned int value, std::size_t width,
+                                             std::size_t height);
 using PFN_cuLaunchKernel_v4000 = CUresult (*)(CUfunction function, unsigned int grid_x,
                                               unsigned int grid_y, unsigned int grid_z,
                                               unsigned int block_x, unsigned int block_y,
@@ -129,11 +133,13 @@ struct DriverTable {
   PFN_cuMemcpyDtoH_v3020 cuMemcpyDtoH = nullptr;      // cuMemcpyDtoH_v2
   PFN_cuLaunchKernel_v4000 cuLaunchKernel = nullptr;  // the legacy default stream
   // Device memory set to a value (the GPU executor zeroes results with them rather than
-  // copying zeros over). Not among the entries a Device needs to open (missing_entry does
+  // copying zeros over, and sets deferred blocks to -0.0 with cuMemsetD32 and cuMemsetD2D32:
+  // Device::fill_negative_zero). Not among the entries a Device needs to open (missing_entry does
   // not list them, resolve_driver does not ask for them): load_driver resolves them apart
   // (resolve_memset), and Device::zero refuses a table without them.
-  PFN_cuMemsetD8_v3020 cuMemsetD8 = nullptr;    // cuMemsetD8_v2
-  PFN_cuMemsetD32_v3020 cuMemsetD32 = nullptr;  // cuMemsetD32_v2
+  PFN_cuMemsetD8_v3020 cuMemsetD8 = nullptr;        // cuMemsetD8_v2
+  PFN_cuMemsetD32_v3020 cuMemsetD32 = nullptr;      // cuMemsetD32_v2
+  PFN_cuMemsetD2D32_v3020 cuMemsetD2D32 = nullptr;  // cuMemsetD2D32_v2
 };
 
 // ---- Streams, events, graphs, pinned host memory and device-to-device copies: what timing
@@ -202,7 +208,7 @@ using GetProcAddress =
 // first entry that failed and how, when one is missing.
 std::optional<DriverTable> resolve_driver(const GetProcAddress& get, std::string& why);
 
-// Resolves the table's memory set entries (cuMemsetD8, cuMemsetD32) through `get` as
+// Resolves the table's memory set entries (cuMemsetD8, cuMemsetD32, cuMemsetD2D32) through `get` as
 // resolve_driver resolves the others; false with `why` when one is missing.
 bool resolve_memset(const GetProcAddress& get, DriverTable& table, std::string& why);
 
@@ -311,6 +317,11 @@ class Device {
   // words, else cuMemsetD8), for an array whose host copy is all zeros: clears host_dirty
   // as a copy would. Throws std::logic_error when the table has no memory set entries.
   void zero(DeviceArray& array);
+  // Sets every double of the device copy to -0.0 (the bits 0x8000000000000000), for an array
+  // of doubles whose host copy is all -0.0 (a deferred plan's deferred blocks): clears
+  // host_dirty as a copy would. Throws std::logic_error when the size is not a whole number
+  // of doubles or the table has no cuMemsetD32 and cuMemsetD2D32.
+  void fill_negative_zero(DeviceArray& array);
 
   // A PTX module; a PTX the driver rejects throws with the driver's JIT error log.
   CUmodule load_module(const std::string& ptx);

@@ -59,14 +59,13 @@ class GpuExecutor final : public Executor {
     device_->make_current();
     copy_back_pending();
     // Each array in unless the device already holds what the host holds (its stamp), a
-    // zeroed result zeroed on the device.
+    // zeroed result zeroed on the device, deferred blocks at -0.0 set so on the device.
     auto stamp = [](const uint64_t* stamps, size_t i) { return stamps ? stamps[i] : 0; };
     std::vector<cuda::DeviceArray*> arrays(args.array_count, nullptr);
     pointers_host_.assign(args.array_count, 0);
     for (size_t i = 0; i < args.array_count; ++i) {
-      const bool zeroed = args.array_zeroed && args.array_zeroed[i];
       arrays[i] = to_device(args.arrays[i], args.array_bytes[i], stamp(args.array_version_in, i),
-                            zeroed ? Refresh::Zero : Refresh::Copy);
+                            args.array_fill ? args.array_fill[i] : ArrayFill::Copy);
       pointers_host_[i] = arrays[i] ? arrays[i]->device : 0;
     }
     cuda::DeviceArray* scalars =
@@ -173,7 +172,7 @@ class GpuExecutor final : public Executor {
       const bool scratch = std::any_of(gathers.begin(), gathers.end(),
                                        [&](const auto& d) { return d.deferred == host; });
       if (scratch)
-        it->second.array.device_dirty = false;  // the next call copies -0.0 over it
+        it->second.array.device_dirty = false;  // the next call sets it to -0.0 again
       else
         copy_back(it->second.array);
     }
@@ -192,7 +191,6 @@ class GpuExecutor final : public Executor {
     uint64_t version = 0;
     long refreshed = 0;  // the call that last copied or zeroed it (once per call)
   };
-  enum class Refresh { Copy, Zero };
   // A plan's gather index in device memory: per gather, its block, start and k arrays.
   struct IndexUpload {
     uint64_t build = 0;  // DeferredPlan::build_id of what was uploaded
@@ -263,12 +261,13 @@ class GpuExecutor final : public Executor {
     return gather_;
   }
 
-  // The device copy of `host` (`bytes` long) as the host has it: copied (or with Zero,
-  // zeroed) unless it already holds the host contents stamped `version` (0: unknown, always
-  // copied); an array two slots name is refreshed once per call. A new host address or size
-  // is a fresh mirror, which holds nothing known. Null for an empty array.
+  // The device copy of `host` (`bytes` long) as the host has it: copied (with Zero, zeroed;
+  // with NegativeZero, every double set to -0.0) unless it already holds the host contents
+  // stamped `version` (0: unknown, always copied); an array two slots name is refreshed once
+  // per call. A new host address or size is a fresh mirror, which holds nothing known. Null
+  // for an empty array.
   cuda::DeviceArray* to_device(void* host, size_t bytes, uint64_t version,
-                               Refresh how = Refresh::Copy) {
+                               ArrayFill how = ArrayFill::Copy) {
     if (!host || bytes == 0) return nullptr;
     Mirror& m = mirrors_[host];
     if (m.array.bytes != bytes || m.array.device == 0) {
@@ -282,11 +281,16 @@ class GpuExecutor final : public Executor {
     if (m.refreshed == call_) return &m.array;
     m.refreshed = call_;
     m.array.device_dirty = false;
-    if (how == Refresh::Zero) {
+    if (how == ArrayFill::Zero) {
       m.array.host_dirty = false;
       device_->zero(m.array);
       ++traffic_.zeroed;
       traffic_.bytes_zeroed += static_cast<long long>(bytes);
+    } else if (how == ArrayFill::NegativeZero) {
+      m.array.host_dirty = false;
+      device_->fill_negative_zero(m.array);
+      ++traffic_.filled;
+      traffic_.bytes_filled += static_cast<long long>(bytes);
     } else if (version != 0 && m.version == version) {
       m.array.host_dirty = false;
       ++traffic_.uploads_skipped;
@@ -297,7 +301,7 @@ class GpuExecutor final : public Executor {
       ++traffic_.uploads;
       traffic_.bytes_to_device += static_cast<long long>(bytes);
     }
-    m.version = how == Refresh::Zero ? 0 : version;
+    m.version = how == ArrayFill::Copy ? version : 0;
     return &m.array;
   }
 
@@ -392,8 +396,9 @@ class GpuExecutor final : public Executor {
 };
 
 std::unique_ptr<Executor> open(const cuda::DriverTable& table, bool emulated) {
-  if (!table.cuMemsetD8 || !table.cuMemsetD32)
-    throw std::invalid_argument("a GPU executor needs the driver's cuMemsetD8 and cuMemsetD32");
+  if (!table.cuMemsetD8 || !table.cuMemsetD32 || !table.cuMemsetD2D32)
+    throw std::invalid_argument(
+        "a GPU executor needs the driver's cuMemsetD8, cuMemsetD32 and cuMemsetD2D32");
   auto device = std::make_unique<cuda::Device>(table);
   device->open(0);
   return std::make_unique<GpuExecutor>(std::move(device), emulated);

@@ -14,8 +14,10 @@
 // the caller gives each array (MapArgs::array_version_in and _out: a field's write version
 // with its set's identity, a pattern's table by the pattern, the endpoint table by the set's
 // topology). Before a launch an array is copied to the device only when its stamp differs
-// from the mirror's (or is 0, unknown: vectors, matrices, the deferred blocks, the scalars);
-// a result the host zeroed is zeroed on the device (cuMemsetD32) rather than copied. Each
+// from the mirror's (or is 0, unknown: vectors, matrices, the scalars); a result the host
+// zeroed is zeroed on the device (cuMemsetD32) rather than copied, and a split run's deferred
+// blocks, which the host holds at -0.0, are set to -0.0 there (Device::fill_negative_zero),
+// never copied. Each
 // array the kernel writes is copied back after the launch, and its mirror takes the stamp
 // the host's copy has then (the host copy stays the one the rest of the program reads); a
 // deferred map's written arrays are copied back after the gather, all but the deferred
@@ -66,12 +68,15 @@ struct GpuTraffic {
   long long bytes_to_host = 0;
   long allocations = 0;
   // Map arguments (arrays, scalars, endpoint tables): copied in; not copied because the
-  // device held the host's contents already; zeroed on the device (results).
+  // device held the host's contents already; zeroed on the device (results); set to -0.0 on
+  // the device (deferred blocks).
   long uploads = 0;
   long uploads_skipped = 0;
   long long bytes_skipped = 0;
   long zeroed = 0;
   long long bytes_zeroed = 0;
+  long filled = 0;
+  long long bytes_filled = 0;
   long gather_launches = 0;  // of the gather kernel (counted in launches too)
   long index_uploads = 0;    // gather indices copied to the device (once per plan build)
 };

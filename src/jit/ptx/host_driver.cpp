@@ -88,6 +88,14 @@ CUresult memset32(CUdeviceptr to, unsigned int value, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) words[i] = value;
   return CUDA_SUCCESS;
 }
+CUresult memset2d32(CUdeviceptr to, std::size_t pitch, unsigned int value, std::size_t width,
+                    std::size_t height) {
+  for (std::size_t row = 0; row < height; ++row) {
+    auto* words = reinterpret_cast<unsigned int*>(to + row * pitch);
+    for (std::size_t i = 0; i < width; ++i) words[i] = value;
+  }
+  return CUDA_SUCCESS;
+}
 CUresult launch(CUfunction, unsigned int, unsigned int, unsigned int, unsigned int, unsigned int,
                 unsigned int, unsigned int, CUstream, void**, void**) {
   return CUDA_ERROR_NOT_SUPPORTED;
@@ -119,6 +127,7 @@ DriverTable host_driver_table() {
   t.cuLaunchKernel = launch;
   t.cuMemsetD8 = memset8;
   t.cuMemsetD32 = memset32;
+  t.cuMemsetD2D32 = memset2d32;
   return t;
 }
 
