@@ -1,7 +1,9 @@
 // PrunedMatrix (jit/pruned_matrix.h): one pass over the values, copying the non-zero blocks.
 #include "jit/pruned_matrix.h"
 
+#include <algorithm>
 #include <bit>
+#include <functional>
 #include <type_traits>
 
 #include "runtime/system_ops.h"
@@ -40,62 +42,85 @@ void fit(std::vector<T>& v, size_t n) {
   v.resize(n);
 }
 
-// Rows with N x N blocks; n is the run-time size when N is 0. Two passes: the first counts
-// the non-zero blocks, so that the arrays hold only those (on a first call, when the matrix
-// is still on its full pattern, more than half of its blocks may be zero); the second copies
-// each of them (by columns: a compiled product reads block column j as one vector), as
-// binary32 when T is float (false if a value is not one).
+// Rows with N x N blocks; n is the run-time size when N is 0. Two passes over tasks of
+// kRowsPerTask rows: the first counts each task's non-zero blocks, so that the arrays hold
+// only those (on a first call, when the matrix is still on its full pattern, more than half
+// of its blocks may be zero) and each task knows where its blocks go; the second copies each
+// of them (by columns: a compiled product reads block column j as one vector), as binary32
+// when T is float (false if a value is not one). The copy is the same whoever runs a task.
+constexpr size_t kRowsPerTask = 4096;
+
 template <int N, class T>
 bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int32_t* ci,
-           const double* v, size_t rows, int n) {
+           const double* v, size_t rows, int n, const runtime::ForEachTask& for_each) {
   const int m = N ? N : n;
   const int bs = m * m;
-  const size_t blocks = static_cast<size_t>(rp[rows]);
-  size_t nonzero = 0;
-  for (size_t k = 0; k < blocks; ++k)
-    nonzero += zero_block<N>(v + k * static_cast<size_t>(bs), bs) ? 0 : 1;
+  const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
+  auto run = [&](const std::function<void(int64_t)>& task) {
+    if (for_each && tasks > 1) {
+      for_each(static_cast<int64_t>(tasks), task);
+    } else {
+      for (size_t t = 0; t < tasks; ++t) task(static_cast<int64_t>(t));
+    }
+  };
+  std::vector<int32_t> first(tasks + 1, 0);  // each task's first kept block
+  run([&](int64_t t) {
+    int32_t kept = 0;
+    const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
+    for (int32_t k = rp[static_cast<size_t>(t) * kRowsPerTask]; k < rp[end]; ++k)
+      kept += zero_block<N>(v + static_cast<size_t>(k) * bs, bs) ? 0 : 1;
+    first[static_cast<size_t>(t) + 1] = kept;
+  });
+  for (size_t t = 0; t < tasks; ++t) first[t + 1] += first[t];
+  const size_t nonzero = static_cast<size_t>(first[tasks]);
   fit(p.cols, nonzero);
   fit(values, nonzero * static_cast<size_t>(bs) +
                   (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
   T* out = values.data();
-  bool exact = true;
-  int32_t at = 0;
+  std::vector<uint8_t> exact(tasks, 1);
   p.row_ptr[0] = 0;
-  for (size_t r = 0; r < rows; ++r) {
-    for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
-      const double* blk = v + static_cast<size_t>(k) * bs;
-      if (zero_block<N>(blk, bs)) continue;
-      T* o = out + static_cast<size_t>(at) * bs;
-      for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) {
-          const double x = blk[i * m + j];
-          o[j * m + i] = static_cast<T>(x);
-          // A NaN stays a NaN (its payload is not the interpreter's concern).
-          if constexpr (std::is_same_v<T, float>) exact = exact && runtime::is_binary32(x);
-        }
-      cols[at++] = ci[k];
+  run([&](int64_t t) {
+    int32_t at = first[static_cast<size_t>(t)];
+    bool all = true;
+    const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
+    for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; ++r) {
+      for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
+        const double* blk = v + static_cast<size_t>(k) * bs;
+        if (zero_block<N>(blk, bs)) continue;
+        T* o = out + static_cast<size_t>(at) * bs;
+        for (int j = 0; j < m; ++j)
+          for (int i = 0; i < m; ++i) {
+            const double x = blk[i * m + j];
+            o[j * m + i] = static_cast<T>(x);
+            // A NaN stays a NaN (its payload is not the interpreter's concern).
+            if constexpr (std::is_same_v<T, float>) all = all && runtime::is_binary32(x);
+          }
+        cols[at++] = ci[k];
+      }
+      p.row_ptr[r + 1] = at;
     }
-    p.row_ptr[r + 1] = at;
-  }
-  p.kept = at;
-  return exact;
+    exact[static_cast<size_t>(t)] = all;
+  });
+  p.kept = static_cast<int64_t>(nonzero);
+  return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
 }
 
 template <int N>
 bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* ci, const double* v,
-                size_t rows, int n) {
+                size_t rows, int n, const runtime::ForEachTask& for_each) {
   if (single) {
     std::vector<double>().swap(p.values);
-    return prune<N>(p, p.values32, rp, ci, v, rows, n);
+    return prune<N>(p, p.values32, rp, ci, v, rows, n, for_each);
   }
   std::vector<float>().swap(p.values32);
-  return prune<N>(p, p.values, rp, ci, v, rows, n);
+  return prune<N>(p, p.values, rp, ci, v, rows, n, for_each);
 }
 
 }  // namespace
 
-bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single) {
+bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single,
+                          const runtime::ForEachTask& for_each) {
   const auto& rp = m.pattern().row_ptr();
   const int32_t* ci = m.pattern().col_idx().data();
   const size_t rows = rp.size() - 1;
@@ -103,10 +128,10 @@ bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single) {
   total = m.pattern().nnz();
   const int n = m.block_rows();
   switch (n) {
-    case 1: return prune_into<1>(*this, single, rp.data(), ci, m.values(), rows, n);
-    case 2: return prune_into<2>(*this, single, rp.data(), ci, m.values(), rows, n);
-    case 3: return prune_into<3>(*this, single, rp.data(), ci, m.values(), rows, n);
-    default: return prune_into<0>(*this, single, rp.data(), ci, m.values(), rows, n);
+    case 1: return prune_into<1>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
+    case 2: return prune_into<2>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
+    case 3: return prune_into<3>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
+    default: return prune_into<0>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
   }
 }
 

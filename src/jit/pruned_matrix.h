@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runtime/system_matrix.h"
+#include "runtime/system_ops.h"
 
 namespace simit::jit {
 
@@ -27,7 +28,9 @@ struct PrunedMatrix {
   // into values32 when `single`, else into values. False (and the arrays not to be used)
   // when `single` and some value of `m` is not a binary32 value (a matrix the host bound
   // with binary64 values), which a binary32 copy would change.
-  bool assign(const runtime::SystemMatrix& m, bool single = false);
+  // `for_each` runs the passes' tasks (ranges of rows) on the executor's threads.
+  bool assign(const runtime::SystemMatrix& m, bool single = false,
+              const runtime::ForEachTask& for_each = {});
 };
 
 }  // namespace simit::jit

@@ -37,7 +37,13 @@ std::vector<const int32_t*> TraceController::prepare_results(
     const runtime::PatternPtr& pattern = special ? s.pattern->pattern : r.pattern;
     if (special || !call.results[i].matrix()) {
       if (s.last && s.last.use_count() == 1 && s.last->shared_pattern() == pattern) {
-        s.last->set_zero();
+        // Zeroed on the executor's threads (the stiffness of dragon160k is 13.7 MB).
+        double* v = s.last->values();
+        const int64_t n = static_cast<int64_t>(s.last->value_count());
+        constexpr int64_t kPerTask = int64_t{1} << 17;
+        executor_->for_each((n + kPerTask - 1) / kPerTask, [v, n](int64_t t) {
+          std::fill(v + t * kPerTask, v + std::min(n, (t + 1) * kPerTask), 0.0);
+        });
       } else {
         s.last = std::make_shared<runtime::SystemMatrix>(pattern, bd.rows, bd.cols,
                                                          runtime::ComponentKind::Float);

@@ -1,0 +1,76 @@
+// PrunedMatrix's passes over ranges of rows (jit/pruned_matrix.h): run as tasks in any order
+// they make the copy a serial pass makes, block for block, in binary64 and in binary32, and
+// the binary32 copy says when a value is not a binary32 value.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "jit/pruned_matrix.h"
+
+namespace simit::jit {
+namespace {
+
+// A block-tridiagonal matrix of `rows` rows of 3 x 3 blocks, every seventh block zero.
+runtime::SystemMatrix tridiagonal(int rows, bool binary32_values) {
+  std::vector<int32_t> row_ptr{0}, cols;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = std::max(0, r - 1); c <= std::min(rows - 1, r + 1); ++c) cols.push_back(c);
+    row_ptr.push_back(static_cast<int32_t>(cols.size()));
+  }
+  runtime::SystemMatrix k(runtime::MatrixPattern::from_csr(rows, rows, row_ptr, cols), 3, 3);
+  for (size_t b = 0; b < cols.size(); ++b)
+    for (int i = 0; i < 9; ++i) {
+      const double x = b % 7 == 3 ? 0.0 : std::sin(0.37 * static_cast<double>(9 * b + i));
+      k.block(static_cast<int64_t>(b))[i] = binary32_values ? static_cast<float>(x) : x;
+    }
+  return k;
+}
+
+// Runs the tasks last to first, as threads might finish them.
+void backwards(int64_t tasks, const std::function<void(int64_t)>& task) {
+  for (int64_t t = tasks - 1; t >= 0; --t) task(t);
+}
+
+TEST(PrunedMatrix, TasksOfRowsInAnyOrderMakeTheSerialCopy) {
+  const runtime::SystemMatrix k = tridiagonal(10000, false);  // three tasks of rows
+  PrunedMatrix serial, tasks;
+  EXPECT_TRUE(serial.assign(k));
+  EXPECT_TRUE(tasks.assign(k, false, backwards));
+  EXPECT_EQ(serial.kept, tasks.kept);
+  EXPECT_LT(serial.kept, serial.total);  // zero blocks were dropped
+  EXPECT_EQ(serial.row_ptr, tasks.row_ptr);
+  EXPECT_EQ(serial.cols, tasks.cols);
+  EXPECT_EQ(serial.values, tasks.values);
+  // Every kept block is a non-zero block of k, by columns, in row order.
+  int64_t at = 0;
+  for (int64_t b = 0; b < k.pattern().nnz(); ++b) {
+    const double* blk = k.block(b);
+    bool zero = true;
+    for (int i = 0; i < 9; ++i) zero = zero && blk[i] == 0.0;
+    if (zero) continue;
+    ASSERT_LT(at, tasks.kept);
+    EXPECT_EQ(tasks.cols[static_cast<size_t>(at)], k.pattern().col_idx()[static_cast<size_t>(b)]);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        EXPECT_EQ(tasks.values[static_cast<size_t>(at) * 9 + 3 * j + i], blk[3 * i + j]);
+    ++at;
+  }
+  EXPECT_EQ(at, tasks.kept);
+}
+
+TEST(PrunedMatrix, TheBinary32CopyHoldsTheValuesOrSaysItCannot) {
+  const runtime::SystemMatrix k = tridiagonal(10000, true);
+  PrunedMatrix wide, narrow;
+  EXPECT_TRUE(wide.assign(k));
+  EXPECT_TRUE(narrow.assign(k, true, backwards));
+  ASSERT_EQ(narrow.values32.size(), wide.values.size());
+  for (size_t i = 0; i + 1 < wide.values.size(); ++i)  // the last: padding
+    EXPECT_EQ(static_cast<double>(narrow.values32[i]), wide.values[i]) << i;
+  const runtime::SystemMatrix w = tridiagonal(10000, false);
+  PrunedMatrix refused;
+  EXPECT_FALSE(refused.assign(w, true, backwards));
+}
+
+}  // namespace
+}  // namespace simit::jit
