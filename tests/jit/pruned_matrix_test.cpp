@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "jit/pruned_matrix.h"
+#include "jit/thread_pool.h"
 
 namespace simit::jit {
 namespace {
@@ -70,6 +71,21 @@ TEST(PrunedMatrix, TheBinary32CopyHoldsTheValuesOrSaysItCannot) {
   const runtime::SystemMatrix w = tridiagonal(10000, false);
   PrunedMatrix refused;
   EXPECT_FALSE(refused.assign(w, true, backwards));
+}
+
+// On a pool of threads (ThreadSanitizer runs this: scripts/sanitize.sh --thread).
+TEST(PrunedMatrix, OnThreadsTheCopyIsTheSerialOne) {
+  const runtime::SystemMatrix k = tridiagonal(20000, true);
+  ThreadPool pool(3);
+  const auto on_pool = [&pool](int64_t tasks, const std::function<void(int64_t)>& task) {
+    pool.run(tasks, task);
+  };
+  PrunedMatrix serial, threaded;
+  EXPECT_TRUE(serial.assign(k, true));
+  EXPECT_TRUE(threaded.assign(k, true, on_pool));
+  EXPECT_EQ(serial.row_ptr, threaded.row_ptr);
+  EXPECT_EQ(serial.cols, threaded.cols);
+  EXPECT_EQ(serial.values32, threaded.values32);
 }
 
 }  // namespace
