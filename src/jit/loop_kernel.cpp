@@ -130,6 +130,15 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   const double cpu = thread_cpu_ms();
   const SystemBinding& b = e->traced.binding;
   const SystemTrace& t = *e->traced.trace;
+  // A matrix or vector with a value that is not a binary32 value, where the kernel holds a
+  // binary32 copy (--float32): the call is left to the interpreter.
+  auto leave_wide = [e](const ast::Variable& var) {
+    ++e->not_binary32;
+    e->stats.note = "; " + std::to_string(e->not_binary32) + " call" +
+                    (e->not_binary32 > 1 ? "s" : "") + " ran interpreted: '" + var.name +
+                    "' holds values that are not binary32";
+    return false;
+  };
   // The matrices are constant while the loop runs: their zero blocks are dropped once, before
   // anything is bound. Under --float32 the copy is binary32; a matrix with a value that is
   // not one (bound by the host) leaves the call to the interpreter.
@@ -143,13 +152,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
                                     executor_->for_each(tasks, task);
                                   });
       e->prune_cpu_ms += thread_cpu_ms() - before;
-      if (!exact) {
-        ++e->not_binary32;
-        e->stats.note = "; " + std::to_string(e->not_binary32) + " call" +
-                        (e->not_binary32 > 1 ? "s" : "") + " ran interpreted: '" +
-                        b.arrays[i].var->name + "' holds values that are not binary32";
-        return false;
-      }
+      if (!exact) return leave_wide(*b.arrays[i].var);
       e->kept += p.kept;
       e->total += p.total;
     }
@@ -159,13 +162,8 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
     const Value& v = in.variable(*b.arrays[i].var);
     if (v.empty() || !v.is_tensor() || v.tensor().kind() != runtime::ComponentKind::Float)
       continue;  // created below
-    if (!runtime::is_binary32(std::span(v.tensor().floats(), v.tensor().size()))) {
-      ++e->not_binary32;
-      e->stats.note = "; " + std::to_string(e->not_binary32) + " call" +
-                      (e->not_binary32 > 1 ? "s" : "") + " ran interpreted: '" +
-                      b.arrays[i].var->name + "' holds values that are not binary32";
-      return false;
-    }
+    if (!runtime::is_binary32(std::span(v.tensor().floats(), v.tensor().size())))
+      return leave_wide(*b.arrays[i].var);
   }
   Saved saved;
   if (!t.errors.empty()) saved = save_loop_variables(b, t, e->writes_scalar, in);
