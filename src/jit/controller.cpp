@@ -131,6 +131,29 @@ Lowered TraceController::lower_for_device(Entry& e) {
   return l;
 }
 
+// Under `--executor gpu`: the system trace lowered as a device program (its steps kernels of
+// their own, jit/device_program.h) for the GPU's target (emulated: the CPU's, whose steps
+// the emulated executor calls), and marked to run on the GPU; no kernel (the trace as it
+// was) when the GPU cannot run it, with why in the note, so that the host's target compiles
+// it and it runs on the host.
+Lowered TraceController::lower_system_for_device(LoopEntry& e) {
+  Lowered none;
+  if (!device_executor_) return none;
+  const SystemTrace traced = *e.traced.trace;
+  e.traced.trace->device = true;
+  Lowered l = lower(*e.traced.trace, device_target_ ? *device_target_ : *target_, lower_options());
+  if (!l.kernel) {
+    *e.traced.trace = traced;
+    e.where = "; on the host: " + l.failure;
+    e.stats.note = e.where;
+    return none;
+  }
+  e.on_device = true;
+  e.where = device_target_ ? "; on the GPU" : "; on the GPU (emulated)";
+  e.stats.note = e.where;
+  return l;
+}
+
 TraceController::Entry* TraceController::entry_for(interp::SiteCall& call) {
   auto& slot = sites_[call.plan.site];
   if (!slot) {
@@ -246,7 +269,8 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
       fail(e->traced.reason, true);
     } else {
       SystemTrace& t = *e->traced.trace;
-      Lowered l = lower(t, *target_, lower_options());
+      Lowered l = lower_system_for_device(*e);
+      if (!l.kernel) l = lower(t, *target_, lower_options());
       e->sizes = current_sizes(e->traced.binding, in);
       std::ostringstream key;
       for (size_t i = 0; i < t.sizes.size(); ++i) key << (i ? ", " : "") << t.sizes[i];
@@ -259,7 +283,7 @@ TraceController::LoopEntry* TraceController::system_entry_for(LoopState& s,
         fail(l.failure, l.verify_failed);
       } else {
         e->kernel = std::move(l.kernel);
-        e->stats.status = "compiled";
+        e->stats.status = e->on_device ? "compiled for the GPU" : "compiled";
         e->stats.compile_ms = e->kernel->compile_ms;
         e->stats.ir_nodes = l.ir_nodes;
       }

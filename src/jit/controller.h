@@ -108,6 +108,7 @@ class TraceController : public interp::SiteHook {
                               interp::ExecState& in);
   Entry* entry_for(interp::SiteCall& call);
   Lowered lower_for_device(Entry& e);
+  Lowered lower_system_for_device(LoopEntry& e);
   bool run_kernel(Entry& e, interp::SiteCall& call);
   // Per result: its pattern table (null for a vector) and the pattern it belongs to.
   bool prepare_deferred(Entry& e, interp::SiteCall& call, const std::vector<const int32_t*>& tables,

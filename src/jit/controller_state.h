@@ -65,6 +65,8 @@ struct TraceController::LoopEntry {
   std::vector<const ast::Stmt*> run;  // the statements it runs (a while loop alone, or a run)
   TracedSystem traced;
   std::unique_ptr<Kernel> kernel;
+  bool on_device = false;  // a device program, run through the GPU executor
+  std::string where;       // --jit-stats: "; on the GPU", or "; on the host: why"
   // Per matrix the loop multiplies (by the variable): its non-zero blocks, rebuilt per call.
   std::map<const ast::Variable*, PrunedMatrix> pruned;
   int64_t kept = 0, total = 0;  // blocks streamed and blocks in the patterns, over all calls

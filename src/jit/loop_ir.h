@@ -236,6 +236,9 @@ struct SystemTrace {
   // arrays (blocks row-major, zero blocks included, as the interpreter's product reads them)
   // rather than a copy without zero blocks, whose blocks are column-major (PrunedMatrix).
   bool matrices_in_place = false;
+  // Compiled as a device program (jit/device_program.h): its steps as kernels of their own,
+  // the scalars in device memory, for an executor whose memory is elsewhere (the GPU's).
+  bool device = false;
 };
 
 // Prints the trace as text (`--dump=loop-ir`).

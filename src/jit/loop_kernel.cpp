@@ -184,6 +184,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       in.variable(*c.var) = Value::of_tensor(runtime::Tensor(runtime::ComponentKind::Float, shape));
   }
   std::vector<void*> arrays(b.arrays.size(), nullptr);
+  std::vector<size_t> bytes(b.arrays.size(), 0);  // for an executor that copies them
   for (int pass = 0; pass < 2; ++pass)
     for (size_t i = 0; i < b.arrays.size(); ++i) {
       if (t.arrays[i].written != (pass == 0)) continue;
@@ -194,11 +195,13 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
           e->single.resize(b.arrays.size());
           e->single[i].resize(n);
           arrays[i] = e->single[i].data();
+          bytes[i] = n * sizeof(float);
           continue;
         }
         e->scratch.resize(b.arrays.size());
         e->scratch[i].resize(n);
         arrays[i] = e->scratch[i].data();
+        bytes[i] = n * sizeof(double);
         continue;
       }
       Value& v = in.variable(*b.arrays[i].var);
@@ -211,28 +214,38 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
             s.resize(x.size());
             for (size_t k = 0; k < x.size(); ++k) s[k] = static_cast<float>(x.floats()[k]);
             arrays[i] = s.data();
+            bytes[i] = s.size() * sizeof(float);
             break;
           }
           arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
                                           : const_cast<double*>(v.tensor().floats());
+          bytes[i] = v.tensor().size() * sizeof(double);
           break;
-        case Part::RowPtr:
-          arrays[i] = t.matrices_in_place
-                          ? const_cast<int32_t*>(v.matrix()->pattern().row_ptr().data())
-                          : e->pruned[b.arrays[i].var].row_ptr.data();
+        case Part::RowPtr: {
+          const std::vector<int32_t>& r = t.matrices_in_place ? v.matrix()->pattern().row_ptr()
+                                                              : e->pruned[b.arrays[i].var].row_ptr;
+          arrays[i] = const_cast<int32_t*>(r.data());
+          bytes[i] = r.size() * sizeof(int32_t);
           break;
-        case Part::Cols:
-          arrays[i] = t.matrices_in_place
-                          ? const_cast<int32_t*>(v.matrix()->pattern().col_idx().data())
-                          : e->pruned[b.arrays[i].var].cols.data();
+        }
+        case Part::Cols: {
+          const std::vector<int32_t>& c = t.matrices_in_place ? v.matrix()->pattern().col_idx()
+                                                              : e->pruned[b.arrays[i].var].cols;
+          arrays[i] = const_cast<int32_t*>(c.data());
+          bytes[i] = c.size() * sizeof(int32_t);
           break;
+        }
         case Part::Values:
-          if (t.matrices_in_place)
+          if (t.matrices_in_place) {
             arrays[i] = const_cast<double*>(std::as_const(*v.matrix()).values());
-          else if (t.arrays[i].single)
+            bytes[i] = v.matrix()->value_count() * sizeof(double);
+          } else if (t.arrays[i].single) {
             arrays[i] = e->pruned[b.arrays[i].var].values32.data();
-          else
+            bytes[i] = e->pruned[b.arrays[i].var].values32.size() * sizeof(float);
+          } else {
             arrays[i] = e->pruned[b.arrays[i].var].values.data();
+            bytes[i] = e->pruned[b.arrays[i].var].values.size() * sizeof(double);
+          }
           break;
         case Part::Field: {
           runtime::Field& f = bound_field(b.arrays[i], in);
@@ -243,6 +256,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
           else
             arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<double>())
                                             : const_cast<double*>(std::as_const(f).data<double>());
+          bytes[i] = in.variable(*b.arrays[i].var).binding()->set->size() * f.element_bytes();
           break;
         }
         case Part::Scratch: break;
@@ -254,8 +268,15 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
     if (!v.empty()) scalars[i] = component(v, 0);
   }
   interp::Trap& trap = in.trap();
-  const int32_t rc = executor_->run_system(
-      *e->kernel, {arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag()});
+  SystemArgs args{arrays.data(), scalars.data(), e->sizes.data(), trap.interrupt_flag()};
+  std::unique_ptr<bool[]> array_written(new bool[b.arrays.size() + 1]);
+  for (size_t i = 0; i < b.arrays.size(); ++i) array_written[i] = t.arrays[i].written;
+  args.array_count = b.arrays.size();
+  args.size_count = t.sizes.size();
+  args.scalar_count = scalars.size();
+  args.array_bytes = bytes.data();
+  args.array_written = array_written.get();
+  const int32_t rc = (e->on_device ? *device_executor_ : *executor_).run_system(*e->kernel, args);
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
   // the scalars go back to their variables, and the interrupt is raised below.
@@ -291,14 +312,14 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   e->stats.run_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++e->stats.calls;
-  e->stats.note.clear();
+  e->stats.note = e->where;
   if (e->total > 0) {
     char note[160];
     std::snprintf(note, sizeof note,
                   "; products stream %.1f%% of the blocks (zero blocks dropped in %.2f cpu ms)",
                   100.0 * static_cast<double>(e->kept) / static_cast<double>(e->total),
                   e->prune_cpu_ms);
-    e->stats.note = note;
+    e->stats.note += note;
   }
   if (e->not_binary32 > 0)
     e->stats.note += "; " + std::to_string(e->not_binary32) + " call" +

@@ -69,6 +69,12 @@ struct SystemArgs {
   const void* interrupt = nullptr;
   // The executor's thread pool (jit/thread_pool.h) its passes run on, or null: one thread.
   void* pool = nullptr;
+  // For an executor that copies the arrays elsewhere (a device program on the GPU): how many
+  // arrays and sizes there are, each array's size in bytes and whether the kernel writes it,
+  // and how many of `scalars` there are.
+  size_t array_count = 0, size_count = 0, scalar_count = 0;
+  const size_t* array_bytes = nullptr;
+  const bool* array_written = nullptr;
 };
 
 // A system kernel's return when its loop stopped for the interrupt flag (the scalars written
@@ -100,6 +106,8 @@ struct SimdReport {
   std::string summary() const;
 };
 
+struct DeviceProgram;
+
 class Kernel {
  public:
   virtual ~Kernel() = default;
@@ -109,6 +117,12 @@ class Kernel {
   // A system kernel: 0; kSystemInterrupted; or 1 + the index in SystemTrace::errors of the
   // error statement it reached (the scalars and vectors are then partly updated).
   virtual int32_t run(const SystemArgs& args) const = 0;
+  // A device program's step `step` (jit/device_program.h) over its units [first, end), with
+  // `context` its context array: for a kernel compiled from a SystemTrace with `device` set
+  // by a target whose code runs in this process (the emulated GPU's). Throws otherwise.
+  virtual void run_step(int32_t step, int64_t* context, int64_t first, int64_t end) const;
+  // Set for a device program: its steps (their ops not kept: the trace may go first).
+  std::shared_ptr<const DeviceProgram> program;
 
   double compile_ms = 0.0;
   int lanes = 1;        // elements computed at once (a map kernel in SIMD lanes)

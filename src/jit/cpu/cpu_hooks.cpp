@@ -1,6 +1,11 @@
-// The host CPU's hooks of LLVM emission (jit/cpu/cpu_hooks.h).
+// The host CPU's hooks of LLVM emission (jit/cpu/cpu_hooks.h), and the function through which
+// the emulated GPU calls a device program's steps (jit/cpu/emitter.h).
 #include "jit/cpu/cpu_hooks.h"
 
+#include <memory>
+#include <vector>
+
+#include "jit/cpu/emitter.h"
 #include "jit/tunables.h"
 
 #include <string>
@@ -48,6 +53,38 @@ void CpuHooks::fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) {
 llvm::FunctionCallee CpuHooks::runtime_call(llvm::IRBuilder<>& b, const char* name,
                                             llvm::FunctionType* type) {
   return b.GetInsertBlock()->getModule()->getOrInsertFunction(name, type);
+}
+
+
+// The steps as internal functions, and one external function that calls step `step` (a
+// switch over their indices; an index out of range does nothing).
+llvm::Function* Emitter::run_device_steps(const std::string& name) {
+  const SystemTrace& t = *std::get<const SystemTrace*>(trace_);
+  CpuHooks hooks;
+  std::unique_ptr<codegen::TargetHooks> step_hooks = codegen::device_step_hooks(hooks);
+  const std::vector<llvm::Function*> steps =
+      codegen::SystemEmitter(t, m_, *step_hooks).device_steps(plan_device_program(t), name);
+  llvm::LLVMContext& ctx = m_.getContext();
+  llvm::IRBuilder<> b(ctx);
+  llvm::Type* ptr = b.getPtrTy();
+  llvm::Type* i64 = b.getInt64Ty();
+  auto* ft = llvm::FunctionType::get(b.getVoidTy(), {b.getInt32Ty(), ptr, i64, i64}, false);
+  auto* fn = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
+  auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
+  auto* done = llvm::BasicBlock::Create(ctx, "done", fn);
+  b.SetInsertPoint(done);
+  b.CreateRetVoid();
+  b.SetInsertPoint(entry);
+  llvm::SwitchInst* sw =
+      b.CreateSwitch(fn->getArg(0), done, static_cast<unsigned>(steps.size()));
+  for (size_t i = 0; i < steps.size(); ++i) {
+    auto* call = llvm::BasicBlock::Create(ctx, "step", fn);
+    sw->addCase(b.getInt32(static_cast<uint32_t>(i)), call);
+    b.SetInsertPoint(call);
+    b.CreateCall(steps[i], {fn->getArg(1), fn->getArg(2), fn->getArg(3)});
+    b.CreateBr(done);
+  }
+  return fn;
 }
 
 }  // namespace simit::jit::cpu

@@ -36,6 +36,9 @@ class Emitter {
     CpuHooks hooks;
     return codegen::SystemEmitter(*std::get<const SystemTrace*>(trace_), m_, hooks).run(name);
   }
+  // A device program's steps (jit/device_program.h) behind one function, which the emulated
+  // GPU calls: void name(int32_t step, int64_t* context, int64_t first, int64_t end).
+  llvm::Function* run_device_steps(const std::string& name);
 
  private:
   std::variant<const Trace*, const SystemTrace*> trace_;

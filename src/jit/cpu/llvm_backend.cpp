@@ -9,6 +9,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 
 #include <llvm/Config/llvm-config.h>
 #include <llvm/ExecutionEngine/Orc/CompileUtils.h>
@@ -27,6 +28,7 @@
 
 #include "jit/cpu/emitter.h"
 #include "jit/cpu/simd_remarks.h"
+#include "jit/device_program.h"
 #include "jit/kernel_cache.h"
 #include "runtime/math/math_functions.h"
 
@@ -166,6 +168,7 @@ class CpuKernel : public Kernel {
   CpuKernel(llvm::orc::ExecutionSession& es, llvm::orc::JITDylib& jd) : es_(es), jd_(&jd) {}
   void* address = nullptr;
   bool system = false;
+  bool device = false;  // a device program's steps (Emitter::run_device_steps)
   ~CpuKernel() override { llvm::consumeError(es_.removeJITDylib(*jd_)); }
   int32_t run(const MapArgs& a, ElementRange r, int32_t* failed) const override {
     return system ? 0
@@ -173,9 +176,15 @@ class CpuKernel : public Kernel {
                                                      r.end, failed);
   }
   int32_t run(const SystemArgs& a) const override {
+    if (device) throw std::logic_error("a device program runs through its executor's steps");
     return system ? reinterpret_cast<SystemFn>(address)(a.arrays, a.scalars, a.sizes, a.interrupt,
                                                         a.pool)
                   : 0;
+  }
+  void run_step(int32_t step, int64_t* context, int64_t first, int64_t end) const override {
+    if (!device) return Kernel::run_step(step, context, first, end);
+    reinterpret_cast<void (*)(int32_t, int64_t*, int64_t, int64_t)>(address)(step, context, first,
+                                                                            end);
   }
 
  private:
@@ -260,11 +269,23 @@ class CpuTarget : public Target {
   }
   std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
                                   std::string& error) override {
+    if (trace.device) {
+      if (std::string why = device_refusal(trace); !why.empty()) {
+        error = why;
+        return nullptr;
+      }
+    }
     auto k = build(key_of(trace), kOptLevel, false, false, keep_ir, error,
                    [&](llvm::Module& m, const std::string& name) {
-                     return Emitter(trace, m).run_system(name);
+                     return trace.device ? Emitter(trace, m).run_device_steps(name)
+                                         : Emitter(trace, m).run_system(name);
                    });
-    if (k) k->system = true;
+    if (!k) return k;
+    k->system = true;
+    if (trace.device) {
+      k->device = true;
+      k->program = detached_device_program(trace);
+    }
     return k;
   }
 

@@ -137,9 +137,9 @@ void SystemEmitter::store_component(int slot, Value* k, Value* v) {
   b_.CreateStore(v, b_.CreateInBoundsGEP(storage(a), arrays_[slot], k));
 }
 
-// arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
-// component of the row just computed.
-void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
+// Row block r (an i64) of arrays[y] = matrix * arrays[x]; then the op's body for each
+// component of the row, its sums' run part added to lane `lane` (null: no sums).
+void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
   const int bs = op.block;
   llvm::Type* i64 = b_.getInt64Ty();
   llvm::Type* f64 = b_.getDoubleTy();
@@ -161,71 +161,74 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
     llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
     sums = entry.CreateAlloca(vec);
   }
-  auto row_of = [&](Value* r, Value* lane) {
-    b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
-    Value* lo =
+  b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
+  Value* lo =
+      b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
+                                  b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+                    i64);
+  Value* hi = b_.CreateSExt(
+      b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
+                                                          b_.CreateAdd(r, b_.getInt64(1)))),
+      i64);
+  loop(lo, hi, [&](Value* k) {
+    Value* col =
         b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
-                                    b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+                                    b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
                       i64);
-    Value* hi = b_.CreateSExt(
-        b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
-                                                            b_.CreateAdd(r, b_.getInt64(1)))),
-        i64);
-    loop(lo, hi, [&](Value* k) {
-      Value* col =
-          b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
-                                      b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
-                        i64);
-      Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
-      Value* xc = b_.CreateMul(col, b_.getInt64(bs));
-      Value* part = nullptr;
-      for (int j = 0; j < bs; ++j) {
-        Value* a;
-        if (st_.matrices_in_place) {
-          // The matrix's own blocks are row-major: column j is every bs-th value, and the
-          // lanes past bs stay zero (their sums are never read).
-          a = llvm::ConstantFP::get(vec, 0.0);
-          for (int i = 0; i < bs; ++i)
-            a = b_.CreateInsertElement(
-                a,
-                b_.CreateLoad(f64,
-                              b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                   b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
-                static_cast<uint64_t>(i));
-        } else if (single) {
-          // Under float32 the copy holds binary32 values: widened exactly, half the bytes.
-          llvm::LoadInst* column =
-              b_.CreateLoad(vec32, b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.values],
-                                                        b_.CreateAdd(blk, b_.getInt64(j * bs))));
-          column->setAlignment(llvm::Align(4));
-          a = b_.CreateFPExt(column, vec);
-        } else {
-          llvm::LoadInst* column =
-              b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+    Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
+    Value* xc = b_.CreateMul(col, b_.getInt64(bs));
+    Value* part = nullptr;
+    for (int j = 0; j < bs; ++j) {
+      Value* a;
+      if (st_.matrices_in_place) {
+        // The matrix's own blocks are row-major: column j is every bs-th value, and the
+        // lanes past bs stay zero (their sums are never read).
+        a = llvm::ConstantFP::get(vec, 0.0);
+        for (int i = 0; i < bs; ++i)
+          a = b_.CreateInsertElement(
+              a,
+              b_.CreateLoad(f64,
+                            b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                 b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
+              static_cast<uint64_t>(i));
+      } else if (single) {
+        // Under float32 the copy holds binary32 values: widened exactly, half the bytes.
+        llvm::LoadInst* column =
+            b_.CreateLoad(vec32, b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.values],
                                                       b_.CreateAdd(blk, b_.getInt64(j * bs))));
-          column->setAlignment(llvm::Align(8));
-          a = column;
-        }
-        Value* x = load_component(op.x, b_.CreateAdd(xc, b_.getInt64(j)));
-        Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
-        part = part ? b_.CreateFAdd(part, term) : term;
+        column->setAlignment(llvm::Align(4));
+        a = b_.CreateFPExt(column, vec);
+      } else {
+        llvm::LoadInst* column =
+            b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                    b_.CreateAdd(blk, b_.getInt64(j * bs))));
+        column->setAlignment(llvm::Align(8));
+        a = column;
       }
-      b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
-    });
-    Value* row = b_.CreateMul(r, b_.getInt64(bs));
-    Value* total = b_.CreateLoad(vec, sums);
-    for (int i = 0; i < bs; ++i)
-      store_component(op.y, b_.CreateAdd(row, b_.getInt64(i)),
-                      b_.CreateExtractElement(total, static_cast<uint64_t>(i)));
-    run_of(op, row, bs, lane);
-  };
+      Value* x = load_component(op.x, b_.CreateAdd(xc, b_.getInt64(j)));
+      Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
+      part = part ? b_.CreateFAdd(part, term) : term;
+    }
+    b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
+  });
+  Value* row = b_.CreateMul(r, b_.getInt64(bs));
+  Value* total = b_.CreateLoad(vec, sums);
+  for (int i = 0; i < bs; ++i)
+    store_component(op.y, b_.CreateAdd(row, b_.getInt64(i)),
+                    b_.CreateExtractElement(total, static_cast<uint64_t>(i)));
+  run_of(op, row, bs, lane);
+}
+
+// arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
+// component of the row just computed.
+void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
   if (op.sums.empty()) {
     const auto [lo, hi] = unit_range(sizes[op.rows], static_cast<int64_t>(runtime::kSumChunk));
-    return loop(lo, hi, [&](Value* r) { row_of(r, nullptr); });
+    return loop(lo, hi, [&](Value* r) { spmv_row(op, r, nullptr); });
   }
   // A reduction fused into the product: a row block is one element of its sums.
   chunked(op, sizes[op.rows], [&](Value* begin, Value* end) {
-    loop(begin, end, [&](Value* r) { row_of(r, lane_of(b_.CreateSub(r, begin))); });
+    loop(begin, end, [&](Value* r) { spmv_row(op, r, lane_of(b_.CreateSub(r, begin))); });
   });
 }
 

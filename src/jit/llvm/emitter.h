@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +14,7 @@
 #include <llvm/IR/LLVMContext.h>
 #include <llvm/IR/Module.h>
 
+#include "jit/device_program.h"
 #include "jit/llvm/target_hooks.h"
 #include "jit/loop_ir.h"
 
@@ -176,10 +178,19 @@ class SystemEmitter : public Emitter {
       : Emitter(m, hooks, t.arrays, t.locals, false, false, false), st_(t) {}
 
   llvm::Function* run(const std::string& name);
+  // A device program's steps (jit/device_program.h; emit_device_steps.cpp), each as
+  //   void step(int64_t* context, int64_t first_unit, int64_t end_unit)
+  // (internal functions: the target wraps each in its own entry), in DeviceProgram::all's
+  // order, named device_step_name(prefix, i). Build the emitter with device_step_hooks.
+  std::vector<llvm::Function*> device_steps(const DeviceProgram& p, const std::string& prefix);
 
  private:
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
   void spmv(const VectorOp& op, const std::vector<Value*>& sizes);
+  void spmv_row(const VectorOp& op, Value* r, Value* lane);
+  llvm::Function* device_step(const DeviceStep& s, const std::string& name);
+  void device_units(const DeviceStep& s, Value* first, Value* end,
+                    const std::vector<Value*>& sizes);
   void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
   // The op's body for the `group` components of one run starting at `first` (an i64); with
   // sums, each taken over the run alone and then added to lane `lane` (an i64) of its chunk.
@@ -224,6 +235,10 @@ class SystemEmitter : public Emitter {
   Value* partials_ = nullptr;  // per unit and sum, a chunk's partial
   int outlined_ops_ = 0;
 };
+
+// Hooks for a device program's steps: `target`'s, except that a failed check stores 1 + its
+// index in the context's error word and leaves the step (emit_device_steps.cpp).
+std::unique_ptr<TargetHooks> device_step_hooks(TargetHooks& target);
 
 // Components of a pass without sums an outlined call runs per unit.
 inline constexpr int64_t kPassUnit = 1024;

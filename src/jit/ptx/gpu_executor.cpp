@@ -4,11 +4,13 @@
 #include "jit/ptx/gpu_executor.h"
 
 #include <algorithm>
+#include <cstring>
 #include <map>
 #include <stdexcept>
 #include <vector>
 
 #include "jit/deferred_plan.h"
+#include "jit/device_program.h"
 #include "jit/ptx/cuda_driver.h"
 #include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/host_driver.h"
@@ -24,6 +26,10 @@ constexpr unsigned kBlock = 128;
 // A mirror not used by the last this many calls is freed (the arrays of sites that stopped
 // running, or of a set that grew, do not hold device memory for good).
 constexpr long kKeepCalls = 64;
+// A solver loop's iterations launched before the host next reads the stop word: 1, 2, 4, ...
+// up to this many (a loop of n iterations waits about log2(n) + n / 32 times, and launches
+// at most 31 iterations' steps that find the stop word set and return at once).
+constexpr int kMostIterationsAtOnce = 32;
 
 class GpuExecutor final : public Executor {
  public:
@@ -35,6 +41,8 @@ class GpuExecutor final : public Executor {
       for (auto& [plan, u] : uploads_) free_index(u);
       device_->free(pointers_);
       device_->free(failure_);
+      for (cuda::DeviceArray* a : {&system_pointers_, &sizes_, &context_, &lanes_, &partials_})
+        device_->free(*a);
     } catch (const cuda::CudaError&) {
       // A driver that fails while the process ends: the memory goes with the context.
     }
@@ -177,6 +185,86 @@ class GpuExecutor final : public Executor {
         copy_back(it->second.array);
     }
     pending_.clear();
+  }
+
+  // A device program (jit/device_program.h): its arrays mirrored as a map's are, its
+  // scalars in the context array, its steps launched one after another with nothing read
+  // back between them; the loop's steps in batches of iterations, after each of which the
+  // host reads the context's stop and error words (and takes an interrupt). A kernel that is
+  // not a device program runs on the host, where the data is (every run copies back).
+  int32_t run_system(const Kernel& kernel, const SystemArgs& args) override {
+    if (!kernel.program) return kernel.run(args);
+    if (args.array_count > 0 && (!args.array_bytes || !args.array_written))
+      throw std::logic_error("a GPU executor needs each array's size (SystemArgs::array_bytes)");
+    const DeviceProgram& p = *kernel.program;
+    ++call_;
+    ++traffic_.system_runs;
+    device_->make_current();
+    copy_back_pending();
+    const std::vector<int64_t> sizes(args.sizes, args.sizes + args.size_count);
+    std::vector<cuda::DeviceArray*> arrays(args.array_count, nullptr);
+    system_pointers_host_.assign(args.array_count, 0);
+    for (size_t i = 0; i < args.array_count; ++i) {
+      arrays[i] = to_device(args.arrays[i], args.array_bytes[i], 0);
+      system_pointers_host_[i] = arrays[i] ? arrays[i]->device : 0;
+      if (args.array_written[i] && arrays[i]) holder(args.arrays[i]).version = 0;
+    }
+    sizes_host_ = sizes;
+    upload(system_pointers_, system_pointers_host_.data(),
+           system_pointers_host_.size() * sizeof(cuda::CUdeviceptr));
+    upload(sizes_, sizes_host_.data(), sizes_host_.size() * sizeof(int64_t));
+    scratch(lanes_, static_cast<size_t>(p.lane_doubles(sizes)) * sizeof(double));
+    scratch(partials_, static_cast<size_t>(p.partial_doubles(sizes)) * sizeof(double));
+    context_host_.assign(static_cast<size_t>(p.context_words()), 0);
+    context_host_[kCtxArrays] = static_cast<int64_t>(system_pointers_.device);
+    context_host_[kCtxSizes] = static_cast<int64_t>(sizes_.device);
+    context_host_[kCtxLanes] = static_cast<int64_t>(lanes_.device);
+    context_host_[kCtxPartials] = static_cast<int64_t>(partials_.device);
+    for (int i = 0; i < p.scalars && static_cast<size_t>(i) < args.scalar_count; ++i)
+      put_local(p.local_types[static_cast<size_t>(i)], args.scalars[i],
+                &context_host_[static_cast<size_t>(kContextHead + i)]);
+    upload(context_, context_host_.data(), context_host_.size() * sizeof(int64_t));
+
+    const std::vector<const DeviceStep*> steps = p.all();
+    const size_t loop_first = p.before.size(), after_first = loop_first + p.loop.size();
+    auto run = [&](size_t from, size_t to) {
+      for (size_t i = from; i < to; ++i) launch_step(kernel, static_cast<int32_t>(i), *steps[i], p, sizes);
+    };
+    auto read_context = [&] {
+      if (!emulated_) device_->synchronize();
+      context_.device_dirty = true;
+      device_->to_host(context_);
+      ++traffic_.system_batches;
+    };
+    bool interrupted = false;
+    run(0, loop_first);
+    if (p.has_loop) {
+      for (int batch = 1;; batch = std::min(batch * 2, kMostIterationsAtOnce)) {
+        for (int it = 0; it < batch; ++it) run(loop_first, after_first);
+        read_context();
+        if (context_host_[kCtxError] != 0 || context_host_[kCtxStop] != 0) break;
+        if (args.interrupt &&
+            __atomic_load_n(static_cast<const uint8_t*>(args.interrupt), __ATOMIC_RELAXED) != 0) {
+          interrupted = true;
+          break;
+        }
+      }
+    }
+    if (!interrupted && context_host_[kCtxError] == 0) run(after_first, steps.size());
+    read_context();
+    for (int i = 0; i < p.scalars && static_cast<size_t>(i) < args.scalar_count; ++i)
+      args.scalars[i] = get_local(p.local_types[static_cast<size_t>(i)],
+                                  &context_host_[static_cast<size_t>(kContextHead + i)]);
+    // Every array the program wrote back out (after an error statement too: the host's
+    // kernel leaves what it wrote, and the caller puts back what it saved).
+    for (size_t i = 0; i < args.array_count; ++i)
+      if (args.array_written[i] && arrays[i]) {
+        arrays[i]->device_dirty = true;
+        copy_back(*arrays[i]);
+      }
+    evict();
+    if (context_host_[kCtxError] != 0) return static_cast<int32_t>(context_host_[kCtxError]);
+    return interrupted ? kSystemInterrupted : 0;
   }
 
   GpuTraffic traffic_;
@@ -380,8 +468,100 @@ class GpuExecutor final : public Executor {
     return {failed_check(failure_word_) + 1, failed_element(failure_word_)};
   }
 
+  // A local's value as the program's scalars hold it (a double) into its context word, in
+  // the local's own type (as a step stores it: little-endian, at the word's address), and
+  // back.
+  static void put_local(Ty t, double v, int64_t* word) {
+    *word = 0;
+    if (t == Ty::F64) {
+      std::memcpy(word, &v, sizeof v);
+    } else if (t == Ty::I32) {
+      const auto i = static_cast<int32_t>(v);
+      std::memcpy(word, &i, sizeof i);
+    } else {
+      const uint8_t bit = v != 0.0 ? 1 : 0;
+      std::memcpy(word, &bit, sizeof bit);
+    }
+  }
+  static double get_local(Ty t, const int64_t* word) {
+    if (t == Ty::F64) {
+      double v;
+      std::memcpy(&v, word, sizeof v);
+      return v;
+    }
+    if (t == Ty::I32) {
+      int32_t i;
+      std::memcpy(&i, word, sizeof i);
+      return i;
+    }
+    uint8_t bit;
+    std::memcpy(&bit, word, sizeof bit);
+    return (bit & 1) != 0 ? 1.0 : 0.0;
+  }
+
+  // `host` (`bytes`) into device array `a`, reallocated when its size changed.
+  void upload(cuda::DeviceArray& a, void* host, size_t bytes) {
+    if (a.bytes != bytes || a.device == 0) {
+      device_->free(a);
+      a = device_->alloc(host, bytes);
+      ++traffic_.allocations;
+    }
+    a.host = host;
+    a.host_dirty = true;
+    device_->to_device(a);
+    traffic_.bytes_to_device += static_cast<long long>(bytes);
+  }
+  // Device-only scratch of at least `bytes`.
+  void scratch(cuda::DeviceArray& a, size_t bytes) {
+    if (a.bytes >= bytes && a.device != 0) return;
+    device_->free(a);
+    a = device_->alloc(nullptr, bytes);
+    ++traffic_.allocations;
+  }
+
+  // Step `index` of a device program over its units: a launch of one unit per thread, or,
+  // emulated, the CPU's step function over all of them (the context's device address is a
+  // host address there).
+  void launch_step(const Kernel& kernel, int32_t index, const DeviceStep& step,
+                   const DeviceProgram& p, const std::vector<int64_t>& sizes) {
+    const int64_t units = p.units(step, sizes);
+    if (units <= 0) return;
+    ++traffic_.launches;
+    if (emulated_) {
+      kernel.run_step(index, reinterpret_cast<int64_t*>(context_.device), 0, units);
+      return;
+    }
+    const cuda::CUfunction fn = step_function(kernel, index);
+    const cuda::KernelArg params[] = {cuda::KernelArg::of(context_.device),
+                                      cuda::KernelArg::of(units)};
+    const auto blocks = static_cast<unsigned>((units + kBlock - 1) / kBlock);
+    device_->launch(fn, cuda::Dim3{blocks}, cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock},
+                    params);
+  }
+
+  cuda::CUfunction step_function(const Kernel& kernel, int32_t index) {
+    auto& fns = step_functions_[&kernel];
+    if (fns.empty()) {
+      const auto* ptx = dynamic_cast<const PtxKernel*>(&kernel);
+      if (!ptx) throw std::logic_error("the GPU executor was given a kernel compiled for the CPU");
+      if (arch_.empty()) {
+        arch_ = ptx_directive(ptx->ptx, ".target");
+        ptx_version_ = ptx_directive(ptx->ptx, ".version");
+      }
+      cuda::CUmodule module = device_->load_module(ptx->ptx);
+      for (const std::string& entry : ptx->entries) fns.push_back(device_->function(module, entry));
+    }
+    return fns.at(static_cast<size_t>(index));
+  }
+
   std::unique_ptr<cuda::Device> device_;
   std::map<const void*, Mirror> mirrors_;
+  // A device program's functions, by step, per kernel.
+  std::map<const Kernel*, std::vector<cuda::CUfunction>> step_functions_;
+  // A device program's pointer table, sizes, context and sum scratch (and their host copies).
+  std::vector<cuda::CUdeviceptr> system_pointers_host_;
+  std::vector<int64_t> sizes_host_, context_host_;
+  cuda::DeviceArray system_pointers_, sizes_, context_, lanes_, partials_;
   std::map<const Kernel*, cuda::CUfunction> functions_;
   // Per plan (by address; its build id tells a rebuilt or new plan there), its gather index.
   std::map<const DeferredPlan*, IndexUpload> uploads_;

@@ -79,6 +79,9 @@ struct GpuTraffic {
   long long bytes_filled = 0;
   long gather_launches = 0;  // of the gather kernel (counted in launches too)
   long index_uploads = 0;    // gather indices copied to the device (once per plan build)
+  // Device programs (solver loops): calls, and the host's waits for a batch of iterations.
+  long system_runs = 0;
+  long system_batches = 0;
 };
 GpuTraffic gpu_traffic(const Executor& executor);
 

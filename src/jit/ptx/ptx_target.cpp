@@ -11,6 +11,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include <llvm/IR/CallingConv.h>
+#include <llvm/IR/IntrinsicsNVPTX.h>
 #include <llvm/IR/LegacyPassManager.h>
 #include <llvm/IR/Verifier.h>
 #include <llvm/MC/MCSubtargetInfo.h>
@@ -21,6 +23,8 @@
 #include <llvm/Target/TargetMachine.h>
 #include <llvm/Target/TargetOptions.h>
 
+#include "jit/device_program.h"
+#include "jit/llvm/emitter.h"
 #include "jit/ptx/device_math.h"
 #include "jit/ptx/ptx_hooks.h"
 #include "jit/tunables.h"
@@ -103,43 +107,110 @@ class PtxTarget : public Target {
       error = hooks.refused();
       return nullptr;
     }
-    std::string broken;
-    llvm::raw_string_ostream bs(broken);
-    if (llvm::verifyModule(m, &bs)) {
-      error = "LLVM rejected the generated code: " + bs.str();
-      return nullptr;
-    }
-    // The project's math functions the kernel calls, from their device bitcode (the same
-    // sources as the host's), so the module is whole and computes the host's bits.
-    if (!link_device_math(m, error)) return nullptr;
-    // Large traces skip the pipeline, as on the CPU (jit/tunables.h).
-    optimise(m, *tm, node_count(trace) > kLargeTrace ? 0 : kOptLevel);
     auto k = std::make_unique<PtxKernel>();
-    if (keep_ir) {
-      llvm::raw_string_ostream os(k->llvm_ir);
-      m.print(os, nullptr);
-    }
-    llvm::SmallString<0> text;
-    llvm::raw_svector_ostream os(text);
-    llvm::legacy::PassManager pm;
-    if (tm->addPassesToEmitFile(pm, os, nullptr, llvm::CodeGenFileType::AssemblyFile)) {
-      error = "LLVM's NVPTX back end cannot emit PTX text";
-      return nullptr;
-    }
-    pm.run(m);
-    k->ptx = text.str().str();
+    if (!finish(m, *tm, *k, keep_ir, node_count(trace) > kLargeTrace, error)) return nullptr;
     k->entry = kMapEntry;
     k->compile_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return k;
   }
 
-  std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool, std::string& error) override {
-    error = gpu_refusal(trace);
-    return nullptr;
+  // A device program (SystemTrace::device): each step a kernel of one unit per thread.
+  std::unique_ptr<Kernel> compile(const SystemTrace& trace, bool keep_ir,
+                                  std::string& error) override {
+    if (std::string why = gpu_refusal(trace); !why.empty()) {
+      error = why;
+      return nullptr;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    std::unique_ptr<llvm::TargetMachine> tm = machine(false);
+    if (!tm) {
+      error = "LLVM could not make a target machine for " + arch_;
+      return nullptr;
+    }
+    llvm::LLVMContext ctx;
+    llvm::Module m(kStepEntry, ctx);
+    m.setTargetTriple(kTriple);
+    m.setDataLayout(tm->createDataLayout());
+    PtxHooks hooks;
+    std::unique_ptr<codegen::TargetHooks> step_hooks = codegen::device_step_hooks(hooks);
+    const DeviceProgram program = plan_device_program(trace);
+    const std::vector<llvm::Function*> steps =
+        codegen::SystemEmitter(trace, m, *step_hooks).device_steps(program, "simit_step_body");
+    auto k = std::make_unique<PtxKernel>();
+    for (size_t i = 0; i < steps.size(); ++i)
+      k->entries.push_back(step_kernel(m, *steps[i], device_step_name(kStepEntry, i)));
+    if (!hooks.refused().empty()) {
+      error = hooks.refused();
+      return nullptr;
+    }
+    if (!finish(m, *tm, *k, keep_ir, false, error)) return nullptr;
+    k->program = detached_device_program(trace);
+    k->compile_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return k;
   }
 
  private:
+  // Verifies the module, links the project's math functions from their device bitcode (the
+  // same sources as the host's, so the module is whole and computes the host's bits),
+  // optimises it (not a large trace, as on the CPU: jit/tunables.h) and emits its PTX.
+  static bool finish(llvm::Module& m, llvm::TargetMachine& tm, PtxKernel& k, bool keep_ir,
+                     bool large, std::string& error) {
+    std::string broken;
+    llvm::raw_string_ostream bs(broken);
+    if (llvm::verifyModule(m, &bs)) {
+      error = "LLVM rejected the generated code: " + bs.str();
+      return false;
+    }
+    if (!link_device_math(m, error)) return false;
+    optimise(m, tm, large ? 0 : kOptLevel);
+    if (keep_ir) {
+      llvm::raw_string_ostream os(k.llvm_ir);
+      m.print(os, nullptr);
+    }
+    llvm::SmallString<0> text;
+    llvm::raw_svector_ostream os(text);
+    llvm::legacy::PassManager pm;
+    if (tm.addPassesToEmitFile(pm, os, nullptr, llvm::CodeGenFileType::AssemblyFile)) {
+      error = "LLVM's NVPTX back end cannot emit PTX text";
+      return false;
+    }
+    pm.run(m);
+    k.ptx = text.str().str();
+    return true;
+  }
+
+  // The kernel `name`(int64_t* context, int64_t units) around a step: unit
+  // blockIdx.x * blockDim.x + threadIdx.x (in 64 bits) when it is below `units`.
+  static std::string step_kernel(llvm::Module& m, llvm::Function& step, const std::string& name) {
+    llvm::LLVMContext& ctx = m.getContext();
+    llvm::IRBuilder<> b(ctx);
+    llvm::Type* i64 = b.getInt64Ty();
+    auto* ft = llvm::FunctionType::get(b.getVoidTy(), {b.getPtrTy(), i64}, false);
+    auto* fn = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m);
+    fn->setCallingConv(llvm::CallingConv::PTX_Kernel);
+    step.addFnAttr(llvm::Attribute::AlwaysInline);
+    auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
+    auto* run = llvm::BasicBlock::Create(ctx, "unit", fn);
+    auto* done = llvm::BasicBlock::Create(ctx, "done", fn);
+    b.SetInsertPoint(entry);
+    auto sreg = [&](llvm::Intrinsic::ID id) {
+      return b.CreateZExt(b.CreateIntrinsic(id, {}, {}), i64);
+    };
+    llvm::Value* u =
+        b.CreateAdd(b.CreateMul(sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x),
+                                sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x)),
+                    sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x));
+    b.CreateCondBr(b.CreateICmpSLT(u, fn->getArg(1)), run, done);
+    b.SetInsertPoint(run);
+    b.CreateCall(&step, {fn->getArg(0), u, b.CreateAdd(u, b.getInt64(1))});
+    b.CreateBr(done);
+    b.SetInsertPoint(done);
+    b.CreateRetVoid();
+    return name;
+  }
+
   // A machine of its own per compile (compiles on several threads stay apart).
   std::unique_ptr<llvm::TargetMachine> machine(bool large) const {
     llvm::TargetOptions options;
@@ -170,9 +241,9 @@ std::string gpu_refusal(const Trace& t) {
   return "";
 }
 
-std::string gpu_refusal(const SystemTrace&) {
-  return "system statements (solver loops, vector updates): their passes, sparse products and "
-         "blocked sums are not compiled for the GPU yet";
+std::string gpu_refusal(const SystemTrace& t) {
+  if (!t.device) return "not lowered as a device program";
+  return device_refusal(t);
 }
 
 std::unique_ptr<Target> make_ptx_target(const std::string& gpu_arch, std::string& error) {

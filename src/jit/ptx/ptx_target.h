@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "jit/loop_ir.h"
 #include "jit/target.h"
@@ -17,6 +18,9 @@ namespace simit::jit::ptx {
 inline constexpr const char* kDefaultGpuArch = "sm_90";
 // The name of a map kernel's `.entry` (one per module).
 inline constexpr const char* kMapEntry = "simit_map";
+// A device program's step kernels: device_step_name(kStepEntry, i), each
+// (int64_t* context, int64_t units) (jit/device_program.h).
+inline constexpr const char* kStepEntry = "simit_step";
 
 // A map kernel's failure word: a uint64_t in device memory, kNoFailure before the launch;
 // after it, kNoFailure when no check failed, else the lowest (element, error) of the threads
@@ -31,13 +35,15 @@ inline int32_t failed_check(uint64_t word) { return static_cast<int32_t>(word & 
 class PtxKernel : public Kernel {
  public:
   std::string ptx;
-  std::string entry;
+  std::string entry;                 // a map kernel's
+  std::vector<std::string> entries;  // a device program's, one per step
   int32_t run(const MapArgs& args, ElementRange range, int32_t* failed_element) const override;
   int32_t run(const SystemArgs& args) const override;
 };
 
 // Why a trace is not compiled for the GPU, or "" when it is: a trace that calls the runtime
-// (a decomposition), and every system trace (solver loops, vector updates) for now.
+// (a decomposition); a system trace not lowered as a device program, or one whose passes
+// cannot run apart (device_refusal).
 std::string gpu_refusal(const Trace& t);
 std::string gpu_refusal(const SystemTrace& t);
 
