@@ -287,7 +287,7 @@ TEST(Ptx, TheDeviceMathBitcodeComputesTheHostsBits) {
   EXPECT_TRUE(has(error, "has no simit_math_none")) << error;
 }
 
-TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesAreRefusedWithTheirReason) {
+TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesNotForTheDeviceAreRefusedWithTheirReason) {
   Trace t = multiply_add();
   Stmt d;
   d.kind = StmtKind::Decompose;
@@ -312,10 +312,28 @@ TEST(Ptx, TracesThatCallTheRuntimeAndSystemTracesAreRefusedWithTheirReason) {
   std::string error;
   EXPECT_FALSE(target->compile(t, false, error));
   EXPECT_EQ(error, why);
+  // A system trace runs on the GPU only as a device program, and one whose pass checks a
+  // value (its units could not run apart) not at all.
   SystemTrace s;
   EXPECT_FALSE(target->compile(s, false, error));
-  EXPECT_TRUE(has(error, "not compiled for the GPU yet")) << error;
+  EXPECT_EQ(error, "not lowered as a device program");
   EXPECT_EQ(error, ptx::gpu_refusal(s));
+  s.device = true;
+  s.sizes = {"n"};
+  s.locals = {Ty::F64};
+  VectorOp pass;
+  pass.kind = VectorOp::Kind::Pass;
+  pass.length = 0;
+  Stmt check;
+  check.kind = StmtKind::Check;
+  check.value = node(ExprKind::Compare, Ty::Bool, static_cast<uint8_t>(CmpOp::Gt),
+                     {constant(1.0), constant(0.0)});
+  check.error = 0;
+  s.errors.push_back(ErrorSite{{}, "never"});
+  pass.body.push_back(check);
+  s.before.push_back(pass);
+  EXPECT_FALSE(target->compile(s, false, error));
+  EXPECT_EQ(error, "a pass or product checks a value");
 }
 
 TEST(Ptx, AnUnknownArchitectureIsAClearError) {
@@ -437,13 +455,13 @@ TEST(Ptx, ARunChecksEveryCompiledTraceAndDumpsItsPtx) {
                   "// singular (line 25): not compiled for the GPU: calls the runtime's "
                   "simit_jit_decompose, which has no device version yet\n"))
       << d;
-  EXPECT_TRUE(has(d, "// statement (line 26): not compiled for the GPU: system statements")) << d;
+  // The system statement: a device program, a kernel per step.
+  EXPECT_TRUE(has(d, "// PTX of statement (line 26)\n")) << d;
+  EXPECT_TRUE(has(d, ".entry simit_step_step0(")) << d;
   if (!assemble) GTEST_SKIP() << "ptxas not found: the PTX was dumped, not assembled";
   EXPECT_EQ(check_ptx_summary(),
-            "check-ptx: 1 trace assembled by ptxas, 2 not compiled for the GPU (1: calls the "
-            "runtime's simit_jit_decompose, which has no device version yet; 1: system "
-            "statements (solver loops, vector updates): their passes, sparse products and "
-            "blocked sums are not compiled for the GPU yet)");
+            "check-ptx: 2 traces assembled by ptxas, 1 not compiled for the GPU (1: calls the "
+            "runtime's simit_jit_decompose, which has no device version yet)");
 }
 
 // An assembler that rejects everything (false(1)): the run stops at the first trace, naming
