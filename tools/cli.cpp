@@ -91,9 +91,10 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
           "What runs " + runs +
               ": interpreter (default), jit (hot map and apply sites, solver loops and "
               "other system statements compiled to native code with LLVM; the rest "
-              "interpreted) or gpu (as jit, with the compiled maps run on an NVIDIA GPU "
-              "through the CUDA driver: an array is copied there only when the host changed it, "
-              "what a map writes comes back after each call; solver loops stay on the CPU). "
+              "interpreted) or gpu (as jit, with the compiled maps and solver loops run on an "
+              "NVIDIA GPU through the CUDA driver: an array is copied there only when the host "
+              "changed it, what a map or loop writes comes back after each call, a loop's "
+              "scalars stay there while it iterates). "
               "--backend is another name of this option")
           ->type_name("interpreter|jit|gpu");
   t.threads = add_parsed(

@@ -53,7 +53,7 @@ struct DeviceProgram {
   std::vector<DeviceStep> before, loop, after;  // loop: the condition first, then the body's
   bool has_loop = false;
   int locals = 0;
-  int scalars = 0;               // the first locals: the program's scalars, in and out
+  int scalars = 0;  // the first locals: the program's scalars, in and out
   std::vector<Ty> local_types;
   // Words of the context array.
   int context_words() const { return kContextHead + locals; }

@@ -55,7 +55,6 @@ llvm::FunctionCallee CpuHooks::runtime_call(llvm::IRBuilder<>& b, const char* na
   return b.GetInsertBlock()->getModule()->getOrInsertFunction(name, type);
 }
 
-
 // The steps as internal functions, and one external function that calls step `step` (a
 // switch over their indices; an index out of range does nothing).
 llvm::Function* Emitter::run_device_steps(const std::string& name) {
@@ -75,8 +74,7 @@ llvm::Function* Emitter::run_device_steps(const std::string& name) {
   b.SetInsertPoint(done);
   b.CreateRetVoid();
   b.SetInsertPoint(entry);
-  llvm::SwitchInst* sw =
-      b.CreateSwitch(fn->getArg(0), done, static_cast<unsigned>(steps.size()));
+  llvm::SwitchInst* sw = b.CreateSwitch(fn->getArg(0), done, static_cast<unsigned>(steps.size()));
   for (size_t i = 0; i < steps.size(); ++i) {
     auto* call = llvm::BasicBlock::Create(ctx, "step", fn);
     sw->addCase(b.getInt32(static_cast<uint32_t>(i)), call);

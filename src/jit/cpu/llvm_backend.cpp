@@ -184,7 +184,7 @@ class CpuKernel : public Kernel {
   void run_step(int32_t step, int64_t* context, int64_t first, int64_t end) const override {
     if (!device) return Kernel::run_step(step, context, first, end);
     reinterpret_cast<void (*)(int32_t, int64_t*, int64_t, int64_t)>(address)(step, context, first,
-                                                                            end);
+                                                                             end);
   }
 
  private:

@@ -21,7 +21,8 @@ class StepHooks final : public TargetHooks {
     return t_.map_kernel(m, name);
   }
   void elements(MapEmitter& k, const MapEntry& entry) override { t_.elements(k, entry); }
-  llvm::Value* math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args) override {
+  llvm::Value* math(llvm::IRBuilder<>& b, MathFn f,
+                    const std::vector<llvm::Value*>& args) override {
     return t_.math(b, f, args);
   }
   void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
@@ -169,13 +170,13 @@ void SystemEmitter::device_units(const DeviceStep& s, Value* first, Value* end,
         llvm::IRBuilder<> at_entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
         lanes_ = at_entry.CreateAlloca(llvm::ArrayType::get(f64, lanes * sums));
       }
-      Value* out = b_.CreateLoad(b_.getPtrTy(),
-                                 b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(),
-                                                               fn_->getArg(0), kCtxLanes));
+      Value* out = b_.CreateLoad(
+          b_.getPtrTy(), b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), fn_->getArg(0), kCtxLanes));
       Value* units = b_.CreateMul(chunks, b_.getInt64(lanes));
       loop(clamp(first, units), clamp(end, units), [&](Value* u) {
         for (int64_t k = 0; k < sums; ++k)
-          b_.CreateStore(llvm::ConstantFP::get(f64, 0.0), lane_at(static_cast<size_t>(k), b_.getInt64(0)));
+          b_.CreateStore(llvm::ConstantFP::get(f64, 0.0),
+                         lane_at(static_cast<size_t>(k), b_.getInt64(0)));
         Value* c = b_.CreateSDiv(u, b_.getInt64(lanes));
         Value* begin = b_.CreateMul(c, b_.getInt64(chunk));
         Value* stop = clamp(b_.CreateAdd(begin, b_.getInt64(chunk)), elements);
@@ -194,16 +195,16 @@ void SystemEmitter::device_units(const DeviceStep& s, Value* first, Value* end,
         for (int64_t k = 0; k < sums; ++k)
           b_.CreateStore(
               b_.CreateLoad(f64, lane_at(static_cast<size_t>(k), b_.getInt64(0))),
-              b_.CreateInBoundsGEP(f64, out, b_.CreateAdd(b_.CreateMul(u, b_.getInt64(sums)),
-                                                          b_.getInt64(k))));
+              b_.CreateInBoundsGEP(
+                  f64, out, b_.CreateAdd(b_.CreateMul(u, b_.getInt64(sums)), b_.getInt64(k))));
       });
       lanes_ = nullptr;
       return;
     }
     case DeviceStep::Kind::Tree: {
       // Chunk c's partial of each sum: the halving tree over its lanes' values.
-      Value* in = b_.CreateLoad(b_.getPtrTy(), b_.CreateConstInBoundsGEP1_64(
-                                                   b_.getInt64Ty(), fn_->getArg(0), kCtxLanes));
+      Value* in = b_.CreateLoad(
+          b_.getPtrTy(), b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), fn_->getArg(0), kCtxLanes));
       Value* out = b_.CreateLoad(b_.getPtrTy(), b_.CreateConstInBoundsGEP1_64(
                                                     b_.getInt64Ty(), fn_->getArg(0), kCtxPartials));
       return loop(clamp(first, chunks), clamp(end, chunks), [&](Value* c) {

@@ -162,19 +162,17 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
     sums = entry.CreateAlloca(vec);
   }
   b_.CreateStore(llvm::ConstantFP::get(vec, 0.0), sums);
-  Value* lo =
-      b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
-                                  b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
-                    i64);
+  Value* lo = b_.CreateSExt(
+      b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr], r)),
+      i64);
   Value* hi = b_.CreateSExt(
       b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.row_ptr],
                                                           b_.CreateAdd(r, b_.getInt64(1)))),
       i64);
   loop(lo, hi, [&](Value* k) {
-    Value* col =
-        b_.CreateSExt(b_.CreateLoad(b_.getInt32Ty(),
-                                    b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
-                      i64);
+    Value* col = b_.CreateSExt(
+        b_.CreateLoad(b_.getInt32Ty(), b_.CreateInBoundsGEP(b_.getInt32Ty(), arrays_[op.cols], k)),
+        i64);
     Value* blk = b_.CreateMul(k, b_.getInt64(bs * bs));
     Value* xc = b_.CreateMul(col, b_.getInt64(bs));
     Value* part = nullptr;
@@ -187,9 +185,8 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
         for (int i = 0; i < bs; ++i)
           a = b_.CreateInsertElement(
               a,
-              b_.CreateLoad(f64,
-                            b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                 b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
+              b_.CreateLoad(f64, b_.CreateInBoundsGEP(f64, arrays_[op.values],
+                                                      b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
               static_cast<uint64_t>(i));
       } else if (single) {
         // Under float32 the copy holds binary32 values: widened exactly, half the bytes.
@@ -199,9 +196,9 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
         column->setAlignment(llvm::Align(4));
         a = b_.CreateFPExt(column, vec);
       } else {
-        llvm::LoadInst* column =
-            b_.CreateLoad(vec, b_.CreateInBoundsGEP(f64, arrays_[op.values],
-                                                    b_.CreateAdd(blk, b_.getInt64(j * bs))));
+        llvm::LoadInst* column = b_.CreateLoad(
+            vec,
+            b_.CreateInBoundsGEP(f64, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(j * bs))));
         column->setAlignment(llvm::Align(8));
         a = column;
       }

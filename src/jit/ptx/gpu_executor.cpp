@@ -228,7 +228,8 @@ class GpuExecutor final : public Executor {
     const std::vector<const DeviceStep*> steps = p.all();
     const size_t loop_first = p.before.size(), after_first = loop_first + p.loop.size();
     auto run = [&](size_t from, size_t to) {
-      for (size_t i = from; i < to; ++i) launch_step(kernel, static_cast<int32_t>(i), *steps[i], p, sizes);
+      for (size_t i = from; i < to; ++i)
+        launch_step(kernel, static_cast<int32_t>(i), *steps[i], p, sizes);
     };
     auto read_context = [&] {
       if (!emulated_) device_->synchronize();
@@ -535,8 +536,8 @@ class GpuExecutor final : public Executor {
     const cuda::KernelArg params[] = {cuda::KernelArg::of(context_.device),
                                       cuda::KernelArg::of(units)};
     const auto blocks = static_cast<unsigned>((units + kBlock - 1) / kBlock);
-    device_->launch(fn, cuda::Dim3{blocks}, cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock},
-                    params);
+    device_->launch(fn, cuda::Dim3{blocks},
+                    cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock}, params);
   }
 
   cuda::CUfunction step_function(const Kernel& kernel, int32_t index) {

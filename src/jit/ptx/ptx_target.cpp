@@ -198,10 +198,9 @@ class PtxTarget : public Target {
     auto sreg = [&](llvm::Intrinsic::ID id) {
       return b.CreateZExt(b.CreateIntrinsic(id, {}, {}), i64);
     };
-    llvm::Value* u =
-        b.CreateAdd(b.CreateMul(sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x),
-                                sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x)),
-                    sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x));
+    llvm::Value* u = b.CreateAdd(b.CreateMul(sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x),
+                                             sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x)),
+                                 sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x));
     b.CreateCondBr(b.CreateICmpSLT(u, fn->getArg(1)), run, done);
     b.SetInsertPoint(run);
     b.CreateCall(&step, {fn->getArg(0), u, b.CreateAdd(u, b.getInt64(1))});
