@@ -1,6 +1,7 @@
 // A fake CUDA driver table for the GPU executor's tests (gpu_executor_test.cpp,
 // gpu_residency_test.cpp): device memory is host memory, every copy and memory set is counted,
-// and each launch is recorded and handed to the test's `on_launch`.
+// and each launch is recorded and handed to the test's `on_launch` (map, gather and device
+// program step kernels).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -23,6 +24,8 @@ using namespace simit::jit::cuda;
 // A driver whose device memory is host memory and whose launches call `on_launch`. Its two
 // functions: the map kernel's entry and the gather kernel's, told apart by their handles.
 inline int map_function = 0, gather_function = 0;
+// A device program's step kernels (ptx::kStepEntry's names), by step index.
+inline int step_functions[64];
 struct Launch {
   bool gather = false;
   unsigned grid = 0, block = 0;
@@ -31,6 +34,10 @@ struct Launch {
   int32_t begin = 0, end = 0;
   // The gather kernel's.
   GatherArgs g;
+  // A device program's step kernel: its index (-1: not one), the context and the units.
+  int step = -1;
+  CUdeviceptr context = 0;
+  int64_t units = 0;
 };
 // One cuMemsetD2D32: `height` rows of `width` words set to `value`, `pitch` bytes apart.
 struct Set2D {
@@ -106,7 +113,11 @@ inline DriverTable fake_table() {
   };
   t.cuModuleUnload = [](CUmodule) { return CUDA_SUCCESS; };
   t.cuModuleGetFunction = [](CUfunction* f, CUmodule, const char* name) {
-    const std::string n = name;
+    const std::string n = name, step = std::string(kStepEntry) + "_step";
+    if (n.rfind(step, 0) == 0) {
+      *f = reinterpret_cast<CUfunction>(&step_functions[std::stoi(n.substr(step.size()))]);
+      return CUDA_SUCCESS;
+    }
     if (n != kMapEntry && n != kGatherEntry) return CUDA_ERROR_NOT_FOUND;
     *f = reinterpret_cast<CUfunction>(n == kMapEntry ? &map_function : &gather_function);
     return CUDA_SUCCESS;
@@ -155,7 +166,12 @@ inline DriverTable fake_table() {
     l.grid = gx;
     l.block = bx;
     l.gather = f == reinterpret_cast<CUfunction>(&gather_function);
-    if (l.gather) {
+    const auto* fn = reinterpret_cast<const int*>(f);
+    if (fn >= step_functions && fn < step_functions + 64) {
+      l.step = static_cast<int>(fn - step_functions);
+      l.context = param<CUdeviceptr>(params, 0);
+      l.units = param<int64_t>(params, 1);
+    } else if (l.gather) {
       l.g.values = reinterpret_cast<double*>(param<CUdeviceptr>(params, 0));
       l.g.deferred = reinterpret_cast<const double*>(param<CUdeviceptr>(params, 1));
       l.g.block = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 2));
