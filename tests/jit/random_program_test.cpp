@@ -309,7 +309,10 @@ struct Tally {
       const bool loop = l.rfind("  while (line", 0) == 0;
       const bool run = l.rfind("  statements (lines", 0) == 0;
       const bool alone = l.rfind("  statement (line", 0) == 0;  // listed when compiled
-      if (l.size() >= 9 && l.compare(l.size() - 9, 9, " compiled") == 0) {
+      auto ends = [&](const std::string& tail) {
+        return l.size() >= tail.size() && l.compare(l.size() - tail.size(), tail.size(), tail) == 0;
+      };
+      if (ends(" compiled") || ends(" compiled for the GPU")) {
         ++(alone  ? statements_compiled
            : run  ? runs_compiled
            : loop ? loops_compiled
