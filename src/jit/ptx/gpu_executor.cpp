@@ -415,8 +415,11 @@ class GpuExecutor final : public Executor {
     }
   }
 
-  cuda::CUfunction function_for(const Kernel& kernel) {
-    if (auto it = functions_.find(&kernel); it != functions_.end()) return it->second;
+  // A kernel's functions, its module loaded on first use: a map kernel's entry, or a device
+  // program's step kernels by step.
+  const std::vector<cuda::CUfunction>& functions_of(const Kernel& kernel) {
+    std::vector<cuda::CUfunction>& fns = functions_[&kernel];
+    if (!fns.empty()) return fns;
     const auto* ptx = dynamic_cast<const PtxKernel*>(&kernel);
     if (!ptx) throw std::logic_error("the GPU executor was given a kernel compiled for the CPU");
     if (arch_.empty()) {
@@ -424,7 +427,11 @@ class GpuExecutor final : public Executor {
       ptx_version_ = ptx_directive(ptx->ptx, ".version");
     }
     cuda::CUmodule module = device_->load_module(ptx->ptx);
-    return functions_[&kernel] = device_->function(module, ptx->entry);
+    if (kernel.program)
+      for (const std::string& entry : ptx->entries) fns.push_back(device_->function(module, entry));
+    else
+      fns.push_back(device_->function(module, ptx->entry));
+    return fns;
   }
 
   // The kernel on the device: one launch over every element, or, for a map whose elements
@@ -432,7 +439,7 @@ class GpuExecutor final : public Executor {
   // order (the stream runs them one after another). Returns (code, element).
   std::pair<int32_t, int32_t> launch(const Kernel& kernel, int32_t n, bool in_order,
                                      cuda::CUdeviceptr scalars, cuda::CUdeviceptr endpoints) {
-    const cuda::CUfunction fn = function_for(kernel);
+    const cuda::CUfunction fn = functions_of(kernel).front();
     if (pointers_.bytes != pointers_host_.size() * sizeof(cuda::CUdeviceptr) ||
         pointers_.device == 0) {
       device_->free(pointers_);
@@ -532,7 +539,7 @@ class GpuExecutor final : public Executor {
       kernel.run_step(index, reinterpret_cast<int64_t*>(context_.device), 0, units);
       return;
     }
-    const cuda::CUfunction fn = step_function(kernel, index);
+    const cuda::CUfunction fn = functions_of(kernel).at(static_cast<size_t>(index));
     const cuda::KernelArg params[] = {cuda::KernelArg::of(context_.device),
                                       cuda::KernelArg::of(units)};
     const auto blocks = static_cast<unsigned>((units + kBlock - 1) / kBlock);
@@ -540,30 +547,13 @@ class GpuExecutor final : public Executor {
                     cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock}, params);
   }
 
-  cuda::CUfunction step_function(const Kernel& kernel, int32_t index) {
-    auto& fns = step_functions_[&kernel];
-    if (fns.empty()) {
-      const auto* ptx = dynamic_cast<const PtxKernel*>(&kernel);
-      if (!ptx) throw std::logic_error("the GPU executor was given a kernel compiled for the CPU");
-      if (arch_.empty()) {
-        arch_ = ptx_directive(ptx->ptx, ".target");
-        ptx_version_ = ptx_directive(ptx->ptx, ".version");
-      }
-      cuda::CUmodule module = device_->load_module(ptx->ptx);
-      for (const std::string& entry : ptx->entries) fns.push_back(device_->function(module, entry));
-    }
-    return fns.at(static_cast<size_t>(index));
-  }
-
   std::unique_ptr<cuda::Device> device_;
   std::map<const void*, Mirror> mirrors_;
-  // A device program's functions, by step, per kernel.
-  std::map<const Kernel*, std::vector<cuda::CUfunction>> step_functions_;
   // A device program's pointer table, sizes, context and sum scratch (and their host copies).
   std::vector<cuda::CUdeviceptr> system_pointers_host_;
   std::vector<int64_t> sizes_host_, context_host_;
   cuda::DeviceArray system_pointers_, sizes_, context_, lanes_, partials_;
-  std::map<const Kernel*, cuda::CUfunction> functions_;
+  std::map<const Kernel*, std::vector<cuda::CUfunction>> functions_;
   // Per plan (by address; its build id tells a rebuilt or new plan there), its gather index.
   std::map<const DeferredPlan*, IndexUpload> uploads_;
   // Host arrays a deferred run wrote, copied back by finish_deferred.

@@ -8,6 +8,15 @@
 
 namespace simit::jit::ptx {
 
+llvm::Value* thread_index(llvm::IRBuilder<>& b) {
+  auto sreg = [&](llvm::Intrinsic::ID id) {
+    return b.CreateZExt(b.CreateIntrinsic(id, {}, {}), b.getInt64Ty());
+  };
+  return b.CreateAdd(b.CreateMul(sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x),
+                                 sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x)),
+                     sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x));
+}
+
 codegen::MapEntry PtxHooks::map_kernel(llvm::Module& m, const std::string& name) {
   llvm::LLVMContext& ctx = m.getContext();
   llvm::Type* ptr = llvm::PointerType::getUnqual(ctx);
@@ -27,20 +36,12 @@ codegen::MapEntry PtxHooks::map_kernel(llvm::Module& m, const std::string& name)
   return e;
 }
 
-// e = begin + blockIdx.x * blockDim.x + threadIdx.x, computed in 64 bits (a grid larger than
-// the range cannot wrap it), and the element visited when e < end; then return.
+// e = begin + the thread's index, and the element visited when e < end; then return.
 void PtxHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) {
   llvm::IRBuilder<>& b = k.builder();
   llvm::LLVMContext& ctx = b.getContext();
   llvm::Type* i64 = b.getInt64Ty();
-  auto sreg = [&](llvm::Intrinsic::ID id) {
-    return b.CreateZExt(b.CreateIntrinsic(id, {}, {}), i64);
-  };
-  llvm::Value* block = sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x);
-  llvm::Value* width = sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x);
-  llvm::Value* thread = sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x);
-  llvm::Value* e = b.CreateAdd(b.CreateSExt(entry.begin, i64),
-                               b.CreateAdd(b.CreateMul(block, width), thread), "e");
+  llvm::Value* e = b.CreateAdd(b.CreateSExt(entry.begin, i64), thread_index(b), "e");
   auto* visit = llvm::BasicBlock::Create(ctx, "element", entry.fn);
   auto* done = llvm::BasicBlock::Create(ctx, "done", entry.fn);
   b.CreateCondBr(b.CreateICmpSLT(e, b.CreateSExt(entry.end, i64)), visit, done);

@@ -19,11 +19,10 @@ namespace simit::jit::ptx {
 // The math functions are TargetHooks' calls by C name, defined by their device bitcode (the
 // same sources compiled for the GPU, linked into the module: jit/ptx/device_math.h; a build
 // without it leaves them external and its PTX relocatable). Assembly is TargetHooks' plain
-// load, add and store, which races where a GPU's elements share a block: the arithmetic
-// contract forbids floating-point atomics (their order, and so the sum's bits, change from
-// run to run), and what will make it correct is the deferred assembly still to be built
-// (contributions into a scratch array, then one thread per block summing them in element
-// order). Until then these kernels are only compiled and assembled (`--check-ptx`).
+// load, add and store: the arithmetic contract forbids floating-point atomics (their order,
+// and so the sum's bits, change from run to run), and the GPU executor runs every map that
+// adds into shared blocks with deferred writes (jit/defer_assembly.h), so that no two threads
+// add into one block.
 class PtxHooks : public codegen::TargetHooks {
  public:
   codegen::MapEntry map_kernel(llvm::Module& m, const std::string& name) override;
@@ -31,7 +30,8 @@ class PtxHooks : public codegen::TargetHooks {
   void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) override;
   llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                     llvm::FunctionType* type) override;
-  // One thread per element (a solver loop's passes are not compiled for the GPU yet).
+  // One thread per element; a solver loop runs as a device program, one unit per thread
+  // (jit/device_program.h), not through the pool's outlined passes.
   bool parallel_passes() const override { return false; }
 
   // Why the emitted kernel cannot run on the GPU (it called the runtime), or "".
@@ -41,5 +41,9 @@ class PtxHooks : public codegen::TargetHooks {
   llvm::Value* failure_ = nullptr;  // the kernel's failure word
   std::string refused_;
 };
+
+// blockIdx.x * blockDim.x + threadIdx.x, computed in 64 bits (a grid larger than a range
+// cannot wrap it): the thread's index in the launch.
+llvm::Value* thread_index(llvm::IRBuilder<>& b);
 
 }  // namespace simit::jit::ptx

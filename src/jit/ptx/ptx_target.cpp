@@ -12,7 +12,6 @@
 #include <stdexcept>
 
 #include <llvm/IR/CallingConv.h>
-#include <llvm/IR/IntrinsicsNVPTX.h>
 #include <llvm/IR/LegacyPassManager.h>
 #include <llvm/IR/Verifier.h>
 #include <llvm/MC/MCSubtargetInfo.h>
@@ -181,8 +180,8 @@ class PtxTarget : public Target {
     return true;
   }
 
-  // The kernel `name`(int64_t* context, int64_t units) around a step: unit
-  // blockIdx.x * blockDim.x + threadIdx.x (in 64 bits) when it is below `units`.
+  // The kernel `name`(int64_t* context, int64_t units) around a step: the unit of the thread's
+  // index (ptx_hooks.h) when it is below `units`.
   static std::string step_kernel(llvm::Module& m, llvm::Function& step, const std::string& name) {
     llvm::LLVMContext& ctx = m.getContext();
     llvm::IRBuilder<> b(ctx);
@@ -195,12 +194,7 @@ class PtxTarget : public Target {
     auto* run = llvm::BasicBlock::Create(ctx, "unit", fn);
     auto* done = llvm::BasicBlock::Create(ctx, "done", fn);
     b.SetInsertPoint(entry);
-    auto sreg = [&](llvm::Intrinsic::ID id) {
-      return b.CreateZExt(b.CreateIntrinsic(id, {}, {}), i64);
-    };
-    llvm::Value* u = b.CreateAdd(b.CreateMul(sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ctaid_x),
-                                             sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_ntid_x)),
-                                 sreg(llvm::Intrinsic::nvvm_read_ptx_sreg_tid_x));
+    llvm::Value* u = thread_index(b);
     b.CreateCondBr(b.CreateICmpSLT(u, fn->getArg(1)), run, done);
     b.SetInsertPoint(run);
     b.CreateCall(&step, {fn->getArg(0), u, b.CreateAdd(u, b.getInt64(1))});
