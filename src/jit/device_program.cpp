@@ -66,11 +66,50 @@ void plan_ops(const std::vector<VectorOp>& ops, bool in_loop, std::vector<Device
   }
 }
 
+bool one_thread(const DeviceStep& s) {
+  return s.kind == DeviceStep::Kind::Serial || s.kind == DeviceStep::Kind::Condition ||
+         s.kind == DeviceStep::Kind::Combine;
+}
+
+// Whether statements set only temporaries (locals past the program's scalars): no store, no
+// check, no program scalar.
+bool sets_only_temporaries(const std::vector<Stmt>& body, int scalars) {
+  for (const Stmt& s : body) {
+    if (s.kind == StmtKind::If) {
+      if (!sets_only_temporaries(s.body, scalars) || !sets_only_temporaries(s.orelse, scalars))
+        return false;
+      continue;
+    }
+    if (s.kind != StmtKind::SetLocal || s.slot < scalars) return false;
+  }
+  return true;
+}
+
+// Neighbouring one-thread steps as the parts of one Thread step.
+std::vector<DeviceStep> merged(const std::vector<DeviceStep>& steps, bool in_loop) {
+  std::vector<DeviceStep> out;
+  for (const DeviceStep& s : steps) {
+    if (!one_thread(s)) {
+      out.push_back(s);
+      continue;
+    }
+    if (out.empty() || out.back().kind != DeviceStep::Kind::Thread) {
+      DeviceStep t;
+      t.kind = DeviceStep::Kind::Thread;
+      t.in_loop = in_loop;
+      out.push_back(t);
+    }
+    out.back().parts.push_back(s);
+  }
+  return out;
+}
+
 }  // namespace
 
 int64_t DeviceProgram::units(const DeviceStep& step, const std::vector<int64_t>& sizes) const {
   const int64_t n = step.size >= 0 ? sizes[static_cast<size_t>(step.size)] : 0;
   switch (step.kind) {
+    case DeviceStep::Kind::Thread:
     case DeviceStep::Kind::Serial:
     case DeviceStep::Kind::Condition:
     case DeviceStep::Kind::Combine: return 1;
@@ -121,23 +160,45 @@ DeviceProgram plan_device_program(const SystemTrace& t) {
   p.locals = static_cast<int>(t.locals.size());
   p.scalars = t.scalars;
   p.local_types = t.locals;
-  plan_ops(t.before, false, p.before);
+  std::vector<DeviceStep> before, body, after;
+  plan_ops(t.before, false, before);
   if (t.condition) {
     p.has_loop = true;
+    plan_ops(t.body, true, body);
+    // The body's leading one-thread steps that set only temporaries move in front of the
+    // condition's launch (see DeviceProgram).
+    size_t lead = 0;
+    while (lead < body.size() && one_thread(body[lead]) &&
+           (body[lead].kind == DeviceStep::Kind::Serial
+                ? sets_only_temporaries(body[lead].op->body, t.scalars)
+                : std::all_of(body[lead].op->sums.begin(), body[lead].op->sums.end(),
+                              [&](int l) { return l >= t.scalars; })))
+      ++lead;
     DeviceStep c;
     c.kind = DeviceStep::Kind::Condition;
-    c.in_loop = true;
-    p.loop.push_back(c);
-    plan_ops(t.body, true, p.loop);
+    std::vector<DeviceStep> loop(body.begin() + static_cast<std::ptrdiff_t>(lead), body.end());
+    loop.push_back(c);
+    before.push_back(c);
+    for (size_t i = 0; i < lead; ++i) {
+      loop.push_back(body[i]);
+      before.push_back(body[i]);
+    }
+    for (DeviceStep& s : loop) s.in_loop = true;
+    p.loop = merged(loop, true);
   }
-  plan_ops(t.after, false, p.after);
+  p.before = merged(before, false);
+  plan_ops(t.after, false, after);
+  p.after = merged(after, false);
   return p;
 }
 
 std::shared_ptr<const DeviceProgram> detached_device_program(const SystemTrace& t) {
   auto p = std::make_shared<DeviceProgram>(plan_device_program(t));
   for (auto* list : {&p->before, &p->loop, &p->after})
-    for (DeviceStep& s : *list) s.op = nullptr;
+    for (DeviceStep& s : *list) {
+      s.op = nullptr;
+      for (DeviceStep& part : s.parts) part.op = nullptr;
+    }
   return p;
 }
 

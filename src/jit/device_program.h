@@ -33,24 +33,34 @@ inline constexpr int kContextHead = 6;
 
 struct DeviceStep {
   enum class Kind : uint8_t {
-    Serial,     // one thread: a scalar op's statements
-    Condition,  // one thread: the while condition; false sets the stop word
+    // One thread: its `parts` one after another (neighbouring one-thread work shares a
+    // launch); the parts are of the three kinds below.
+    Thread,
+    Serial,     // a scalar op's statements
+    Condition,  // the while condition; false sets the stop word, and the parts after it
+                // (the next iteration's) do not run
+    Combine,    // each sum plus its chunks' partials, in chunk order
     Each,       // a unit per component: a pass without sums
     Rows,       // a unit per row block: a product without sums (and its fused body)
     Lanes,      // a unit per (chunk, lane): a pass or product with sums, each lane's part
     Tree,       // a unit per chunk: the halving tree over the chunk's lanes
-    Combine,    // one thread: each sum plus its chunks' partials, in chunk order
   };
   Kind kind = Kind::Serial;
-  const VectorOp* op = nullptr;  // the op it runs (null for the condition)
-  bool in_loop = false;          // skipped once the stop word is set
-  int size = -1;                 // the sizes entry its elements come from
-  int group = 1;                 // components per element (a pass's runs); 1 for rows
-  int sums = 0;                  // the op's sums (Lanes, Tree, Combine)
+  const VectorOp* op = nullptr;   // the op it runs (null for the condition and a Thread)
+  bool in_loop = false;           // skipped once the stop word is set
+  int size = -1;                  // the sizes entry its elements come from
+  int group = 1;                  // components per element (a pass's runs); 1 for rows
+  int sums = 0;                   // the op's sums (Lanes, Tree, Combine)
+  std::vector<DeviceStep> parts;  // a Thread's
 };
 
+// The loop is rotated so that the condition shares a launch with the one-thread work around
+// it: `before` ends with the first condition and the body's leading one-thread steps (when
+// they set only temporaries, so that an interrupt between two batches still finds whole
+// iterations), and `loop` is the rest of the body, the condition, and those leading steps
+// again, for the next iteration.
 struct DeviceProgram {
-  std::vector<DeviceStep> before, loop, after;  // loop: the condition first, then the body's
+  std::vector<DeviceStep> before, loop, after;
   bool has_loop = false;
   int locals = 0;
   int scalars = 0;  // the first locals: the program's scalars, in and out

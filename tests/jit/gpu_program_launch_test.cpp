@@ -1,6 +1,7 @@
 // A device program's launch path (jit/ptx/gpu_executor.h, run_system) against the fake driver:
 // the step kernels of the PTX target loaded by name and launched with the context and their
-// units, the loop's iterations in batches of 1, 2, 4, ... ended by the stop word, the scalars
+// units, the loop's iterations in batches of 1, 2, 4, ... ended by the stop word (which the
+// thread that ends an iteration sets when the next condition fails), the scalars
 // in and out through the context, an interrupt taken between two batches. The fake's launches
 // run the CPU target's step functions of the same trace on the fake's (host) memory.
 #include <gtest/gtest.h>
@@ -144,8 +145,9 @@ TEST_F(GpuExecutorFake, ADeviceProgramLaunchesItsStepsInBatchesUntilTheStopWord)
   const Compiled c = compile_both();
   ASSERT_TRUE(c.cpu && c.gpu);
   const auto& ptx = dynamic_cast<const PtxKernel&>(*c.gpu);
-  // condition, lanes, tree, combine, k = k + 1
-  ASSERT_EQ(ptx.entries.size(), 5u);
+  // Before the loop: the condition. The loop: lanes, tree, and one thread that combines the
+  // sum, counts, and tests the condition for the next iteration.
+  ASSERT_EQ(ptx.entries.size(), 4u);
   EXPECT_EQ(ptx.entries[0], "simit_step_step0");
   state.on_launch = [&](const Launch& l) {
     ASSERT_GE(l.step, 0);
@@ -158,18 +160,20 @@ TEST_F(GpuExecutorFake, ADeviceProgramLaunchesItsStepsInBatchesUntilTheStopWord)
   // Squares of halves of small integers: every sum exact, whatever the order.
   EXPECT_EQ(r.scalars[1], 55.0 * (1.0 / 4 + 1.0 / 16 + 1.0 / 64));
   EXPECT_EQ(r.x, (std::vector<double>{0.125, 0.25, 0.375, 0.5, 0.625}));
-  // Batches of 1, 2 and 4 iterations: the fourth condition sets the stop word, and the
-  // steps after it return at once.
-  ASSERT_EQ(state.launches.size(), 7u * 5u);
-  for (size_t i = 0; i < state.launches.size(); ++i) EXPECT_EQ(state.launches[i].step, int(i % 5));
+  // The first condition, then batches of 1 and 2 iterations: the third iteration's thread
+  // finds the condition false and sets the stop word.
+  ASSERT_EQ(state.launches.size(), 1u + 3u * 3u);
+  EXPECT_EQ(state.launches[0].step, 0);
+  for (size_t i = 1; i < state.launches.size(); ++i)
+    EXPECT_EQ(state.launches[i].step, int(1 + (i - 1) % 3));
   const Launch& lanes = state.launches[1];
   EXPECT_EQ(lanes.units, 32);  // one chunk of 5 elements: 32 lanes
   EXPECT_EQ(lanes.grid, 1u);
   EXPECT_EQ(lanes.block, 32u);
   EXPECT_EQ(state.launches[2].units, 1);  // the tree: one chunk
-  EXPECT_EQ(state.launches[0].block, 1u);
+  EXPECT_EQ(state.launches[3].block, 1u);
   // The host read the context after each batch and at the end.
-  EXPECT_EQ(gpu_traffic(*exec).system_batches, 4);
+  EXPECT_EQ(gpu_traffic(*exec).system_batches, 3);
   EXPECT_EQ(gpu_traffic(*exec).system_runs, 1);
 }
 
@@ -187,7 +191,7 @@ TEST_F(GpuExecutorFake, AnInterruptStopsADeviceProgramBetweenTwoBatches) {
   EXPECT_EQ(r.scalars[0], 1.0);
   EXPECT_EQ(r.scalars[1], 55.0 / 4);
   EXPECT_EQ(r.x, (std::vector<double>{0.5, 1, 1.5, 2, 2.5}));
-  EXPECT_EQ(state.launches.size(), 5u);
+  EXPECT_EQ(state.launches.size(), 1u + 3u);
 }
 
 // The emulated executor runs the CPU's steps directly, to the same results.

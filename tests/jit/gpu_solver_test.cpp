@@ -178,10 +178,14 @@ TEST(DeviceProgram, ASumIsLanesTreeAndCombineWithTheContractsChunks) {
   t.before = {scalar, pass};
   DeviceProgram p = plan_device_program(t);
   ASSERT_EQ(p.before.size(), 4u);
-  EXPECT_EQ(p.before[0].kind, DeviceStep::Kind::Serial);
+  EXPECT_EQ(p.before[0].kind, DeviceStep::Kind::Thread);
+  ASSERT_EQ(p.before[0].parts.size(), 1u);
+  EXPECT_EQ(p.before[0].parts[0].kind, DeviceStep::Kind::Serial);
   EXPECT_EQ(p.before[1].kind, DeviceStep::Kind::Lanes);
   EXPECT_EQ(p.before[2].kind, DeviceStep::Kind::Tree);
-  EXPECT_EQ(p.before[3].kind, DeviceStep::Kind::Combine);
+  EXPECT_EQ(p.before[3].kind, DeviceStep::Kind::Thread);
+  ASSERT_EQ(p.before[3].parts.size(), 1u);
+  EXPECT_EQ(p.before[3].parts[0].kind, DeviceStep::Kind::Combine);
   EXPECT_FALSE(p.has_loop);
   // 3 * 600 components: 600 elements, three chunks (256, 256, 88).
   const std::vector<int64_t> sizes = {1800};
@@ -202,6 +206,60 @@ TEST(DeviceProgram, ASumIsLanesTreeAndCombineWithTheContractsChunks) {
   set.value = std::make_shared<const Expr>(one);
   t.before[1].body.push_back(set);
   EXPECT_EQ(device_refusal(t), "a pass or product sets a program scalar");
+}
+
+// The loop rotated: the condition shares a launch with the one-thread work before and after
+// it. A body that starts by setting temporaries (a CG's sums set to zero) has that work run
+// after the condition, for the next iteration; one that starts by setting a program scalar
+// keeps it in place, so that an interrupt between two batches finds whole iterations.
+TEST(DeviceProgram, TheConditionSharesALaunchWithTheOneThreadWorkAroundIt) {
+  SystemTrace t;
+  t.scalars = 1;  // %0: a program scalar; %1: a temporary
+  t.locals = {Ty::F64, Ty::F64};
+  t.sizes = {"n"};
+  Expr truth;
+  truth.ty = Ty::Bool;
+  truth.i = 1;
+  t.condition = std::make_shared<const Expr>(truth);
+  auto setting = [](int local) {
+    VectorOp op;
+    Stmt set;
+    set.kind = StmtKind::SetLocal;
+    set.slot = local;
+    Expr zero;
+    set.value = std::make_shared<const Expr>(zero);
+    op.body.push_back(set);
+    return op;
+  };
+  VectorOp pass;
+  pass.kind = VectorOp::Kind::Pass;
+  pass.length = 0;
+  pass.sums = {1};
+  t.body = {setting(1), pass, setting(0)};
+  DeviceProgram p = plan_device_program(t);
+  using K = DeviceStep::Kind;
+  auto kinds = [](const DeviceStep& s) {
+    std::vector<K> out;
+    for (const DeviceStep& part : s.parts) out.push_back(part.kind);
+    return out;
+  };
+  ASSERT_EQ(p.before.size(), 1u);
+  EXPECT_EQ(kinds(p.before[0]), (std::vector<K>{K::Condition, K::Serial}));
+  EXPECT_EQ(p.before[0].parts[1].op, &t.body[0]);
+  ASSERT_EQ(p.loop.size(), 3u);
+  EXPECT_EQ(p.loop[0].kind, K::Lanes);
+  EXPECT_EQ(p.loop[1].kind, K::Tree);
+  EXPECT_EQ(kinds(p.loop[2]), (std::vector<K>{K::Combine, K::Serial, K::Condition, K::Serial}));
+  EXPECT_TRUE(p.loop[2].in_loop);
+  EXPECT_EQ(p.loop[2].parts[3].op, &t.body[0]);
+  // Starting with a program scalar's update: not moved.
+  t.body = {setting(0), pass};
+  p = plan_device_program(t);
+  ASSERT_EQ(p.before.size(), 1u);
+  EXPECT_EQ(kinds(p.before[0]), (std::vector<K>{K::Condition}));
+  ASSERT_EQ(p.loop.size(), 4u);
+  EXPECT_EQ(kinds(p.loop[0]), (std::vector<K>{K::Serial}));
+  EXPECT_EQ(kinds(p.loop[3]), (std::vector<K>{K::Combine, K::Condition}));
 }
 
 }  // namespace

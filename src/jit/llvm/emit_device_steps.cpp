@@ -2,7 +2,8 @@
 // alike for every target: the GPU wraps each in a kernel of one unit per thread, the CPU
 // (the emulated GPU) calls them over all their units. Every step reads the context array:
 // it returns at once when an error was reported, or, inside the loop, when the stop word is
-// set; it loads the locals from the context, and a one-thread step stores them back.
+// set; it loads the locals from the context, and a one-thread step (a Thread of parts)
+// stores them back.
 #include <memory>
 
 #include "jit/llvm/emitter.h"
@@ -90,52 +91,69 @@ llvm::Function* SystemEmitter::device_step(const DeviceStep& s, const std::strin
   for (size_t i = 0; i < local_types_.size(); ++i)
     b_.CreateStore(b_.CreateLoad(type(local_types_[i]), word(kContextHead + static_cast<int>(i))),
                    locals_[i]);
-  if (s.op && s.op->guard >= 0) {
-    auto* guarded = llvm::BasicBlock::Create(ctx_, "guarded", fn_);
-    b_.CreateCondBr(b_.CreateLoad(b_.getInt1Ty(), locals_[s.op->guard]), guarded, leave);
-    b_.SetInsertPoint(guarded);
-  }
-  auto store_locals = [&] {
-    for (size_t i = 0; i < local_types_.size(); ++i)
-      b_.CreateStore(b_.CreateLoad(type(local_types_[i]), locals_[i]),
-                     word(kContextHead + static_cast<int>(i)));
+  // An op under a guard (a branch of an `if`) runs when it holds: a Thread's parts each on
+  // their own.
+  auto guarded = [&](const DeviceStep& step, llvm::BasicBlock* otherwise) {
+    if (!step.op || step.op->guard < 0) return;
+    auto* run_op = llvm::BasicBlock::Create(ctx_, "guarded", fn_);
+    b_.CreateCondBr(b_.CreateLoad(b_.getInt1Ty(), locals_[step.op->guard]), run_op, otherwise);
+    b_.SetInsertPoint(run_op);
   };
-  switch (s.kind) {
-    case DeviceStep::Kind::Serial:
-      block(s.op->body);
-      store_locals();
-      break;
-    case DeviceStep::Kind::Condition: {
-      auto* stop = llvm::BasicBlock::Create(ctx_, "stop", fn_);
-      b_.CreateCondBr(expr(*st_.condition), leave, stop);
-      b_.SetInsertPoint(stop);
-      b_.CreateStore(b_.getInt64(1), word(kCtxStop));
-      break;
-    }
-    case DeviceStep::Kind::Combine: {
-      // s = s + P_0 + P_1 + ...: each sum's partials in chunk order.
-      Value* partials = b_.CreateLoad(ptr, word(kCtxPartials));
-      const int64_t n = s.sums;
-      Value* elements = b_.CreateSDiv(sizes[static_cast<size_t>(s.size)], b_.getInt64(s.group));
-      const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
-      Value* chunks =
-          b_.CreateSDiv(b_.CreateAdd(elements, b_.getInt64(chunk - 1)), b_.getInt64(chunk));
-      loop(b_.getInt64(0), chunks, [&](Value* c) {
-        for (int64_t k = 0; k < n; ++k) {
-          Value* at = b_.CreateAdd(b_.CreateMul(c, b_.getInt64(n)), b_.getInt64(k));
-          Value* partial =
-              b_.CreateLoad(b_.getDoubleTy(), b_.CreateInBoundsGEP(b_.getDoubleTy(), partials, at));
-          Value* sum = locals_[static_cast<size_t>(s.op->sums[static_cast<size_t>(k)])];
-          b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), sum), partial), sum);
-        }
-      });
-      store_locals();
-      break;
-    }
-    default: device_units(s, first, end, sizes); break;
+  if (s.kind != DeviceStep::Kind::Thread) {
+    guarded(s, leave);
+    device_units(s, first, end, sizes);
+    b_.CreateBr(leave);
+    return fn_;
   }
+  // The parts in order, then the locals back into the context (the next steps read them). A
+  // condition that fails sets the stop word and skips the parts after it.
+  auto* finish = llvm::BasicBlock::Create(ctx_, "finish", fn_);
+  for (const DeviceStep& part : s.parts) {
+    auto* next = llvm::BasicBlock::Create(ctx_, "part.done", fn_);
+    guarded(part, next);
+    switch (part.kind) {
+      case DeviceStep::Kind::Serial: block(part.op->body); break;
+      case DeviceStep::Kind::Condition: {
+        auto* stop = llvm::BasicBlock::Create(ctx_, "stop", fn_);
+        b_.CreateCondBr(expr(*st_.condition), next, stop);
+        b_.SetInsertPoint(stop);
+        b_.CreateStore(b_.getInt64(1), word(kCtxStop));
+        b_.CreateBr(finish);
+        b_.SetInsertPoint(next);
+        continue;
+      }
+      case DeviceStep::Kind::Combine: combine_sums(part, sizes); break;
+      default: break;  // a Thread holds one-thread parts only
+    }
+    b_.CreateBr(next);
+    b_.SetInsertPoint(next);
+  }
+  b_.CreateBr(finish);
+  b_.SetInsertPoint(finish);
+  for (size_t i = 0; i < local_types_.size(); ++i)
+    b_.CreateStore(b_.CreateLoad(type(local_types_[i]), locals_[i]),
+                   word(kContextHead + static_cast<int>(i)));
   b_.CreateBr(leave);
   return fn_;
+}
+
+// s = s + P_0 + P_1 + ...: each of the op's sums plus its chunks' partials in chunk order.
+void SystemEmitter::combine_sums(const DeviceStep& s, const std::vector<Value*>& sizes) {
+  Value* partials = b_.CreateLoad(
+      b_.getPtrTy(), b_.CreateConstInBoundsGEP1_64(b_.getInt64Ty(), fn_->getArg(0), kCtxPartials));
+  const int64_t n = s.sums;
+  Value* elements = b_.CreateSDiv(sizes[static_cast<size_t>(s.size)], b_.getInt64(s.group));
+  const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
+  Value* chunks = b_.CreateSDiv(b_.CreateAdd(elements, b_.getInt64(chunk - 1)), b_.getInt64(chunk));
+  loop(b_.getInt64(0), chunks, [&](Value* c) {
+    for (int64_t k = 0; k < n; ++k) {
+      Value* at = b_.CreateAdd(b_.CreateMul(c, b_.getInt64(n)), b_.getInt64(k));
+      Value* partial =
+          b_.CreateLoad(b_.getDoubleTy(), b_.CreateInBoundsGEP(b_.getDoubleTy(), partials, at));
+      Value* sum = locals_[static_cast<size_t>(s.op->sums[static_cast<size_t>(k)])];
+      b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(b_.getDoubleTy(), sum), partial), sum);
+    }
+  });
 }
 
 // The units [first, end) of a step that has many (clamped to the step's count).

@@ -191,6 +191,7 @@ class SystemEmitter : public Emitter {
   llvm::Function* device_step(const DeviceStep& s, const std::string& name);
   void device_units(const DeviceStep& s, Value* first, Value* end,
                     const std::vector<Value*>& sizes);
+  void combine_sums(const DeviceStep& s, const std::vector<Value*>& sizes);
   void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
   // The op's body for the `group` components of one run starting at `first` (an i64); with
   // sums, each taken over the run alone and then added to lane `lane` (an i64) of its chunk.
