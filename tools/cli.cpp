@@ -50,6 +50,8 @@ struct Commands {
   CLI::App* debug = nullptr;
   DebugOptions debug_options;
   CLI::App* dap = nullptr;
+  CLI::App* partition = nullptr;
+  PartitionOptions partition_options;
   CheckOptions check_options;
   std::vector<std::string> test_paths;
   TestCommandOptions test_options;  // how `simit test` runs %! tests and graph sections
@@ -185,6 +187,31 @@ void add_check(CLI::App& app, Commands& c) {
       "Diagnostics go to stderr as file:line:col: error: message, with the source line and a "
       "caret.\nExit status: 0 when every file is clean, 1 when any file has errors or cannot "
       "be read, 2 on a usage error.\n");
+}
+
+void add_partition(CLI::App& app, Commands& c) {
+  c.partition = app.add_subcommand(
+      "partition", "Cut a mesh's vertex graph into parts, as the distributed executor will");
+  c.partition->add_option("MESH", c.partition_options.mesh, "A mesh file (.node/.ele, .msh, .obj)")
+      ->required()
+      ->type_name("");
+  c.partition
+      ->add_option("--parts", c.partition_options.parts,
+                   "How many parts, e.g. 2,4,8 (one line each; default 2)")
+      ->type_name("K,...")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1 << 20));
+  c.partition->add_flag("--csv", c.partition_options.csv,
+                        "Print comma-separated lines instead of the table");
+  c.partition->footer(
+      "Every two vertices of an element (tet, triangle, edge) are adjacent; METIS's k-way "
+      "partitioner cuts that graph, with a fixed seed (the same parts on every run). An element "
+      "belongs to the part of its lowest-numbered vertex; a part's ghosts are the vertices its "
+      "elements reach that other parts own, its neighbours the parts that own them. Columns: "
+      "cut edges (and their share of the graph's), the largest part's vertices and elements "
+      "over the mean, ghosts in all parts and in the part with most, the most neighbours of "
+      "a part, and the partitioner's time.\nExit status: 0, 1 when the mesh does not read or "
+      "the parts do not fit it, 2 on a usage error.\n");
 }
 
 void add_test(CLI::App& app, Commands& c) {
@@ -366,6 +393,7 @@ void add_commands(CLI::App& app, Commands& c) {
   add_check(app, c);
   add_test(app, c);
   add_run(app, c);
+  add_partition(app, c);
 #ifdef SIMIT_HAVE_REPL
   app.require_subcommand(0, 1);
   add_repl(app, c);
@@ -442,6 +470,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   if (app.get_subcommands().empty()) return repl::run_repl("");
 #endif
   if (c.check->parsed()) return run_check(c.check_options, out, err);
+  if (c.partition->parsed()) {
+    if (c.partition_options.parts.empty()) c.partition_options.parts = {2};
+    return run_partition(c.partition_options, out, err);
+  }
   const bool scene = c.run->parsed() && ends_with(c.run_options.file, ".toml");
   for (const auto& [sub, flags] :
        {std::pair{c.run, &c.run_executor}, std::pair{c.test, &c.test_executor}})

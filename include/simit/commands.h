@@ -1,5 +1,6 @@
 // The work behind the `simit` subcommands that need the compiler's internals: `simit check`
-// (diagnostics and tree dumps) and `simit run FILE --call` (one function, literal arguments).
+// (diagnostics and tree dumps), `simit run FILE --call` (one function, literal arguments) and
+// `simit partition` (a mesh cut into parts).
 // The command line (tools/) parses arguments and calls these.
 #pragma once
 
@@ -37,6 +38,18 @@ struct RunOptions {
 // Returns 0, or 1 (with diagnostics or the run-time error on `err`) when the file does not
 // compile, the arguments do not fit, or the run stops with a run-time error.
 int run_function(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// `simit partition MESH --parts K,...`: the mesh's vertex graph (every element's vertices
+// adjacent) cut into each K parts (METIS, dist/partition.h), one line per K: cut edges,
+// balance, ghosts (vertices a part's elements reach that another part owns) and neighbours
+// (parts a part exchanges with). Returns 0, or 1 with the error on `err` (a mesh that does
+// not read, more parts than vertices, a build without METIS).
+struct PartitionOptions {
+  std::string mesh;
+  std::vector<int> parts;
+  bool csv = false;  // comma-separated lines instead of the table
+};
+int run_partition(const PartitionOptions& options, std::ostream& out, std::ostream& err);
 
 // Runs `command` and returns its exit status; an exception escaping it is simit's own bug,
 // reported on `err` as such (an internal assertion with its place, or any other exception)

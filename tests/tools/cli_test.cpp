@@ -187,5 +187,29 @@ TEST(Cli, TestPrintsJitStats) {
   EXPECT_EQ(r.out.find("jit traces:"), std::string::npos) << r.out;
 }
 
+// `simit partition`: a line per part count; a mesh that does not read and more parts than
+// vertices are errors (exit 1) naming the file; a part count below 1 is a usage error.
+TEST(Cli, PartitionPrintsALinePerPartCount) {
+  const std::string bunny = SIMIT_SOURCE_DIR "/examples/data/bunny.1.ele";
+  Result r = cli({"partition", bunny, "--parts", "2,3"});
+  if (r.status == 1 && r.err.find("this build has no partitioner") != std::string::npos)
+    GTEST_SKIP() << r.err;
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("bunny.1.ele: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n    2  "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n    3  "), std::string::npos) << r.out;
+  Result csv = cli({"partition", bunny, "--parts", "4", "--csv"});
+  ASSERT_EQ(csv.status, 0);
+  EXPECT_NE(csv.out.find("\nparts,cut_edges,"), std::string::npos) << csv.out;
+  EXPECT_NE(csv.out.find("\n4,"), std::string::npos) << csv.out;
+  Result missing = cli({"partition", "no_such_mesh.ele"});
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_NE(missing.err.find("no_such_mesh"), std::string::npos) << missing.err;
+  Result too_many = cli({"partition", bunny, "--parts", "100000"});
+  EXPECT_EQ(too_many.status, 1);
+  EXPECT_NE(too_many.err.find("each part needs a vertex"), std::string::npos) << too_many.err;
+  EXPECT_EQ(cli({"partition", bunny, "--parts", "0"}).status, 2);
+}
+
 }  // namespace
 }  // namespace simit::tools

@@ -1,0 +1,105 @@
+// The partitioner of the distributed layer (dist/partition.h): what a given split makes of a
+// mesh's elements (owned, ghosts, neighbours, cut), checked by hand on a small graph; METIS's
+// parts of the bunny checked against counts the test makes itself; and the errors.
+#include "dist/partition.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "runtime/mesh/mesh_reader.h"
+
+namespace simit::dist {
+namespace {
+
+using runtime::ElementList;
+
+// A path 0 - 1 - 2 - 3 of three edges, split {0, 1} | {2, 3}: the edge (1, 2) is cut and
+// belongs to part 0 (its lowest vertex is 1), so part 0 reaches vertex 2, its one ghost.
+TEST(Partition, AGivenSplitsOwnersGhostsAndCutByHand) {
+  const std::vector<int32_t> path = {0, 1, 1, 2, 2, 3};
+  const std::vector<ElementList> lists = {{path, 2}};
+  const runtime::VertexGraph g = runtime::vertex_graph(4, lists);
+  const std::vector<int32_t> owner = {0, 0, 1, 1};
+  const PartitionStats s = partition_stats(g, lists, owner, 2);
+  EXPECT_EQ(s.graph_edges, 3);
+  EXPECT_EQ(s.cut_edges, 1);
+  ASSERT_EQ(s.per_part.size(), 2u);
+  EXPECT_EQ(s.per_part[0].vertices, 2);
+  EXPECT_EQ(s.per_part[0].elements, 2);
+  EXPECT_EQ(s.per_part[0].ghosts, 1);
+  EXPECT_EQ(s.per_part[0].neighbours, 1);
+  EXPECT_EQ(s.per_part[1].vertices, 2);
+  EXPECT_EQ(s.per_part[1].elements, 1);
+  EXPECT_EQ(s.per_part[1].ghosts, 0);
+  EXPECT_EQ(s.per_part[1].neighbours, 0);
+  EXPECT_EQ(s.total_ghosts(), 1);
+  EXPECT_EQ(s.most_neighbours(), 1);
+  EXPECT_DOUBLE_EQ(s.vertex_imbalance(), 1.0);
+  EXPECT_DOUBLE_EQ(s.element_imbalance(), 2.0 * 2.0 / 3.0);
+}
+
+// The bunny's tets cut into 2, 3 and 7 parts: every part owns vertices and elements, the
+// owned counts add up to the mesh's, the cut is what the test counts from the tets' vertex
+// pairs, ghosts exist, and the same call gives the same parts.
+TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
+  const runtime::Mesh mesh = runtime::read_mesh(SIMIT_SOURCE_DIR "/examples/data/bunny.1.ele");
+  ASSERT_FALSE(mesh.tets.empty());
+  std::vector<int32_t> tets;
+  for (const auto& t : mesh.tets) tets.insert(tets.end(), t.begin(), t.end());
+  const std::vector<ElementList> lists = {{tets, 4}};
+  const auto n = static_cast<int32_t>(mesh.points.size());
+  const runtime::VertexGraph g = runtime::vertex_graph(n, lists);
+  for (int parts : {2, 3, 7}) {
+    const std::vector<int32_t> owner = partition_vertices(g, parts);
+    EXPECT_EQ(partition_vertices(g, parts), owner) << parts;
+    const PartitionStats s = partition_stats(g, lists, owner, parts);
+    int64_t vertices = 0, elements = 0;
+    for (const PartStats& p : s.per_part) {
+      EXPECT_GT(p.vertices, 0) << parts;
+      EXPECT_GT(p.elements, 0) << parts;
+      vertices += p.vertices;
+      elements += p.elements;
+    }
+    EXPECT_EQ(vertices, n);
+    EXPECT_EQ(elements, static_cast<int64_t>(mesh.tets.size()));
+    std::set<std::pair<int32_t, int32_t>> pairs, cut;
+    for (const auto& t : mesh.tets)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const auto pair = std::minmax(t[static_cast<size_t>(i)], t[static_cast<size_t>(j)]);
+          pairs.insert(pair);
+          if (owner[static_cast<size_t>(pair.first)] != owner[static_cast<size_t>(pair.second)])
+            cut.insert(pair);
+        }
+    EXPECT_EQ(s.graph_edges, static_cast<int64_t>(pairs.size()));
+    EXPECT_EQ(s.cut_edges, static_cast<int64_t>(cut.size())) << parts;
+    EXPECT_GT(s.cut_edges, 0);
+    EXPECT_LT(s.cut_edges, s.graph_edges / 4) << parts;  // a partitioner, not a scatter
+    EXPECT_GT(s.total_ghosts(), 0);
+    EXPECT_LT(s.vertex_imbalance(), 1.1) << parts;
+  }
+}
+
+TEST(Partition, OnePartOwnsEverythingAndTooManyPartsAreAnError) {
+  const std::vector<int32_t> path = {0, 1, 1, 2};
+  const std::vector<ElementList> lists = {{path, 2}};
+  const runtime::VertexGraph g = runtime::vertex_graph(3, lists);
+  EXPECT_EQ(partition_vertices(g, 1), (std::vector<int32_t>{0, 0, 0}));
+  const PartitionStats s = partition_stats(g, lists, partition_vertices(g, 1), 1);
+  EXPECT_EQ(s.cut_edges, 0);
+  EXPECT_EQ(s.total_ghosts(), 0);
+  try {
+    partition_vertices(g, 4);
+    ADD_FAILURE() << "4 parts of 3 vertices";
+  } catch (const PartitionError& e) {
+    EXPECT_STREQ(e.what(), "cannot cut 3 vertices into 4 parts: each part needs a vertex");
+  }
+  EXPECT_THROW(partition_vertices(g, 0), PartitionError);
+}
+
+}  // namespace
+}  // namespace simit::dist
