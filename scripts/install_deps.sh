@@ -5,7 +5,8 @@
 # test.sh pass it) and zstd, which LLVM's static libraries link; with --bench also matplotlib,
 # which bench/accuracy.py draws its plots with (Debian's python3-matplotlib, for /usr/bin/python3).
 # The Python module (python/) builds with pybind11 for Debian's /usr/bin/python3 and needs numpy.
-# METIS (libmetis-dev) is the distributed layer's partitioner (src/dist, `simit partition`).
+# METIS (libmetis-dev) is the distributed layer's partitioner (src/dist, `simit partition`), and
+# OpenMPI (openmpi-bin, libopenmpi-dev) its ranks (src/dist/mpi; the tests labelled mpi).
 set -euo pipefail
 
 packages=(
@@ -14,7 +15,7 @@ packages=(
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
   libpng-dev libtinyobjloader-dev clang libclang-rt-14-dev tmux python3
   clang-format pybind11-dev python3-dev python3-numpy
-  libmetis-dev
+  libmetis-dev openmpi-bin libopenmpi-dev
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with; pytest for
 # the Python module's tests, scipy and matplotlib for the ones of its matrices and example.

@@ -1,10 +1,13 @@
 // The vertex partition by METIS and what it makes of a mesh's elements (dist/partition.h).
 #include "dist/partition.h"
 
+#include "dist/local_part.h"
+
 #include <metis.h>
 
 #include <algorithm>
-#include <numeric>
+#include <limits>
+#include <string>
 
 namespace simit::dist {
 
@@ -66,8 +69,7 @@ PartitionStats partition_stats(const runtime::VertexGraph& graph,
     for (size_t e = 0; e < count; ++e) {
       const auto vs = list.indices.subspan(e * static_cast<size_t>(list.arity),
                                            static_cast<size_t>(list.arity));
-      const int32_t lowest = *std::min_element(vs.begin(), vs.end());
-      const int32_t p = owner[static_cast<size_t>(lowest)];
+      const int32_t p = element_owner(vs, owner);
       ++s.per_part[static_cast<size_t>(p)].elements;
       elements_of[static_cast<size_t>(p)].insert(elements_of[static_cast<size_t>(p)].end(),
                                                  vs.begin(), vs.end());

@@ -3,6 +3,8 @@
 // parts of the bunny checked against counts the test makes itself; and the errors.
 #include "dist/partition.h"
 
+#include "dist/local_part.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -40,6 +42,21 @@ TEST(Partition, AGivenSplitsOwnersGhostsAndCutByHand) {
   EXPECT_EQ(s.most_neighbours(), 1);
   EXPECT_DOUBLE_EQ(s.vertex_imbalance(), 1.0);
   EXPECT_DOUBLE_EQ(s.element_imbalance(), 2.0 * 2.0 / 3.0);
+}
+
+// The same split as a rank takes it: its vertices, its elements, its ghosts, in the mesh's
+// numbers.
+TEST(Partition, ARanksPartHoldsItsVerticesElementsAndGhostsInMeshNumbers) {
+  const std::vector<int32_t> path = {0, 1, 1, 2, 2, 3};
+  const std::vector<ElementList> lists = {{path, 2}};
+  const std::vector<int32_t> owner = {0, 0, 1, 1};
+  const LocalPart p0 = local_part(lists, owner, 0), p1 = local_part(lists, owner, 1);
+  EXPECT_EQ(p0.owned_vertices, (std::vector<int32_t>{0, 1}));
+  EXPECT_EQ(p0.owned_elements, (std::vector<std::vector<int32_t>>{{0, 1}}));
+  EXPECT_EQ(p0.ghost_vertices, (std::vector<int32_t>{2}));
+  EXPECT_EQ(p1.owned_vertices, (std::vector<int32_t>{2, 3}));
+  EXPECT_EQ(p1.owned_elements, (std::vector<std::vector<int32_t>>{{2}}));
+  EXPECT_TRUE(p1.ghost_vertices.empty());
 }
 
 // The bunny's tets cut into 2, 3 and 7 parts: every part owns vertices and elements, the
