@@ -1,6 +1,8 @@
 // The kernel cache's key text and entry files (jit/kernel_cache.h).
 #include "jit/kernel_cache.h"
 
+#include "jit/device_program.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -276,6 +278,16 @@ std::string kernel_key_text(const SystemTrace& t) {
   w.out += '\n';
   w.ops("body", t.body);
   w.ops("after", t.after);
+  // A device program's code is its steps, numbered as the plan lays them out: a plan that
+  // lays them out otherwise must not load this code (a step's number would name another).
+  if (t.device) {
+    w.tag("\nsteps");
+    const DeviceProgram p = plan_device_program(t);
+    for (const DeviceStep* s : p.all()) {
+      w.num(static_cast<int64_t>(s->kind));
+      for (const DeviceStep& part : s->parts) w.num(100 + static_cast<int64_t>(part.kind));
+    }
+  }
   return std::move(w.out);
 }
 

@@ -433,6 +433,30 @@ TEST(KernelCache, TwoThreadsCompilingTheSameTraceLeaveOneWholeEntry) {
   }
 }
 
+// A device program's key names its steps as the plan lays them out (a cached dispatcher whose
+// step numbers name other steps would run the wrong code): the same trace as a host kernel
+// and as a device program are other code.
+TEST(KernelCache, ADeviceProgramsKeyNamesItsSteps) {
+  SystemTrace t;
+  t.sizes = {"n"};
+  t.locals = {Ty::F64};
+  VectorOp scalar, pass;
+  pass.kind = VectorOp::Kind::Pass;
+  pass.length = 0;
+  t.before = {scalar};
+  SystemTrace device = t;
+  device.device = true;
+  const std::string host_key = kernel_key_text(t), device_key = kernel_key_text(device);
+  EXPECT_EQ(host_key.find("steps"), std::string::npos);
+  EXPECT_NE(device_key.find("steps"), std::string::npos) << device_key;
+  EXPECT_NE(host_key, device_key);
+  // Its steps by kind: a Thread (0) of one Serial part (100 + 1), then a pass without sums
+  // (Each: 4).
+  device.before.push_back(pass);
+  EXPECT_NE(kernel_key_text(device).find("steps 0 101 4"), std::string::npos)
+      << kernel_key_text(device);
+}
+
 TEST(KernelCache, KeysFollowTheCodeNotTheNamesOrLines) {
   const Trace a = fem_like(0.0), renamed = fem_like(0.0, "force@other.sim:99");
   const Trace tweaked = fem_like(0.25);
