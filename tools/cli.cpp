@@ -205,7 +205,8 @@ void add_partition(CLI::App& app, Commands& c) {
                         "Print comma-separated lines instead of the table");
   c.partition->footer(
       "Every two vertices of an element (tet, triangle, edge) are adjacent; METIS's k-way "
-      "partitioner cuts that graph, with a fixed seed (the same parts on every run). An element "
+      "partitioner cuts that graph, with a fixed seed (the same parts on every run), balancing "
+      "the parts' vertices and the elements they own. An element "
       "belongs to the part of its lowest-numbered vertex; a part's ghosts are the vertices its "
       "elements reach that other parts own, its neighbours the parts that own them. Columns: "
       "cut edges (and their share of the graph's), the largest part's vertices and elements "

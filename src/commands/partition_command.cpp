@@ -49,7 +49,7 @@ int run_partition(const PartitionOptions& options, std::ostream& out, std::ostre
     out << header;
     for (int parts : options.parts) {
       const auto start = std::chrono::steady_clock::now();
-      const std::vector<int32_t> owner = dist::partition_vertices(graph, parts);
+      const std::vector<int32_t> owner = dist::partition_vertices(graph, parts, lists);
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();

@@ -11,7 +11,8 @@
 
 namespace simit::dist {
 
-std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts) {
+std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts,
+                                        std::span<const runtime::ElementList> lists) {
   const int32_t n = graph.vertices();
   if (parts < 1)
     throw PartitionError("the number of parts must be at least 1, not " + std::to_string(parts));
@@ -26,15 +27,32 @@ std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int p
     throw PartitionError("the vertex graph has too many edges for METIS's 32-bit indices");
   std::vector<idx_t> xadj(graph.offsets.begin(), graph.offsets.end());
   std::vector<idx_t> adjncy(graph.neighbours.begin(), graph.neighbours.end());
-  idx_t vertices = n, constraints = 1, nparts = parts, cut = 0;
+  // With elements: two weights per vertex, 1 and the elements whose lowest vertex it is (the
+  // ones its part will own), and METIS balances both.
+  std::vector<idx_t> weights;
+  idx_t constraints = 1;
+  if (!lists.empty()) {
+    constraints = 2;
+    weights.assign(2 * static_cast<size_t>(n), 0);
+    for (size_t v = 0; v < static_cast<size_t>(n); ++v) weights[2 * v] = 1;
+    for (const runtime::ElementList& list : lists) {
+      const auto arity = static_cast<size_t>(list.arity);
+      for (size_t e = 0; e + arity <= list.indices.size(); e += arity) {
+        const auto vs = list.indices.subspan(e, arity);
+        ++weights[2 * static_cast<size_t>(*std::min_element(vs.begin(), vs.end())) + 1];
+      }
+    }
+  }
+  idx_t vertices = n, nparts = parts, cut = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
   options[METIS_OPTION_SEED] = 1;  // the same parts on every run
   options[METIS_OPTION_NUMBERING] = 0;
   std::vector<idx_t> part(static_cast<size_t>(n), 0);
   const int status =
-      METIS_PartGraphKway(&vertices, &constraints, xadj.data(), adjncy.data(), nullptr, nullptr,
-                          nullptr, &nparts, nullptr, nullptr, options, &cut, part.data());
+      METIS_PartGraphKway(&vertices, &constraints, xadj.data(), adjncy.data(),
+                          weights.empty() ? nullptr : weights.data(), nullptr, nullptr, &nparts,
+                          nullptr, nullptr, options, &cut, part.data());
   if (status != METIS_OK)
     throw PartitionError(
         std::string("METIS could not partition the graph (") +

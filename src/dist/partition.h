@@ -3,7 +3,8 @@
 // figures its cost model starts from (docs/distributed.md).
 //
 // The vertex graph every element implies (runtime/mesh/reorder.h) is cut into `parts` by
-// METIS's multilevel k-way partitioner (fixed seed: the same parts every run). A vertex
+// METIS's multilevel k-way partitioner (fixed seed: the same parts every run), balancing
+// vertices and the elements they will own. A vertex
 // belongs to one part; an element to the part of its lowest-numbered vertex; a part's ghosts
 // are the vertices its elements reach that another part owns (one layer: what an assembly
 // over its elements reads and writes that is not its own).
@@ -24,9 +25,11 @@ class PartitionError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The part of each vertex of `graph`, in [0, parts). One part: all zero. Throws
-// PartitionError when parts < 1, parts exceeds the vertices, or METIS fails.
-std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts);
+// The part of each vertex of `graph`, in [0, parts). With `lists`, the parts balance the
+// elements each will own as well as the vertices (two weights per vertex). One part: all
+// zero. Throws PartitionError when parts < 1, parts exceeds the vertices, or METIS fails.
+std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts,
+                                        std::span<const runtime::ElementList> lists = {});
 
 struct PartStats {
   int64_t vertices = 0;    // owned

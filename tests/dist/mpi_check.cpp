@@ -42,7 +42,8 @@ int parts(const Session& mpi, const std::string& path) {
       for (const auto& t : mesh.tets) tets.insert(tets.end(), t.begin(), t.end());
       const std::vector<simit::runtime::ElementList> lists = {{tets, 4}};
       const auto n = static_cast<int32_t>(mesh.points.size());
-      owner = simit::dist::partition_vertices(simit::runtime::vertex_graph(n, lists), mpi.size());
+      owner = simit::dist::partition_vertices(simit::runtime::vertex_graph(n, lists), mpi.size(),
+                                              lists);
       head = {1, n};
     } catch (const std::exception& e) {
       std::fprintf(stderr, "parts: %s\n", e.what());

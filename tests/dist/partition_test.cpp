@@ -59,9 +59,9 @@ TEST(Partition, ARanksPartHoldsItsVerticesElementsAndGhostsInMeshNumbers) {
   EXPECT_TRUE(p1.ghost_vertices.empty());
 }
 
-// The bunny's tets cut into 2, 3 and 7 parts: every part owns vertices and elements, the
-// owned counts add up to the mesh's, the cut is what the test counts from the tets' vertex
-// pairs, ghosts exist, and the same call gives the same parts.
+// The bunny's tets cut into 2, 3 and 7 parts: every part owns vertices and elements, both
+// balanced, the owned counts add up to the mesh's, the cut is what the test counts from the tets'
+// vertex pairs, ghosts exist, and the same call gives the same parts.
 TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
   const runtime::Mesh mesh = runtime::read_mesh(SIMIT_SOURCE_DIR "/examples/data/bunny.1.ele");
   ASSERT_FALSE(mesh.tets.empty());
@@ -71,8 +71,8 @@ TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
   const auto n = static_cast<int32_t>(mesh.points.size());
   const runtime::VertexGraph g = runtime::vertex_graph(n, lists);
   for (int parts : {2, 3, 7}) {
-    const std::vector<int32_t> owner = partition_vertices(g, parts);
-    EXPECT_EQ(partition_vertices(g, parts), owner) << parts;
+    const std::vector<int32_t> owner = partition_vertices(g, parts, lists);
+    EXPECT_EQ(partition_vertices(g, parts, lists), owner) << parts;
     const PartitionStats s = partition_stats(g, lists, owner, parts);
     int64_t vertices = 0, elements = 0;
     for (const PartStats& p : s.per_part) {
@@ -98,6 +98,7 @@ TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
     EXPECT_LT(s.cut_edges, s.graph_edges / 4) << parts;  // a partitioner, not a scatter
     EXPECT_GT(s.total_ghosts(), 0);
     EXPECT_LT(s.vertex_imbalance(), 1.1) << parts;
+    EXPECT_LT(s.element_imbalance(), 1.1) << parts;  // the second weight
   }
 }
 
