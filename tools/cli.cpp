@@ -58,6 +58,7 @@ struct Commands {
   RunOptions run_options;
   SceneOptions scene_options;
   bool no_finite_check = false;  // simit run --no-finite-check (scenes)
+  bool distributed = false;      // simit run --distributed (scenes, under mpirun)
   ExecutorFlags run_executor{&run_options.executor, &run_options.jit_stats};
   ExecutorFlags test_executor{&test_options.executor, &test_options.jit_stats};
 };
@@ -293,6 +294,9 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->add_option("--output", so.output_dir, "Scenes: write the output into this folder");
   c.run->add_option("--final-csv", so.final_csv,
                     "Scenes: write the last frame's positions to this CSV file (x,y,z lines)");
+  c.run->add_flag("--distributed", c.distributed,
+                  "Scenes, under mpirun -np K: each rank runs the program over its part of the "
+                  "sets (cut by METIS; rank 0 writes the output); the interpreter only, so far");
   c.run->add_option("--png", so.png,
                     "Scenes: write a quick-look picture of the last frame to this PNG file "
                     "(instead of [output] png)");
@@ -498,8 +502,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       SceneOptions so = scene_options(c);
       so.progress_line = &out == &std::cout && isatty(fileno(stdout));
       scene::remove_temporaries_on_signals();  // a killed run leaves complete files only
+      if (c.distributed) return checked(run_distributed_scene(so, out, err));
       return checked(run_scene(so, out, err));
     }
+    if (c.distributed) return usage_error(app, "run: --distributed runs scenes (.toml) only", err);
     if (c.run_options.func.empty())
       return usage_error(app, "run: a .sim file needs --call NAME (or give a .toml scene)", err);
     c.run_options.args = c.run->remaining();

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "simit/executor.h"
+#include "simit/scene.h"
 
 namespace simit::tools {
 
@@ -50,6 +51,11 @@ struct PartitionOptions {
   bool csv = false;  // comma-separated lines instead of the table
 };
 int run_partition(const PartitionOptions& options, std::ostream& out, std::ostream& err);
+
+// `simit run --distributed SCENE.toml` under mpirun: each rank runs the scene over its part of
+// the sets, rank 0 prints and writes the output; a failure on any rank ends them all with its
+// message (MPI_Abort). Returns 1 with the reason when this simit has no MPI.
+int run_distributed_scene(scene::SceneOptions options, std::ostream& out, std::ostream& err);
 
 // Runs `command` and returns its exit status; an exception escaping it is simit's own bug,
 // reported on `err` as such (an internal assertion with its place, or any other exception)

@@ -16,6 +16,8 @@
 
 namespace simit::scene {
 
+class Distributed;  // scene/distributed.h
+
 struct SceneOptions {
   std::string file;        // the .toml scene
   int frames = -1;         // overrides the scene's `frames` when >= 0
@@ -45,6 +47,9 @@ struct SceneOptions {
   // While a run or a Stepper call runs, the first SIGINT (Ctrl-C) stops it at its next
   // statement with an error that says so (Stepper: Interrupted) instead of ending the process.
   bool stop_on_interrupt = false;
+  // A run on MPI ranks (`simit run --distributed`): each rank runs the program over its part of
+  // the sets and rank 0 writes the output (scene/distributed.h); null in one process.
+  std::shared_ptr<Distributed> distributed;
 };
 
 class Scene {

@@ -46,6 +46,7 @@ std::unique_ptr<interp::Interpreter> Engine::make_executor() const {
   o.trap = options_.trap;
   o.hook = options_.hook;
   o.sites = options_.sites;
+  o.distribution = options_.distribution;
   return std::make_unique<interp::Interpreter>(compiled_->program(), o);
 }
 

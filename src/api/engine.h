@@ -52,6 +52,8 @@ struct EngineOptions {
   // executor seam); null with ExecutorKind::Interpreter runs everything in the interpreter.
   // ExecutorKind::Jit installs its own.
   interp::SiteHook* sites = nullptr;
+  // A distributed run's seam (interp/distribution.h); null in one process.
+  const interp::Distribution* distribution = nullptr;
   // Where the JIT's dumps (ExecutorChoice::dump_loop_ir, dump_llvm) print; null: nowhere.
   std::ostream* dump = nullptr;
   // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value

@@ -68,6 +68,12 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
       else if (r.is_tensor())
         runtime::round_to_float32(r.tensor());
     }
+    // A distributed run: a ghost's sum misses the other ranks' elements (interp/distribution.h).
+    if (options_.distribution && m.type) {
+      const bool multi = m.type->kind == frontend::Type::Kind::Multi;
+      if (!multi || i < m.type->members.size())
+        refresh_ghosts(out.back(), multi ? m.type->members[i].get() : m.type.get());
+    }
   }
   return out;
 }

@@ -152,6 +152,8 @@ void Interpreter::set_ivars(const std::vector<const ast::Variable*>& vars,
 // (a block's components) run row-major from +0.0. Every addition is one `+` of the
 // interpreter, with its float32 rounding and finiteness check.
 Value Interpreter::reduce(const ast::Assign& a, const IndexVars& vars) {
+  if (options_.distribution && !vars.over_sets.empty())
+    not_distributed(a.value->span, "a sum over a set in index notation");
   const Value zero = zero_of(*a.value->type, a.value->span);
   if (any_empty(vars.over_set_sizes) || any_empty(vars.dense_sizes)) return zero;
   auto add = [&](Value& sum, const Value& term) {

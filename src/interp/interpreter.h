@@ -255,6 +255,16 @@ class Interpreter final : public ExecState {
   bool is_map_result(const Value* v) const;
   Value finish_grid_result(MapContext& ctx, size_t result);
 
+  // distributed.cpp: a distributed run (interp/distribution.h)
+  // The set a global vector of type `t` runs over, in a distributed run (null otherwise).
+  const runtime::Set* distributed_set(const frontend::Type* t);
+  [[noreturn]] void not_distributed(const frontend::SourceSpan& at, const std::string& what) const;
+  // x' y (or with `root`, its square root) over `set`: the owned elements, then every rank's.
+  Value distributed_inner_product(const Value& x, const Value& y, const runtime::Set& set,
+                                  bool root, const frontend::SourceSpan& at);
+  // Ghost entries of a global vector of type `t` from their owners (after a partial write).
+  void refresh_ghosts(Value& v, const frontend::Type* t);
+
   // linalg.cpp: system values in operators and intrinsics
   bool system_binary(const frontend::ast::Binary& b, const Value& l, const Value& r, Value& out);
   bool scaled_matrix_sum(const frontend::ast::Binary& b, Value& out);

@@ -135,10 +135,17 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
     case Intrinsic::Inv2:
     case Intrinsic::Inv4: return Value::of_tensor(runtime::inverse(a0.tensor()));
     case Intrinsic::Cross: return cross(a0, a1);
-    case Intrinsic::Norm: return norm(a0, is_set_vector(c.args[0]->type.get()));
-    case Intrinsic::Dot:
+    case Intrinsic::Norm:
+      if (const runtime::Set* set = distributed_set(c.args[0]->type.get()))
+        return distributed_inner_product(a0, a0, *set, true, c.span);
+      return norm(a0, is_set_vector(c.args[0]->type.get()));
+    case Intrinsic::Dot: {
+      const runtime::Set* set = distributed_set(c.args[0]->type.get());
+      if (!set) set = distributed_set(c.args[1]->type.get());
+      if (set) return distributed_inner_product(a0, a1, *set, false, c.span);
       return dot(a0, a1,
                  is_set_vector(c.args[0]->type.get()) || is_set_vector(c.args[1]->type.get()));
+    }
     case Intrinsic::CreateComplex: return Value::of_complex({a0.as_float(), a1.as_float()});
     case Intrinsic::ComplexGetReal: return Value::of_float(a0.as_complex().real());
     case Intrinsic::ComplexGetImag: return Value::of_float(a0.as_complex().imag());

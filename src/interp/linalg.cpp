@@ -254,22 +254,32 @@ Value inner_product_over_set(const Value& l, const Value& r) {
 bool Interpreter::system_binary(const ast::Binary& b, const Value& l, const Value& r, Value& out) {
   using Op = ast::Binary::Op;
   const bool lm = l.kind() == Value::Kind::Matrix, rm = r.kind() == Value::Kind::Matrix;
+  // A distributed run holds complete rows of its owned elements only (interp/distribution.h):
+  // what needs other rows is refused until it is built.
+  const bool distributed = options_.distribution && (lm || rm);
   switch (b.op) {
     case Op::Mul:
       if (!lm && !rm && is_set_inner_product(b)) {
-        out = inner_product_over_set(l, r);
+        if (const runtime::Set* set = distributed_set(b.lhs->type.get()))
+          out = distributed_inner_product(l, r, *set, false, b.span);
+        else
+          out = inner_product_over_set(l, r);
         return true;
       }
       if (lm && rm) {
+        if (distributed) not_distributed(b.span, "a product of two system matrices");
         out = matrix_value(runtime::multiply(*l.matrix(), *r.matrix()));
         return true;
       }
       if (lm && r.is_tensor()) {
         out = Value::of_tensor(
             matrix_vector(*l.matrix(), r.tensor(), false, shape_of(*b.type, b.span)));
+        // The ghost rows' sums miss the other ranks' elements: their owners' sums replace them.
+        if (distributed) refresh_ghosts(out, b.type.get());
         return true;
       }
       if (rm && l.is_tensor()) {
+        if (distributed) not_distributed(b.span, "a vector times a system matrix (x' * A)");
         out = Value::of_tensor(
             matrix_vector(*r.matrix(), l.tensor(), true, shape_of(*b.type, b.span)));
         return true;
@@ -303,6 +313,7 @@ bool Interpreter::system_binary(const ast::Binary& b, const Value& l, const Valu
       break;
     case Op::LeftDiv:
       if (lm && r.is_tensor()) {
+        if (distributed) not_distributed(b.span, "a direct solve ('\\')");
         const SystemMatrix& a = *l.matrix();
         if (!a.is_float() || r.tensor().kind() != ComponentKind::Float)
           throw Fault(std::string("the solve operator '\\' needs float components, not ") +
@@ -384,6 +395,8 @@ Value Interpreter::matrix_read(const ast::TensorRead& r, const Value& mv) {
 
 Value Interpreter::solver_intrinsic(const ast::Call& c, std::vector<Value>& args) {
   using frontend::Intrinsic;
+  if (options_.distribution)
+    not_distributed(c.span, "the factorisation or solve '" + c.callee + "'");
   auto matrix = [&](const Value& v) -> const SystemMatrix& {
     if (v.kind() != Value::Kind::Matrix) fail(c.span, "expected a system matrix");
     return *v.matrix();

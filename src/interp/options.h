@@ -5,6 +5,7 @@
 
 namespace simit::interp {
 
+class Distribution;
 class SiteHook;
 class StatementHook;
 class Trap;
@@ -25,6 +26,9 @@ struct Options {
   // The executor seam (interp/assembly_plan.h): offered every planned map / apply site;
   // null runs everything in the interpreter.
   SiteHook* sites = nullptr;
+  // A distributed run's seam (interp/distribution.h): reductions over a set add the ranks'
+  // owned parts and partial results refresh their ghosts; null in a run of one process.
+  const Distribution* distribution = nullptr;
 };
 
 }  // namespace simit::interp

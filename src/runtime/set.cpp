@@ -188,17 +188,19 @@ void Set::reserve(int elements) {
   endpoints_.reserve(static_cast<size_t>(elements) * arity());
 }
 
-void Set::set_mesh_numbers(std::vector<int32_t> numbers) {
+void Set::set_mesh_numbers(std::vector<int32_t> numbers, int32_t whole) {
   if (numbers.size() != static_cast<size_t>(size_))
     throw Fault(describe() + ": " + std::to_string(numbers.size()) + " mesh numbers for " +
                 std::to_string(size_) + " elements");
-  std::vector<char> seen(numbers.size(), 0);
+  const int32_t limit = whole < 0 ? size_ : whole;
+  std::vector<char> seen(static_cast<size_t>(std::max(limit, 0)), 0);
   for (size_t e = 0; e < numbers.size(); ++e) {
     const int32_t m = numbers[e];
-    if (m < 0 || m >= size_ || seen[m])
+    if (m < 0 || m >= limit || seen[m])
       throw Fault(element_str(*this, static_cast<int>(e)) + ": mesh number " + std::to_string(m) +
-                  (m < 0 || m >= size_ ? " is out of range" : " is given twice") +
-                  " (the mesh numbers must be a permutation of the elements)");
+                  (m < 0 || m >= limit ? " is out of range" : " is given twice") +
+                  (whole < 0 ? " (the mesh numbers must be a permutation of the elements)"
+                             : " (the mesh numbers of a part must be distinct elements of the mesh)"));
     seen[m] = 1;
   }
   mesh_numbers_ = std::move(numbers);

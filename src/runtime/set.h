@@ -152,7 +152,9 @@ class Set {
   bool has_mesh_numbers() const { return !mesh_numbers_.empty(); }
   std::span<const int32_t> mesh_numbers() const { return mesh_numbers_; }
   // `numbers[e]`: element e's number in the mesh; a permutation of 0..size()-1 (Fault if not).
-  void set_mesh_numbers(std::vector<int32_t> numbers);
+  // A part of a set (a distributed run's rank holds one): with `whole` >= 0, distinct numbers
+  // in [0, whole) instead.
+  void set_mesh_numbers(std::vector<int32_t> numbers, int32_t whole = -1);
 
   // --- pinned storage ---------------------------------------------------------------------
   // From now on every field's array stays where it is, for hosts that hold views of it

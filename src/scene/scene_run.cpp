@@ -18,6 +18,32 @@ using runtime::ComponentKind;
 void SceneRun::build() {
   tensors_ = read_tensors(file_, options_.float32);
   sets_ = build_sets(file_, meshes_, options_.float32, reorder_);
+  if (options_.distributed) localize();
+}
+
+std::vector<runtime::Set*> SceneRun::whole_sets() const {
+  std::vector<runtime::Set*> whole;
+  for (const auto& s : sets_.sets) whole.push_back(s->set.get());
+  return whole;
+}
+
+// Every rank built the whole sets from the meshes alike; each keeps its part to run on.
+void SceneRun::localize() {
+  if (options_.executor.kind != ExecutorKind::Interpreter)
+    throw SceneError(file_.path + ": error: --distributed runs the interpreter (executor " +
+                     executor_name(options_.executor.kind) + " is not distributed yet)");
+  try {
+    local_ = options_.distributed->localize(whole_sets());
+  } catch (const std::runtime_error& e) {
+    throw SceneError(file_.path + ": error: --distributed: " + e.what());
+  }
+}
+
+void SceneRun::gather() const {
+  if (!options_.distributed) return;
+  std::vector<runtime::Set*> local;
+  for (const auto& s : local_) local.push_back(s.get());
+  options_.distributed->gather(local, whole_sets());
 }
 
 // Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
@@ -38,8 +64,11 @@ void SceneRun::check_needs(const std::string& key, const std::string& name) cons
 void SceneRun::bind(api::Engine& engine) const {
   try {
     for (int pass = 0; pass < 2; ++pass)
-      for (const auto& s : sets_.sets)
-        if ((s->set->arity() == 0) == (pass == 0)) engine.bind_set(*s->var, *s->set);
+      for (size_t k = 0; k < sets_.sets.size(); ++k) {
+        const SceneSet& s = *sets_.sets[k];
+        runtime::Set& set = local_.empty() ? *s.set : *local_[k];
+        if ((set.arity() == 0) == (pass == 0)) engine.bind_set(*s.var, set);
+      }
     for (const auto& [name, t] : tensors_) engine.set_global(*t.var, t.value);
   } catch (const interp::RuntimeError& e) {
     throw SceneError(file_.path + ": error: " + e.message());
@@ -121,6 +150,8 @@ std::string number_text(double v) { return std::isnan(v) ? "nan" : v > 0 ? "inf"
 // instead of filling the rest of the series. Frame 0 is the state after init.
 void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& results) const {
   if (!options_.finite_check || !file_.finite_check) return;
+  // A distributed run checks the gathered sets, on rank 0 (an error there stops every rank).
+  if (options_.distributed && options_.distributed->rank() != 0) return;
   const std::string when = frame > 0                 ? "after frame " + std::to_string(frame)
                            : file_.init_name.empty() ? "in the initial state (frame 0)"
                                                      : "after init (frame 0)";
@@ -165,6 +196,7 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.executor =
       options_.executor;  // resolved with the scene file's keys and checked by Scene::open
   eo.dump = &out;
+  eo.distribution = options_.distributed.get();
   return eo;
 }
 
@@ -179,6 +211,7 @@ void SceneRun::prepare(std::ostream& out) {
 
 void SceneRun::initialise(bool last) {
   if (!file_.init_name.empty()) call(*engine_, file_.init_name);
+  gather();
   check_finite_state(0, {});
   output_.write_frame(meshes_, 0, last);
   last_written_ = 0;
@@ -193,6 +226,7 @@ FrameResult SceneRun::frame(int frame, bool last) {
   r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   r.assembly_ms = std::min(r.ms, 1e3 * engine_->stats().assembly_seconds);
   r.stats = step_stats(r.results);
+  gather();
   check_finite_state(frame, r.results);
   if (output_.every_frame(frame) || last) {
     output_.write_frame(meshes_, frame, last);

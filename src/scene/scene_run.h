@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "api/engine.h"
+#include "scene/distributed.h"
 #include "scene/mesh_binding.h"
 #include "scene/mesh_cache.h"
 #include "scene/output_series.h"
@@ -80,6 +81,11 @@ class SceneRun {
   std::vector<double> step_stats(const std::vector<interp::Value>& results) const;
   void print_sizes(std::ostream& out, int frames) const;
   void check_finite_state(int frame, const std::vector<interp::Value>& results) const;
+  // A distributed run: the sets as bind() binds them (the local parts), and the local fields
+  // gathered into the whole sets on rank 0 before they are checked or written.
+  std::vector<runtime::Set*> whole_sets() const;
+  void localize();
+  void gather() const;
 
   const SceneFile& file_;
   const SceneOptions& options_;
@@ -87,6 +93,8 @@ class SceneRun {
   Reorder reorder_;
   interp::Trap* trap_;
   BoundSets sets_;
+  // A distributed run: this rank's part of each of sets_.sets, in the same order.
+  std::vector<std::unique_ptr<runtime::Set>> local_;
   std::map<std::string, SceneTensor> tensors_;
   OutputSeries output_;
   // --jit-stats without a debugger's trap: Ctrl-C stops the run through this one.

@@ -1,0 +1,80 @@
+// A distributed run's reductions over sets and ghost refreshes (interp/distribution.h): what
+// the interpreter does differently when each MPI rank holds only its part of every set.
+#include <cmath>
+#include <cstring>
+#include <span>
+
+#include "interp/distribution.h"
+#include "interp/frame.h"
+#include "interp/interpreter.h"
+#include "interp/set_reductions.h"
+#include "runtime/blocked_sum.h"
+#include "runtime/dense_linalg.h"
+
+namespace simit::interp {
+
+using frontend::IndexSet;
+using frontend::SourceSpan;
+using frontend::Type;
+
+const runtime::Set* Interpreter::distributed_set(const Type* t) {
+  if (!options_.distribution || !is_set_vector(t) || t->dims.empty()) return nullptr;
+  const IndexSet& d = t->dims[0];
+  if (d.kind == IndexSet::Kind::Fixed || !d.var) return nullptr;
+  const Value& v = d.kind == IndexSet::Kind::Generic ? *frame().refs[d.var->slot] : var(*d.var);
+  if (v.kind() != Value::Kind::Set || !v.binding()) return nullptr;
+  return v.binding()->set;
+}
+
+void Interpreter::not_distributed(const SourceSpan& at, const std::string& what) const {
+  fail(at, "a distributed run cannot compute " + what + " yet (it runs in one process)");
+}
+
+Value Interpreter::distributed_inner_product(const Value& x, const Value& y,
+                                             const runtime::Set& set, bool root,
+                                             const SourceSpan& at) {
+  if (!x.is_tensor() || !y.is_tensor() || x.tensor().kind() != runtime::ComponentKind::Float ||
+      y.tensor().kind() != runtime::ComponentKind::Float)
+    not_distributed(at, "an inner product over a set of other than float vectors");
+  const runtime::Tensor& u = x.tensor();
+  const runtime::Tensor& v = y.tensor();
+  if (u.size() != v.size() ||
+      (set.size() > 0 && u.size() % static_cast<size_t>(set.size()) != 0))
+    fail(at, "an inner product of vectors of " + std::to_string(u.size()) + " and " +
+                 std::to_string(v.size()) + " components over " + set.describe());
+  // A rank may hold no element of a set: it still takes part in the sum.
+  const size_t per_element = set.size() > 0 ? u.size() / static_cast<size_t>(set.size()) : 0;
+  const size_t group = runtime::inner_product_group(u.shape());
+  if (runtime::inner_product_group(v.shape()) != group)
+    fail(at, "an inner product of vectors blocked differently");
+  // The owned elements' sum in the contract's blocked order, then the ranks' sums in rank
+  // order (docs/arithmetic.md, "Distributed runs").
+  const size_t n = static_cast<size_t>(options_.distribution->owned(set)) * per_element;
+  const double partial = runtime::blocked_dot(u.floats(), v.floats(), n, group);
+  const double total = options_.distribution->sum(partial);
+  return Value::of_float(root ? std::sqrt(total) : total);
+}
+
+void Interpreter::refresh_ghosts(Value& v, const Type* t) {
+  const runtime::Set* set = distributed_set(t);
+  // Every rank takes the same branches here: the refresh is collective.
+  if (!set || !v.is_tensor() || !options_.distribution->split(*set)) return;
+  runtime::Tensor& x = v.tensor();
+  if (x.kind() == runtime::ComponentKind::String) return;
+  const size_t bytes = runtime::component_bytes(x.kind()) * x.size();
+  const size_t per_element = set->size() > 0 ? bytes / static_cast<size_t>(set->size()) : 0;
+  std::byte* data = nullptr;
+  switch (x.kind()) {
+    case runtime::ComponentKind::Int: data = reinterpret_cast<std::byte*>(x.mutable_ints()); break;
+    case runtime::ComponentKind::Bool:
+      data = reinterpret_cast<std::byte*>(x.mutable_bools());
+      break;
+    case runtime::ComponentKind::Complex:
+      data = reinterpret_cast<std::byte*>(x.mutable_complexes());
+      break;
+    default: data = reinterpret_cast<std::byte*>(x.mutable_floats()); break;
+  }
+  options_.distribution->refresh(*set, std::span<std::byte>(data, bytes), per_element);
+}
+
+}  // namespace simit::interp

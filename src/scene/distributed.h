@@ -1,0 +1,36 @@
+// A scene run on MPI ranks (`simit run --distributed`): the seam between the scene, which
+// builds the whole sets from the meshes and writes the output, and the distributed layer
+// (src/dist), which splits the sets over the ranks and moves data between them. Each rank runs
+// the program over its own part of every set (interp/distribution.h); rank 0 alone writes.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "interp/distribution.h"
+#include "runtime/set.h"
+
+namespace simit::scene {
+
+class Distributed : public interp::Distribution {
+ public:
+  virtual int rank() const = 0;
+  virtual int ranks() const = 0;
+  // This rank's part of each of `whole` (vertex sets, and edge sets whose endpoints all lie in
+  // one of them; every rank passes the same sets), in the same order: the elements it owns
+  // first, then ghosts; fields copied, endpoints renumbered, mesh numbers kept. Throws
+  // std::runtime_error for sets it cannot split.
+  virtual std::vector<std::unique_ptr<runtime::Set>> localize(
+      const std::vector<runtime::Set*>& whole) = 0;
+  // Every field of each of `local` (as localize made them) put together in the matching set of
+  // `whole` on rank 0; the others' `whole` are left alone. Collective.
+  virtual void gather(const std::vector<runtime::Set*>& local,
+                      const std::vector<runtime::Set*>& whole) const = 0;
+  // Whether `flag` holds on any rank (on every rank). Collective.
+  virtual bool any(bool flag) const = 0;
+  // Ends every rank of the run with `status`: one rank's error, while the others may be
+  // waiting for it. Not collective.
+  [[noreturn]] virtual void abort(int status) const = 0;
+};
+
+}  // namespace simit::scene
