@@ -4,7 +4,9 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <climits>
 #include <cstdlib>
+#include <cstring>
 
 namespace simit::dist::mpi {
 
@@ -16,6 +18,38 @@ void check(int status, const char* what) {
   int length = 0;
   MPI_Error_string(status, text, &length);
   throw CommError(std::string(what) + " failed: " + std::string(text, static_cast<size_t>(length)));
+}
+
+// The tag of ghost refreshes: each pair of ranks exchanges at most one message each way per
+// refresh, and MPI keeps a pair's messages in order, so one tag tells them apart.
+constexpr int kGhostTag = 17;
+
+// A datatype of one element (element_bytes bytes), so that counts are in elements and a large
+// set's byte count never has to fit an int.
+class ElementType {
+ public:
+  explicit ElementType(size_t element_bytes) {
+    if (element_bytes == 0 || element_bytes > static_cast<size_t>(INT_MAX))
+      throw std::invalid_argument("element size of " + std::to_string(element_bytes) +
+                                  " bytes: it must be 1 to " + std::to_string(INT_MAX));
+    check(MPI_Type_contiguous(static_cast<int>(element_bytes), MPI_BYTE, &type_),
+          "MPI_Type_contiguous");
+    check(MPI_Type_commit(&type_), "MPI_Type_commit");
+  }
+  ~ElementType() { MPI_Type_free(&type_); }
+  ElementType(const ElementType&) = delete;
+  ElementType& operator=(const ElementType&) = delete;
+  MPI_Datatype get() const { return type_; }
+
+ private:
+  MPI_Datatype type_ = MPI_DATATYPE_NULL;
+};
+
+int element_count(size_t count, const char* what) {
+  if (count > static_cast<size_t>(INT_MAX))
+    throw CommError(std::string(what) + ": " + std::to_string(count) +
+                    " elements in one message, more than MPI counts");
+  return static_cast<int>(count);
 }
 
 }  // namespace
@@ -52,6 +86,124 @@ void Session::broadcast(std::vector<int32_t>& values, int root) const {
     check(MPI_Bcast(values.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_INT32_T,
                     root, MPI_COMM_WORLD),
           "MPI_Bcast");
+}
+
+void Session::refresh_ghosts(const GhostPlan& plan, std::span<std::byte> values,
+                             size_t element_bytes) const {
+  const ElementType type(element_bytes);
+  const size_t count = values.size() / element_bytes;
+  // Every index is checked before the first message, so that a bad plan fails here rather
+  // than writing outside `values`.
+  for (const GhostLink& link : plan.links) {
+    if (link.rank < 0 || link.rank >= size_ || link.rank == rank_)
+      throw std::invalid_argument("ghost plan of rank " + std::to_string(rank_) +
+                                  " has a link to rank " + std::to_string(link.rank));
+    for (const auto* list : {&link.send, &link.recv})
+      for (int32_t i : *list)
+        if (i < 0 || static_cast<size_t>(i) >= count)
+          throw std::invalid_argument("ghost plan of rank " + std::to_string(rank_) +
+                                      " names element " + std::to_string(i) + " of " +
+                                      std::to_string(count));
+  }
+  const size_t links = plan.links.size();
+  std::vector<std::vector<std::byte>> out(links), in(links);
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * links);
+  // The receives first, so that the sends find them posted.
+  for (size_t l = 0; l < links; ++l) {
+    const GhostLink& link = plan.links[l];
+    if (link.recv.empty()) continue;
+    in[l].resize(link.recv.size() * element_bytes);
+    check(MPI_Irecv(in[l].data(), element_count(link.recv.size(), "MPI_Irecv"), type.get(),
+                    link.rank, kGhostTag, MPI_COMM_WORLD, &requests.emplace_back()),
+          "MPI_Irecv");
+  }
+  for (size_t l = 0; l < links; ++l) {
+    const GhostLink& link = plan.links[l];
+    if (link.send.empty()) continue;
+    out[l].resize(link.send.size() * element_bytes);
+    for (size_t k = 0; k < link.send.size(); ++k)
+      std::memcpy(out[l].data() + k * element_bytes,
+                  values.data() + static_cast<size_t>(link.send[k]) * element_bytes, element_bytes);
+    check(MPI_Isend(out[l].data(), element_count(link.send.size(), "MPI_Isend"), type.get(),
+                    link.rank, kGhostTag, MPI_COMM_WORLD, &requests.emplace_back()),
+          "MPI_Isend");
+  }
+  check(MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE),
+        "MPI_Waitall");
+  for (size_t l = 0; l < links; ++l) {
+    const GhostLink& link = plan.links[l];
+    for (size_t k = 0; k < link.recv.size(); ++k)
+      std::memcpy(values.data() + static_cast<size_t>(link.recv[k]) * element_bytes,
+                  in[l].data() + k * element_bytes, element_bytes);
+  }
+}
+
+double Session::sum_in_rank_order(double partial) const {
+  // Every rank adds the same numbers in the same order, so every rank gets the same bits
+  // (a reduction's order is MPI's to choose, and may differ between runs).
+  std::vector<double> all(static_cast<size_t>(size_));
+  check(MPI_Allgather(&partial, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD),
+        "MPI_Allgather");
+  double total = 0;
+  for (double x : all) total += x;
+  return total;
+}
+
+std::vector<std::byte> Session::gather_owned(std::span<const int32_t> global,
+                                             std::span<const std::byte> values,
+                                             size_t element_bytes, int32_t whole, int root) const {
+  const ElementType type(element_bytes);
+  if (whole < 0) throw std::invalid_argument("gather of " + std::to_string(whole) + " elements");
+  if (values.size() / element_bytes < global.size())
+    throw std::invalid_argument("gather: rank " + std::to_string(rank_) + " gives " +
+                                std::to_string(global.size()) + " elements but values for " +
+                                std::to_string(values.size() / element_bytes));
+  const int mine = element_count(global.size(), "MPI_Gatherv");
+  const bool is_root = rank_ == root;
+  std::vector<int> counts(is_root ? static_cast<size_t>(size_) : 0), offsets(counts.size());
+  check(MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, root, MPI_COMM_WORLD),
+        "MPI_Gather");
+  // The counts must add up to the whole before the gather (else it could not be laid out);
+  // root tells every rank, and every rank throws alike.
+  int64_t total = 0;
+  for (size_t r = 0; r < counts.size(); ++r) {
+    offsets[r] = static_cast<int>(std::min<int64_t>(total, INT_MAX));
+    total += counts[r];
+  }
+  int64_t given = total;
+  check(MPI_Bcast(&given, 1, MPI_INT64_T, root, MPI_COMM_WORLD), "MPI_Bcast");
+  if (given != whole)
+    throw std::invalid_argument("gather: the ranks own " + std::to_string(given) +
+                                " elements, not the whole's " + std::to_string(whole));
+  std::vector<int32_t> all_global(is_root ? static_cast<size_t>(whole) : 0);
+  std::vector<std::byte> all_values(all_global.size() * element_bytes);
+  check(MPI_Gatherv(global.data(), mine, MPI_INT32_T, all_global.data(), counts.data(),
+                    offsets.data(), MPI_INT32_T, root, MPI_COMM_WORLD),
+        "MPI_Gatherv");
+  check(MPI_Gatherv(values.data(), mine, type.get(), all_values.data(), counts.data(),
+                    offsets.data(), type.get(), root, MPI_COMM_WORLD),
+        "MPI_Gatherv");
+  if (!is_root) return {};
+  std::vector<std::byte> result(all_values.size());
+  std::vector<uint8_t> seen(static_cast<size_t>(whole), 0);
+  for (size_t i = 0; i < all_global.size(); ++i) {
+    const int32_t g = all_global[i];
+    if (g < 0 || g >= whole || seen[static_cast<size_t>(g)])
+      throw std::invalid_argument("gather: element " + std::to_string(g) + " of " +
+                                  std::to_string(whole) +
+                                  (g < 0 || g >= whole ? " is out of range" : " is given twice"));
+    seen[static_cast<size_t>(g)] = 1;
+    std::memcpy(result.data() + static_cast<size_t>(g) * element_bytes,
+                all_values.data() + i * element_bytes, element_bytes);
+  }
+  return result;
+}
+
+bool Session::any(bool flag) const {
+  int mine = flag ? 1 : 0, result = 0;
+  check(MPI_Allreduce(&mine, &result, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD), "MPI_Allreduce");
+  return result != 0;
 }
 
 void Session::abort(int status) const {

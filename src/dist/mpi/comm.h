@@ -4,10 +4,14 @@
 // aborting, so that the caller reports it).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "dist/overlap.h"
 
 namespace simit::dist::mpi {
 
@@ -33,6 +37,26 @@ class Session {
   std::vector<int64_t> gather(int64_t value, int root = 0) const;
   // `values` as `root` holds them, on every rank (resized there).
   void broadcast(std::vector<int32_t>& values, int root = 0) const;
+  // Overwrites the ghost entries of `values` (element_bytes bytes per local element, in local
+  // order) with their owners' entries, as `plan` says: point to point with the plan's ranks
+  // only (MPI_Isend/Irecv, then wait for all). Collective over the ranks of the plans, which
+  // must be the layouts of one overlap_layout input (dist/overlap.h). Throws
+  // std::invalid_argument, before any message, when an index of `plan` lies outside `values`
+  // or element_bytes is 0.
+  void refresh_ghosts(const GhostPlan& plan, std::span<std::byte> values,
+                      size_t element_bytes) const;
+  // The sum of every rank's `partial`, added in rank order (rank 0's, + rank 1's, + ...): the
+  // same bits on every rank, run after run.
+  double sum_in_rank_order(double partial) const;
+  // Each rank's owned entries (element_bytes per element, values[i] for global[i], i < count
+  // of `global`) put together on `root` into the whole array of `whole` elements; empty
+  // elsewhere. Throws std::invalid_argument on root when the ranks' `global` do not name each
+  // element of [0, whole) exactly once, and on any rank whose `values` are too short.
+  std::vector<std::byte> gather_owned(std::span<const int32_t> global,
+                                      std::span<const std::byte> values, size_t element_bytes,
+                                      int32_t whole, int root = 0) const;
+  // Whether `flag` is true on any rank (on every rank).
+  bool any(bool flag) const;
   // Ends every rank of the run with `status` (not collective: one rank's failure).
   [[noreturn]] void abort(int status) const;
 
