@@ -1,0 +1,111 @@
+#!/usr/bin/env python3
+"""A scene run in one process against the same scene on two MPI ranks (simit run --distributed).
+
+Usage: run_compare.py SIMIT SCENE WORK --tolerance T --iterations K -- MPIRUN ARGS...
+
+Checks: two 2-rank runs write identical bytes (final positions, every .vtu frame, the stats
+without their timing columns); the final positions of one process and of two ranks differ by at
+most T (relative to the largest coordinate); each frame's CG iterations differ by at most K.
+Exit status 0 when every check holds, 1 otherwise (with the reason).
+"""
+import argparse
+import csv
+import filecmp
+import os
+import shutil
+import subprocess
+import sys
+
+
+def run(command):
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    if done.returncode != 0:
+        sys.exit("FAILED: %s\nexit status %d\n%s%s" % (" ".join(command), done.returncode,
+                                                      done.stdout, done.stderr))
+    return done.stdout
+
+
+def positions(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return [[float(x) for x in row] for row in rows[1:]]
+
+
+def untimed_stats(folder):
+    names = [n for n in os.listdir(folder) if n.endswith(".csv")]
+    if len(names) != 1:
+        sys.exit("FAILED: expected one stats CSV in %s, found %s" % (folder, names))
+    with open(os.path.join(folder, names[0])) as f:
+        rows = list(csv.reader(f))
+    keep = [i for i, name in enumerate(rows[0]) if not (name == "ms" or name.endswith("_ms"))]
+    return [[row[i] for i in keep] for row in rows], rows[0]
+
+
+def main():
+    argv = sys.argv[1:]
+    split = argv.index("--")
+    parser = argparse.ArgumentParser()
+    parser.add_argument("simit")
+    parser.add_argument("scene")
+    parser.add_argument("work")
+    parser.add_argument("--tolerance", type=float, required=True)
+    parser.add_argument("--iterations", type=int, required=True)
+    args = parser.parse_args(argv[:split])
+    mpirun = argv[split + 1:]
+    shutil.rmtree(args.work, ignore_errors=True)
+    os.makedirs(args.work)
+    out = {}
+    for name in ["one", "two_a", "two_b"]:
+        folder = os.path.join(args.work, name)
+        command = [args.simit, "run", args.scene, "--output", folder,
+                   "--final-csv", folder + ".csv"]
+        if name != "one":
+            command = mpirun + [args.simit, "run", "--distributed"] + command[2:]
+        out[name] = run(command)
+    failures = []
+    # Two 2-rank runs: the same bytes.
+    a, b = os.path.join(args.work, "two_a"), os.path.join(args.work, "two_b")
+    if not filecmp.cmp(a + ".csv", b + ".csv", shallow=False):
+        failures.append("two 2-rank runs wrote different final positions")
+    frames = sorted(n for n in os.listdir(a) if n.endswith(".vtu"))
+    if not frames:
+        failures.append("the 2-rank run wrote no .vtu frame")
+    for n in frames:
+        if not filecmp.cmp(os.path.join(a, n), os.path.join(b, n), shallow=False):
+            failures.append("two 2-rank runs wrote different %s" % n)
+    if untimed_stats(a)[0] != untimed_stats(b)[0]:
+        failures.append("two 2-rank runs wrote different stats")
+    # One process against two ranks.
+    one, two = positions(os.path.join(args.work, "one.csv")), positions(a + ".csv")
+    if len(one) != len(two) or not one:
+        failures.append("%d positions in one process, %d on two ranks" % (len(one), len(two)))
+    else:
+        scale = max(abs(x) for row in one for x in row)
+        worst = max(abs(x - y) for r, s in zip(one, two) for x, y in zip(r, s))
+        print("positions: largest difference %.3g (%.3g of the largest coordinate, bound %.3g)"
+              % (worst, worst / scale, args.tolerance))
+        if worst > args.tolerance * scale:
+            failures.append("positions differ by %.3g, more than %.3g" % (worst / scale,
+                                                                        args.tolerance))
+    stats_one, header = untimed_stats(os.path.join(args.work, "one"))
+    stats_two, _ = untimed_stats(a)
+    if "cg_iterations" in header:
+        column = [n for n in stats_one[0]].index("cg_iterations")
+        for r, s in zip(stats_one[1:], stats_two[1:]):
+            print("frame %s: %s CG iterations in one process, %s on two ranks" % (r[0], r[column],
+                                                                                   s[column]))
+            if abs(int(r[column]) - int(s[column])) > args.iterations:
+                failures.append("frame %s: CG iterations %s and %s differ by more than %d"
+                                % (r[0], r[column], s[column], args.iterations))
+    if len(stats_one) != len(stats_two):
+        failures.append("%d stats rows in one process, %d on two ranks" % (len(stats_one),
+                                                                           len(stats_two)))
+    for f in failures:
+        print("FAILED: " + f)
+    if not failures:
+        print("ok: two ranks agree with one process and with themselves")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
