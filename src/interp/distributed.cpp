@@ -38,8 +38,7 @@ Value Interpreter::distributed_inner_product(const Value& x, const Value& y,
     not_distributed(at, "an inner product over a set of other than float vectors");
   const runtime::Tensor& u = x.tensor();
   const runtime::Tensor& v = y.tensor();
-  if (u.size() != v.size() ||
-      (set.size() > 0 && u.size() % static_cast<size_t>(set.size()) != 0))
+  if (u.size() != v.size() || (set.size() > 0 && u.size() % static_cast<size_t>(set.size()) != 0))
     fail(at, "an inner product of vectors of " + std::to_string(u.size()) + " and " +
                  std::to_string(v.size()) + " components over " + set.describe());
   // A rank may hold no element of a set: it still takes part in the sum.

@@ -61,9 +61,12 @@ Value Interpreter::eval_node(const ast::Expr& e) {
     case ast::NodeKind::Transpose: {
       Value scratch;
       const Value& x = operand(*static_cast<const ast::Transpose&>(e).operand, scratch);
-      if (x.kind() == Value::Kind::Matrix)
+      if (x.kind() == Value::Kind::Matrix) {
+        // Its owned rows would need the other ranks' columns (interp/distribution.h).
+        if (options_.distribution) not_distributed(e.span, "the transpose of a system matrix");
         return Value::of_matrix(
             std::make_shared<runtime::SystemMatrix>(runtime::transposed(*x.matrix(), &patterns_)));
+      }
       // A vector's transpose has the same components: a temporary is passed on as it is.
       if (&x == &scratch && (!x.is_tensor() || x.tensor().shape().order() == 1)) return scratch;
       return transpose_value(x);

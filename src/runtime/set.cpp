@@ -199,8 +199,9 @@ void Set::set_mesh_numbers(std::vector<int32_t> numbers, int32_t whole) {
     if (m < 0 || m >= limit || seen[m])
       throw Fault(element_str(*this, static_cast<int>(e)) + ": mesh number " + std::to_string(m) +
                   (m < 0 || m >= limit ? " is out of range" : " is given twice") +
-                  (whole < 0 ? " (the mesh numbers must be a permutation of the elements)"
-                             : " (the mesh numbers of a part must be distinct elements of the mesh)"));
+                  (whole < 0
+                       ? " (the mesh numbers must be a permutation of the elements)"
+                       : " (the mesh numbers of a part must be distinct elements of the mesh)"));
     seen[m] = 1;
   }
   mesh_numbers_ = std::move(numbers);

@@ -115,7 +115,8 @@ std::unique_ptr<runtime::Set> SceneDistribution::make_part(const runtime::Set& w
     local->add_many(static_cast<int>(layout.global.size()));
   } else {
     local = std::make_unique<runtime::Set>(
-        whole.name(), std::vector<const runtime::Set*>(static_cast<size_t>(whole.arity()), endpoints));
+        whole.name(),
+        std::vector<const runtime::Set*>(static_cast<size_t>(whole.arity()), endpoints));
     local->add_edges(connectivity);
   }
   copy_fields(whole, layout.global, *local);
@@ -132,7 +133,8 @@ std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
   for (size_t k = 0; k < whole.size(); ++k) {
     const runtime::Set& v = *whole[k];
     if (v.is_grid() || (v.arity() == 0 && v.kind() == runtime::SetKind::Grid))
-      throw std::runtime_error(v.describe() + " is a grid, which a distributed run cannot split yet");
+      throw std::runtime_error(v.describe() +
+                               " is a grid, which a distributed run cannot split yet");
     if (v.arity() != 0) continue;
     // The edge sets over this vertex set: every endpoint in it.
     std::vector<size_t> edge_sets;
@@ -144,9 +146,9 @@ std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
       for (const runtime::Set* s : e.endpoint_sets()) over = over && s == &v;
       if (!over) continue;
       edge_sets.push_back(j);
-      lists.push_back({std::span<const int32_t>(e.endpoints(),
-                                                static_cast<size_t>(e.size()) * e.arity()),
-                       e.arity()});
+      lists.push_back(
+          {std::span<const int32_t>(e.endpoints(), static_cast<size_t>(e.size()) * e.arity()),
+           e.arity()});
     }
     const std::vector<int32_t> owner = owners(v, lists);
     RankLayout layout = overlap_layout(owner, lists, session_.size(), session_.rank());
@@ -154,7 +156,8 @@ std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
     parts_[out[k].get()] = Part{std::move(layout.vertices), std::move(layout.vertex_plan)};
     for (size_t i = 0; i < edge_sets.size(); ++i) {
       const size_t j = edge_sets[i];
-      out[j] = make_part(*whole[j], layout.edge_sets[i], out[k].get(), layout.local_connectivity[i]);
+      out[j] =
+          make_part(*whole[j], layout.edge_sets[i], out[k].get(), layout.local_connectivity[i]);
       parts_[out[j].get()] = Part{std::move(layout.edge_sets[i]), std::move(layout.edge_plans[i])};
     }
   }
@@ -176,8 +179,7 @@ void SceneDistribution::gather(const std::vector<runtime::Set*>& local,
       const runtime::Field& from = local[k]->field(f);
       const size_t bytes = from.element_bytes();
       const std::span<const std::byte> values(from.bytes(), owned.size() * bytes);
-      std::vector<std::byte> all =
-          session_.gather_owned(owned, values, bytes, whole[k]->size());
+      std::vector<std::byte> all = session_.gather_owned(owned, values, bytes, whole[k]->size());
       if (session_.rank() != 0 || all.empty()) continue;
       std::memcpy(whole[k]->field(f).bytes(), all.data(), all.size());
     }
