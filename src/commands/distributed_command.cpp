@@ -32,6 +32,12 @@ int run_distributed_scene(scene::SceneOptions options, std::ostream& out, std::o
          "(install libopenmpi-dev and rebuild)\n";
   return 1;
 #else
+  // Said before MPI starts, once (the scene file's own `executor` key is checked by the scene).
+  if (options.executor_given && options.executor.kind != ExecutorKind::Interpreter) {
+    err << "simit: error: --distributed runs the interpreter (--executor "
+        << executor_name(options.executor.kind) << " is not distributed yet)\n";
+    return 1;
+  }
   std::shared_ptr<scene::Distributed> ranks;
   try {
     ranks = dist::mpi::start_scene_distribution();
