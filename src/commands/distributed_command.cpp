@@ -33,9 +33,9 @@ int run_distributed_scene(scene::SceneOptions options, std::ostream& out, std::o
   return 1;
 #else
   // Said before MPI starts, once (the scene file's own `executor` key is checked by the scene).
-  if (options.executor_given && options.executor.kind != ExecutorKind::Interpreter) {
-    err << "simit: error: --distributed runs the interpreter (--executor "
-        << executor_name(options.executor.kind) << " is not distributed yet)\n";
+  if (options.executor_given && options.executor.kind == ExecutorKind::Gpu) {
+    err << "simit: error: --distributed runs the interpreter or the JIT (--executor gpu is not "
+           "distributed yet)\n";
     return 1;
   }
   std::shared_ptr<scene::Distributed> ranks;

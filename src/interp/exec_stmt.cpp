@@ -22,8 +22,9 @@ bool joins_run(const ast::Stmt& s) { return s.system_level || s.scalar_level; }
 void Interpreter::exec_block(const ast::Block& b) {
   const size_t n = b.size();
   // Runs are offered to a compiled executor, not in a mapped function (whose element-wise
-  // writes to its results are the map's business).
-  const bool offer = options_.sites && !map_;
+  // writes to its results are the map's business), nor in a distributed run (compiled system
+  // statements would skip its reductions over ranks and ghost refreshes: maps only).
+  const bool offer = options_.sites && !map_ && !options_.distribution;
   for (size_t i = 0; i < n; ++i) {
     const ast::Stmt& s = *b[i];
     // The first statement of a run: the run is offered whole.
@@ -64,7 +65,7 @@ void Interpreter::exec(const ast::Stmt& s) {
   if (trap_->armed()) [[unlikely]]
     return exec_trapped(s);
 #endif
-  if (s.system_level && options_.sites) [[unlikely]]
+  if (s.system_level && options_.sites && !options_.distribution) [[unlikely]]
     return exec_offered(s);
   exec_node(s);
 }

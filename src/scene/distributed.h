@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "interp/distribution.h"
@@ -26,6 +27,13 @@ class Distributed : public interp::Distribution {
   // `whole` on rank 0; the others' `whole` are left alone. Collective.
   virtual void gather(const std::vector<runtime::Set*>& local,
                       const std::vector<runtime::Set*>& whole) const = 0;
+  // Rank 0's report of the parts, one line per rank: each set of `local` (as localize made
+  // them) with the elements the rank owns and the ghosts it holds, and the entries it sends
+  // per refresh; "" on the other ranks. Collective.
+  virtual std::string describe_parts(const std::vector<runtime::Set*>& local) const = 0;
+  // Rank 0's report of what the ranks exchanged so far, one line per rank: ghost refreshes,
+  // bytes and messages sent, sums across ranks; "" on the other ranks. Collective.
+  virtual std::string describe_traffic() const = 0;
   // Whether `flag` holds on any rank (on every rank). Collective.
   virtual bool any(bool flag) const = 0;
   // Ends every rank of the run with `status`: one rank's error, while the others may be

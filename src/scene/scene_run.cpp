@@ -29,9 +29,10 @@ std::vector<runtime::Set*> SceneRun::whole_sets() const {
 
 // Every rank built the whole sets from the meshes alike; each keeps its part to run on.
 void SceneRun::localize() {
-  if (options_.executor.kind != ExecutorKind::Interpreter)
-    throw SceneError(file_.path + ": error: --distributed runs the interpreter (executor " +
-                     executor_name(options_.executor.kind) + " is not distributed yet)");
+  if (options_.executor.kind == ExecutorKind::Gpu)
+    throw SceneError(file_.path +
+                     ": error: --distributed runs the interpreter or the JIT (executor gpu is "
+                     "not distributed yet)");
   try {
     local_ = options_.distributed->localize(whole_sets());
   } catch (const std::runtime_error& e) {
@@ -39,11 +40,14 @@ void SceneRun::localize() {
   }
 }
 
-void SceneRun::gather() const {
-  if (!options_.distributed) return;
+std::vector<runtime::Set*> SceneRun::local_sets() const {
   std::vector<runtime::Set*> local;
   for (const auto& s : local_) local.push_back(s.get());
-  options_.distributed->gather(local, whole_sets());
+  return local;
+}
+
+void SceneRun::gather() const {
+  if (options_.distributed) options_.distributed->gather(local_sets(), whole_sets());
 }
 
 // Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
@@ -257,11 +261,13 @@ void SceneRun::run(int frames, std::ostream& out) {
   if (options_.jit_stats && !trap_) stop_on_sigint.emplace(own_trap_);
   prepare(out);
   print_sizes(out, frames);
+  if (options_.distributed) out << options_.distributed->describe_parts(local_sets());
   // Everything is checked: run.
   initialise(frames == 0);
   const double total_ms = run_frames(frames, out);
   if (options_.progress_line && frames > 0) out << '\n';
   print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
+  if (options_.distributed) out << options_.distributed->describe_traffic();
   print_jit_stats(out);
   output_.write_final_csv();
 }

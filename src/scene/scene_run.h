@@ -84,6 +84,7 @@ class SceneRun {
   // A distributed run: the sets as bind() binds them (the local parts), and the local fields
   // gathered into the whole sets on rank 0 before they are checked or written.
   std::vector<runtime::Set*> whole_sets() const;
+  std::vector<runtime::Set*> local_sets() const;
   void localize();
   void gather() const;
 

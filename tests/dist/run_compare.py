@@ -4,14 +4,18 @@
 Usage: run_compare.py SIMIT SCENE WORK --tolerance T --iterations K -- MPIRUN ARGS...
 
 Checks: two 2-rank runs write identical bytes (final positions, every .vtu frame, the stats
-without their timing columns); the final positions of one process and of two ranks differ by at
-most T (relative to the largest coordinate); each frame's CG iterations differ by at most K.
+without their timing columns), and so does a 2-rank run with --executor jit (maps compiled);
+the final positions of one process and of two ranks differ by at most T (relative to the
+largest coordinate); each frame's CG iterations differ by at most K; each rank reports its
+part of every set, both own elements and hold ghosts, and the owned counts add up to the sets'
+sizes in one process.
 Exit status 0 when every check holds, 1 otherwise (with the reason).
 """
 import argparse
 import csv
 import filecmp
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -55,26 +59,44 @@ def main():
     shutil.rmtree(args.work, ignore_errors=True)
     os.makedirs(args.work)
     out = {}
-    for name in ["one", "two_a", "two_b"]:
+    for name in ["one", "two_a", "two_b", "two_jit"]:
         folder = os.path.join(args.work, name)
         command = [args.simit, "run", args.scene, "--output", folder,
                    "--final-csv", folder + ".csv"]
         if name != "one":
             command = mpirun + [args.simit, "run", "--distributed"] + command[2:]
+        if name == "two_jit":
+            command += ["--executor", "jit", "--jit-cache", "off"]
         out[name] = run(command)
     failures = []
-    # Two 2-rank runs: the same bytes.
-    a, b = os.path.join(args.work, "two_a"), os.path.join(args.work, "two_b")
-    if not filecmp.cmp(a + ".csv", b + ".csv", shallow=False):
-        failures.append("two 2-rank runs wrote different final positions")
+    # Two 2-rank runs, and one with compiled maps: the same bytes.
+    a = os.path.join(args.work, "two_a")
     frames = sorted(n for n in os.listdir(a) if n.endswith(".vtu"))
     if not frames:
         failures.append("the 2-rank run wrote no .vtu frame")
-    for n in frames:
-        if not filecmp.cmp(os.path.join(a, n), os.path.join(b, n), shallow=False):
-            failures.append("two 2-rank runs wrote different %s" % n)
-    if untimed_stats(a)[0] != untimed_stats(b)[0]:
-        failures.append("two 2-rank runs wrote different stats")
+    for other, what in [("two_b", "two 2-rank runs"), ("two_jit", "2-rank runs with and without the JIT")]:
+        b = os.path.join(args.work, other)
+        if not filecmp.cmp(a + ".csv", b + ".csv", shallow=False):
+            failures.append(what + " wrote different final positions")
+        for n in frames:
+            if not filecmp.cmp(os.path.join(a, n), os.path.join(b, n), shallow=False):
+                failures.append("%s wrote different %s" % (what, n))
+        if untimed_stats(a)[0] != untimed_stats(b)[0]:
+            failures.append(what + " wrote different stats")
+    # Each rank's part: "rank R: SET N owned + G ghosts, ...; SET ...", and the sizes of one
+    # process: "SCENE: SET N, SET N; F frames".
+    sizes = dict((name, int(n)) for name, n in
+                 re.findall(r"(\w+) (\d+)[,;]", out["one"].splitlines()[0]))
+    owned = {}
+    for rank, line in re.findall(r"^rank (\d+): (.*)$", out["two_a"], re.M):
+        for name, n, g in re.findall(r"(\w+) ([\d,]+) owned \+ ([\d,]+) ghosts", line):
+            n, g = int(n.replace(",", "")), int(g.replace(",", ""))
+            print("rank %s: %s %d owned, %d ghosts" % (rank, name, n, g))
+            if n == 0 or g == 0:
+                failures.append("rank %s: %s has %d owned and %d ghosts" % (rank, name, n, g))
+            owned[name] = owned.get(name, 0) + n
+    if not sizes or owned != sizes:
+        failures.append("owned counts %s do not add up to the sets' sizes %s" % (owned, sizes))
     # One process against two ranks.
     one, two = positions(os.path.join(args.work, "one.csv")), positions(a + ".csv")
     if len(one) != len(two) or not one:

@@ -34,12 +34,24 @@ class SceneDistribution final : public scene::Distributed {
   bool split(const runtime::Set& set) const override {
     return session_.size() > 1 && parts_.count(&set) > 0;
   }
-  double sum(double partial) const override { return session_.sum_in_rank_order(partial); }
+  double sum(double partial) const override {
+    ++traffic_.sums;
+    return session_.sum_in_rank_order(partial);
+  }
   void refresh(const runtime::Set& set, std::span<std::byte> values,
                size_t element_bytes) const override {
     auto it = parts_.find(&set);
-    if (it != parts_.end()) session_.refresh_ghosts(it->second.plan, values, element_bytes);
+    if (it == parts_.end()) return;
+    ++traffic_.refreshes;
+    for (const GhostLink& link : it->second.plan.links)
+      if (!link.send.empty()) {
+        ++traffic_.messages;
+        traffic_.bytes += static_cast<int64_t>(link.send.size() * element_bytes);
+      }
+    session_.refresh_ghosts(it->second.plan, values, element_bytes);
   }
+  std::string describe_parts(const std::vector<runtime::Set*>& local) const override;
+  std::string describe_traffic() const override;
   bool any(bool flag) const override { return session_.any(flag); }
   [[noreturn]] void abort(int status) const override { session_.abort(status); }
 
@@ -57,7 +69,22 @@ class SceneDistribution final : public scene::Distributed {
 
   Session session_;
   std::map<const runtime::Set*, Part> parts_;  // by the local set
+  // What this rank sent (describe_traffic).
+  struct Traffic {
+    int64_t refreshes = 0, messages = 0, bytes = 0, sums = 0;
+  };
+  mutable Traffic traffic_;
 };
+
+// 1234567 as "1,234,567".
+std::string grouped(int64_t n) {
+  std::string digits = std::to_string(n < 0 ? -n : n), out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return n < 0 ? "-" + out : out;
+}
 
 // Copies the fields of `whole`'s elements `global` into `local` (same fields, same order).
 void copy_fields(const runtime::Set& whole, std::span<const int32_t> global, runtime::Set& local) {
@@ -184,6 +211,51 @@ void SceneDistribution::gather(const std::vector<runtime::Set*>& local,
       std::memcpy(whole[k]->field(f).bytes(), all.data(), all.size());
     }
   }
+}
+
+std::string SceneDistribution::describe_parts(const std::vector<runtime::Set*>& local) const {
+  // Per set, per rank: owned, ghosts, entries sent per refresh, neighbours.
+  std::vector<std::vector<std::vector<int64_t>>> figures;  // [set][figure][rank]
+  for (const runtime::Set* set : local) {
+    const Part& part = parts_.at(set);
+    int64_t sent = 0, neighbours = 0;
+    for (const GhostLink& link : part.plan.links) {
+      sent += static_cast<int64_t>(link.send.size());
+      neighbours += 1;
+    }
+    figures.push_back({session_.gather(part.layout.owned),
+                       session_.gather(set->size() - part.layout.owned), session_.gather(sent),
+                       session_.gather(neighbours)});
+  }
+  if (session_.rank() != 0) return "";
+  std::string text;
+  for (int r = 0; r < session_.size(); ++r) {
+    const auto i = static_cast<size_t>(r);
+    text += "rank " + std::to_string(r) + ":";
+    for (size_t k = 0; k < local.size(); ++k)
+      text += std::string(k == 0 ? " " : "; ") + local[k]->name() + " " +
+              grouped(figures[k][0][i]) + " owned + " + grouped(figures[k][1][i]) +
+              " ghosts, sends " + grouped(figures[k][2][i]) + " per refresh to " +
+              grouped(figures[k][3][i]) + (figures[k][3][i] == 1 ? " rank" : " ranks");
+    text += "\n";
+  }
+  return text;
+}
+
+std::string SceneDistribution::describe_traffic() const {
+  const std::vector<int64_t> refreshes = session_.gather(traffic_.refreshes),
+                             messages = session_.gather(traffic_.messages),
+                             bytes = session_.gather(traffic_.bytes),
+                             sums = session_.gather(traffic_.sums);
+  if (session_.rank() != 0) return "";
+  std::string text;
+  for (int r = 0; r < session_.size(); ++r) {
+    const auto i = static_cast<size_t>(r);
+    text += "rank " + std::to_string(r) + " sent " + grouped(bytes[i]) + " bytes in " +
+            grouped(messages[i]) + " messages (" + grouped(refreshes[i]) +
+            " ghost refreshes) and took part in " + grouped(sums[i]) + " sums across ranks\n";
+  }
+  return text;
 }
 
 }  // namespace
