@@ -57,7 +57,15 @@ int run_distributed_scene(scene::SceneOptions options, std::ostream& out, std::o
     options.png.clear();
   }
   std::ostream& where = rank == 0 ? out : quiet;
-  const int status = scene::run_scene(options, where, err);
+  // Opening the scene (reading it, compiling its program) fails alike on every rank: rank 0
+  // reports it, the others wait for its abort.
+  std::unique_ptr<scene::Scene> opened = scene::Scene::open(options, rank == 0 ? err : quiet);
+  if (!opened) {
+    if (rank != 0) ranks->wait_for_abort();
+    err.flush();
+    ranks->abort(1);
+  }
+  const int status = opened->run(where, err);
   if (status != 0) {
     // The others may be waiting for this rank in a collective step: end them all, after the
     // error (already on `err`) and whatever was written completely.

@@ -18,9 +18,10 @@ class Distributed : public interp::Distribution {
   virtual int rank() const = 0;
   virtual int ranks() const = 0;
   // This rank's part of each of `whole` (vertex sets, and edge sets whose endpoints all lie in
-  // one of them; every rank passes the same sets), in the same order: the elements it owns
-  // first, then ghosts; fields copied, endpoints renumbered, mesh numbers kept. Throws
-  // std::runtime_error for sets it cannot split.
+  // one of them), in the same order: the elements it owns first, then ghosts; fields copied,
+  // endpoints renumbered, mesh numbers kept. Only rank 0 has the whole sets (the others pass
+  // nulls): it cuts them and sends each rank its part. Throws std::runtime_error on rank 0 for
+  // sets it cannot split (the others then wait for its abort).
   virtual std::vector<std::unique_ptr<runtime::Set>> localize(
       const std::vector<runtime::Set*>& whole) = 0;
   // Every field of each of `local` (as localize made them) put together in the matching set of
@@ -39,6 +40,8 @@ class Distributed : public interp::Distribution {
   // Ends every rank of the run with `status`: one rank's error, while the others may be
   // waiting for it. Not collective.
   [[noreturn]] virtual void abort(int status) const = 0;
+  // Waits for another rank's abort (a failure every rank meets alike, which rank 0 reports).
+  [[noreturn]] virtual void wait_for_abort() const = 0;
 };
 
 }  // namespace simit::scene

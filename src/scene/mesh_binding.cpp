@@ -224,6 +224,12 @@ void add_fields(const SceneFile& file, SceneSet& s, bool float32) {
 
 }  // namespace
 
+BoundSets declared_sets(const SceneFile& file, MeshCache& meshes) {
+  BoundSets out;
+  declare_sets(file, meshes, out);
+  return out;
+}
+
 BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32, Reorder reorder) {
   BoundSets out;
   declare_sets(file, meshes, out);

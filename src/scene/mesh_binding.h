@@ -39,5 +39,8 @@ struct BoundSets {
 // renumbered as `reorder` says. Throws SceneError: an extern the scene leaves unbound or does
 // not know, a bad mesh or elements, a field value that does not fit.
 BoundSets build_sets(const SceneFile& file, MeshCache& meshes, bool float32, Reorder reorder);
+// The sets of [sets] declared (names, externs, meshes, kinds of elements) but not built: a
+// distributed run's ranks other than 0, which receive their parts from rank 0 instead.
+BoundSets declared_sets(const SceneFile& file, MeshCache& meshes);
 
 }  // namespace simit::scene

@@ -17,7 +17,12 @@ using runtime::ComponentKind;
 
 void SceneRun::build() {
   tensors_ = read_tensors(file_, options_.float32);
-  sets_ = build_sets(file_, meshes_, options_.float32, reorder_);
+  // A distributed run: rank 0 alone reads the meshes and builds the whole sets; every rank
+  // then receives its part from it (localize).
+  if (options_.distributed && options_.distributed->rank() != 0)
+    sets_ = declared_sets(file_, meshes_);
+  else
+    sets_ = build_sets(file_, meshes_, options_.float32, reorder_);
   if (options_.distributed) localize();
 }
 
@@ -120,7 +125,8 @@ std::vector<double> SceneRun::step_stats(const std::vector<interp::Value>& resul
 void SceneRun::print_sizes(std::ostream& out, int frames) const {
   std::string sizes;
   for (const auto& s : sets_.sets)
-    sizes += (sizes.empty() ? "" : ", ") + s->name + " " + std::to_string(s->set->size());
+    if (s->set)  // not on a distributed run's ranks other than 0
+      sizes += (sizes.empty() ? "" : ", ") + s->name + " " + std::to_string(s->set->size());
   out << file_.path << ": " << sizes << "; " << frames << " frames\n";
 }
 

@@ -88,6 +88,39 @@ void Session::broadcast(std::vector<int32_t>& values, int root) const {
           "MPI_Bcast");
 }
 
+std::vector<std::byte> Session::scatter(std::vector<std::vector<std::byte>> parts, int root) const {
+  constexpr int kTag = 18;
+  constexpr int64_t kPiece = int64_t{1} << 30;
+  std::vector<int64_t> sizes(static_cast<size_t>(size_), 0);
+  if (rank_ == root) {
+    if (parts.size() != static_cast<size_t>(size_))
+      throw std::invalid_argument("scatter: " + std::to_string(parts.size()) + " parts for " +
+                                  std::to_string(size_) + " ranks");
+    for (size_t r = 0; r < parts.size(); ++r) sizes[r] = static_cast<int64_t>(parts[r].size());
+  }
+  int64_t mine = 0;
+  check(MPI_Scatter(sizes.data(), 1, MPI_INT64_T, &mine, 1, MPI_INT64_T, root, MPI_COMM_WORLD),
+        "MPI_Scatter");
+  if (rank_ == root) {
+    for (int r = 0; r < size_; ++r) {
+      if (r == root) continue;
+      const std::vector<std::byte>& part = parts[static_cast<size_t>(r)];
+      const auto n = static_cast<int64_t>(part.size());
+      for (int64_t at = 0; at < n; at += kPiece)
+        check(MPI_Send(part.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, r,
+                       kTag, MPI_COMM_WORLD),
+              "MPI_Send");
+    }
+    return std::move(parts[static_cast<size_t>(root)]);
+  }
+  std::vector<std::byte> part(static_cast<size_t>(mine));
+  for (int64_t at = 0; at < mine; at += kPiece)
+    check(MPI_Recv(part.data() + at, static_cast<int>(std::min(kPiece, mine - at)), MPI_BYTE, root,
+                   kTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+          "MPI_Recv");
+  return part;
+}
+
 void Session::refresh_ghosts(const GhostPlan& plan, std::span<std::byte> values,
                              size_t element_bytes) const {
   const ElementType type(element_bytes);
@@ -204,6 +237,11 @@ bool Session::any(bool flag) const {
   int mine = flag ? 1 : 0, result = 0;
   check(MPI_Allreduce(&mine, &result, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD), "MPI_Allreduce");
   return result != 0;
+}
+
+void Session::wait_for_abort() const {
+  // A barrier the failing rank never joins: the abort ends it.
+  for (;;) MPI_Barrier(MPI_COMM_WORLD);
 }
 
 void Session::abort(int status) const {

@@ -37,6 +37,9 @@ class Session {
   std::vector<int64_t> gather(int64_t value, int root = 0) const;
   // `values` as `root` holds them, on every rank (resized there).
   void broadcast(std::vector<int32_t>& values, int root = 0) const;
+  // `parts[r]` (one per rank, given on `root` only) on rank r: rank 0's part of a scene read
+  // there, say. Point to point from `root`, in pieces an int counts.
+  std::vector<std::byte> scatter(std::vector<std::vector<std::byte>> parts, int root = 0) const;
   // Overwrites the ghost entries of `values` (element_bytes bytes per local element, in local
   // order) with their owners' entries, as `plan` says: point to point with the plan's ranks
   // only (MPI_Isend/Irecv, then wait for all). Collective over the ranks of the plans, which
@@ -59,6 +62,9 @@ class Session {
   bool any(bool flag) const;
   // Ends every rank of the run with `status` (not collective: one rank's failure).
   [[noreturn]] void abort(int status) const;
+  // Waits for another rank's abort to end this one (a rank that failed alone reports, the
+  // others wait for it rather than race it with a message of their own).
+  [[noreturn]] void wait_for_abort() const;
 
  private:
   int rank_ = 0, size_ = 1;

@@ -8,8 +8,7 @@
 
 #include "dist/mpi/comm.h"
 #include "dist/overlap.h"
-#include "dist/partition.h"
-#include "runtime/mesh/reorder.h"
+#include "dist/set_parts.h"
 
 namespace simit::dist::mpi {
 
@@ -19,6 +18,7 @@ namespace {
 struct Part {
   SetPart layout;
   GhostPlan plan;
+  int32_t whole_size = 0;  // the set's size in one process
 };
 
 class SceneDistribution final : public scene::Distributed {
@@ -54,6 +54,7 @@ class SceneDistribution final : public scene::Distributed {
   std::string describe_traffic() const override;
   bool any(bool flag) const override { return session_.any(flag); }
   [[noreturn]] void abort(int status) const override { session_.abort(status); }
+  [[noreturn]] void wait_for_abort() const override { session_.wait_for_abort(); }
 
   std::vector<std::unique_ptr<runtime::Set>> localize(
       const std::vector<runtime::Set*>& whole) override;
@@ -61,12 +62,6 @@ class SceneDistribution final : public scene::Distributed {
               const std::vector<runtime::Set*>& whole) const override;
 
  private:
-  std::vector<int32_t> owners(const runtime::Set& vertices,
-                              std::span<const runtime::ElementList> lists) const;
-  std::unique_ptr<runtime::Set> make_part(const runtime::Set& whole, const SetPart& layout,
-                                          const runtime::Set* endpoints,
-                                          std::span<const int32_t> connectivity);
-
   Session session_;
   std::map<const runtime::Set*, Part> parts_;  // by the local set
   // What this rank sent (describe_traffic).
@@ -86,114 +81,31 @@ std::string grouped(int64_t n) {
   return n < 0 ? "-" + out : out;
 }
 
-// Copies the fields of `whole`'s elements `global` into `local` (same fields, same order).
-void copy_fields(const runtime::Set& whole, std::span<const int32_t> global, runtime::Set& local) {
-  for (int k = 0; k < whole.field_count(); ++k) {
-    const runtime::Field& from = whole.field(k);
-    const int index = local.add_field(from.name(), from.type());
-    runtime::Field& to = local.field(index);
-    const size_t bytes = from.element_bytes();
-    if (bytes == 0 || global.empty()) continue;
-    std::byte* dst = to.bytes();
-    const std::byte* src = from.bytes();
-    for (size_t i = 0; i < global.size(); ++i)
-      std::memcpy(dst + i * bytes, src + static_cast<size_t>(global[i]) * bytes, bytes);
-  }
-}
-
-// The rank of each vertex: METIS's parts (on rank 0, sent to the others) where edge sets join
-// the vertices, else blocks of consecutive vertices.
-std::vector<int32_t> SceneDistribution::owners(const runtime::Set& vertices,
-                                               std::span<const runtime::ElementList> lists) const {
-  const int32_t n = vertices.size();
-  const int ranks = session_.size();
-  std::vector<int32_t> owner(static_cast<size_t>(n));
-  if (lists.empty() || n < ranks) {
-    for (int32_t v = 0; v < n; ++v)
-      owner[static_cast<size_t>(v)] =
-          static_cast<int32_t>(static_cast<int64_t>(v) * ranks / std::max<int32_t>(n, 1));
-    return owner;
-  }
-  std::vector<int32_t> head = {0};
+std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
+    const std::vector<runtime::Set*>& whole) {
+  // Rank 0 read the meshes: it cuts the sets and sends each rank its part.
+  std::vector<std::vector<std::byte>> messages;
+  std::vector<int32_t> ok = {1};
   std::string error;
   if (session_.rank() == 0) {
     try {
-      owner = partition_vertices(runtime::vertex_graph(n, lists), ranks, lists);
-      head = {1};
+      messages = encode_parts(std::vector<const runtime::Set*>(whole.begin(), whole.end()),
+                              session_.size());
     } catch (const std::exception& e) {
       error = e.what();
+      ok = {0};
     }
   }
-  session_.broadcast(head);
-  if (head[0] == 0)
-    throw std::runtime_error(vertices.describe() + " could not be partitioned" +
-                             (error.empty() ? "" : ": " + error));
-  session_.broadcast(owner);
-  return owner;
-}
-
-std::unique_ptr<runtime::Set> SceneDistribution::make_part(const runtime::Set& whole,
-                                                           const SetPart& layout,
-                                                           const runtime::Set* endpoints,
-                                                           std::span<const int32_t> connectivity) {
-  std::unique_ptr<runtime::Set> local;
-  if (!endpoints) {
-    local = std::make_unique<runtime::Set>(whole.name());
-    local->add_many(static_cast<int>(layout.global.size()));
-  } else {
-    local = std::make_unique<runtime::Set>(
-        whole.name(),
-        std::vector<const runtime::Set*>(static_cast<size_t>(whole.arity()), endpoints));
-    local->add_edges(connectivity);
+  session_.broadcast(ok);
+  if (ok[0] == 0) {
+    if (session_.rank() == 0) throw std::runtime_error(error);
+    session_.wait_for_abort();  // rank 0 reports it
   }
-  copy_fields(whole, layout.global, *local);
-  std::vector<int32_t> numbers;
-  numbers.reserve(layout.global.size());
-  for (int32_t g : layout.global) numbers.push_back(whole.mesh_number(g));
-  local->set_mesh_numbers(std::move(numbers), whole.size());
-  return local;
-}
-
-std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
-    const std::vector<runtime::Set*>& whole) {
-  std::vector<std::unique_ptr<runtime::Set>> out(whole.size());
-  for (size_t k = 0; k < whole.size(); ++k) {
-    const runtime::Set& v = *whole[k];
-    if (v.is_grid() || (v.arity() == 0 && v.kind() == runtime::SetKind::Grid))
-      throw std::runtime_error(v.describe() +
-                               " is a grid, which a distributed run cannot split yet");
-    if (v.arity() != 0) continue;
-    // The edge sets over this vertex set: every endpoint in it.
-    std::vector<size_t> edge_sets;
-    std::vector<runtime::ElementList> lists;
-    for (size_t j = 0; j < whole.size(); ++j) {
-      const runtime::Set& e = *whole[j];
-      if (e.arity() == 0) continue;
-      bool over = true;
-      for (const runtime::Set* s : e.endpoint_sets()) over = over && s == &v;
-      if (!over) continue;
-      edge_sets.push_back(j);
-      lists.push_back(
-          {std::span<const int32_t>(e.endpoints(), static_cast<size_t>(e.size()) * e.arity()),
-           e.arity()});
-    }
-    const std::vector<int32_t> owner = owners(v, lists);
-    RankLayout layout = overlap_layout(owner, lists, session_.size(), session_.rank());
-    out[k] = make_part(v, layout.vertices, nullptr, {});
-    parts_[out[k].get()] = Part{std::move(layout.vertices), std::move(layout.vertex_plan)};
-    for (size_t i = 0; i < edge_sets.size(); ++i) {
-      const size_t j = edge_sets[i];
-      out[j] =
-          make_part(*whole[j], layout.edge_sets[i], out[k].get(), layout.local_connectivity[i]);
-      parts_[out[j].get()] = Part{std::move(layout.edge_sets[i]), std::move(layout.edge_plans[i])};
-    }
-  }
-  for (size_t j = 0; j < whole.size(); ++j)
-    if (!out[j])
-      throw std::runtime_error(whole[j]->describe() +
-                               " has endpoints in more than one set, which a distributed run "
-                               "cannot split yet");
-  return out;
+  LocalSets mine = decode_part(session_.scatter(std::move(messages)));
+  for (size_t k = 0; k < mine.sets.size(); ++k)
+    parts_[mine.sets[k].get()] =
+        Part{std::move(mine.layouts[k]), std::move(mine.plans[k]), mine.whole_sizes[k]};
+  return std::move(mine.sets);
 }
 
 void SceneDistribution::gather(const std::vector<runtime::Set*>& local,
@@ -206,7 +118,7 @@ void SceneDistribution::gather(const std::vector<runtime::Set*>& local,
       const runtime::Field& from = local[k]->field(f);
       const size_t bytes = from.element_bytes();
       const std::span<const std::byte> values(from.bytes(), owned.size() * bytes);
-      std::vector<std::byte> all = session_.gather_owned(owned, values, bytes, whole[k]->size());
+      std::vector<std::byte> all = session_.gather_owned(owned, values, bytes, part.whole_size);
       if (session_.rank() != 0 || all.empty()) continue;
       std::memcpy(whole[k]->field(f).bytes(), all.data(), all.size());
     }
