@@ -19,9 +19,13 @@ void SceneRun::build() {
   tensors_ = read_tensors(file_, options_.float32);
   // A distributed run: rank 0 alone reads the meshes and builds the whole sets; every rank
   // then receives its part from it (localize).
-  if (options_.distributed && options_.distributed->rank() != 0)
-    sets_ = declared_sets(file_, meshes_);
-  else
+  if (options_.distributed && options_.distributed->rank() != 0) {
+    try {
+      sets_ = declared_sets(file_, meshes_);
+    } catch (const SceneError&) {
+      options_.distributed->wait_for_abort();  // rank 0 meets it too, and reports it
+    }
+  } else
     sets_ = build_sets(file_, meshes_, options_.float32, reorder_);
   if (options_.distributed) localize();
 }
@@ -32,12 +36,14 @@ std::vector<runtime::Set*> SceneRun::whole_sets() const {
   return whole;
 }
 
-// Every rank built the whole sets from the meshes alike; each keeps its part to run on.
+// Rank 0 built the whole sets: every rank receives its part to run on.
 void SceneRun::localize() {
-  if (options_.executor.kind == ExecutorKind::Gpu)
+  if (options_.executor.kind == ExecutorKind::Gpu) {
+    if (options_.distributed->rank() != 0) options_.distributed->wait_for_abort();
     throw SceneError(file_.path +
                      ": error: --distributed runs the interpreter or the JIT (executor gpu is "
                      "not distributed yet)");
+  }
   try {
     local_ = options_.distributed->localize(whole_sets());
   } catch (const std::runtime_error& e) {
