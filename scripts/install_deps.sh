@@ -6,7 +6,8 @@
 # which bench/accuracy.py draws its plots with (Debian's python3-matplotlib, for /usr/bin/python3).
 # The Python module (python/) builds with pybind11 for Debian's /usr/bin/python3 and needs numpy.
 # METIS (libmetis-dev) is the distributed layer's partitioner (src/dist, `simit partition`), and
-# OpenMPI (openmpi-bin, libopenmpi-dev) its ranks (src/dist/mpi; the tests labelled mpi).
+# OpenMPI (openmpi-bin, libopenmpi-dev) its ranks (src/dist/mpi; the tests labelled mpi), and
+# PETSc (libpetsc-real-dev, built with OpenMPI) the direct solves of a distributed run.
 set -euo pipefail
 
 packages=(
@@ -15,7 +16,7 @@ packages=(
   libgtest-dev libgmock-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libfmt-dev
   libpng-dev libtinyobjloader-dev clang libclang-rt-14-dev tmux python3
   clang-format pybind11-dev python3-dev python3-numpy
-  libmetis-dev openmpi-bin libopenmpi-dev
+  libmetis-dev openmpi-bin libopenmpi-dev libpetsc-real-dev
 )
 # Test-only: VTK's Python reader, which the scene tests open the .vtu frames with; pytest for
 # the Python module's tests, scipy and matplotlib for the ones of its matrices and example.

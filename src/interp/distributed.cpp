@@ -54,6 +54,24 @@ Value Interpreter::distributed_inner_product(const Value& x, const Value& y,
   return Value::of_float(root ? std::sqrt(total) : total);
 }
 
+Value Interpreter::distributed_solve(const frontend::ast::Binary& b, const runtime::SystemMatrix& a,
+                                     const Value& rhs) {
+  const runtime::Set* set = distributed_set(b.rhs->type.get());
+  if (!set || !a.is_float() || rhs.tensor().kind() != runtime::ComponentKind::Float)
+    not_distributed(b.span, "a direct solve ('\\') of other than float vectors over a set");
+  runtime::Tensor x(runtime::ComponentKind::Float, shape_of(*b.type, b.span));
+  if (x.size() != rhs.tensor().size())
+    fail(b.span, "the solution has " + std::to_string(x.size()) + " components but '\\' has " +
+                     std::to_string(rhs.tensor().size()));
+  std::string why;
+  if (!options_.distribution->solve(a, *set, {rhs.tensor().floats(), rhs.tensor().size()},
+                                    {x.mutable_floats(), x.size()}, why))
+    fail(b.span, "a distributed run cannot compute a direct solve ('\\') here: " + why);
+  Value out = Value::of_tensor(std::move(x));
+  refresh_ghosts(out, b.type.get());
+  return out;
+}
+
 void Interpreter::refresh_ghosts(Value& v, const Type* t) {
   const runtime::Set* set = distributed_set(t);
   // Every rank takes the same branches here: the refresh is collective.

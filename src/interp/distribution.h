@@ -10,8 +10,10 @@
 
 #include <cstddef>
 #include <span>
+#include <string>
 
 #include "runtime/set.h"
+#include "runtime/system_matrix.h"
 
 namespace simit::interp {
 
@@ -30,6 +32,15 @@ class Distribution {
   // order) with their owners' entries. Collective: every rank calls it in the same order.
   virtual void refresh(const runtime::Set& set, std::span<std::byte> values,
                        size_t element_bytes) const = 0;
+  // x = A \ b for a square matrix over `rows` (its owned rows complete), b and x over the same
+  // local elements: x's owned entries (the interpreter then refreshes its ghosts). Collective.
+  // False, with the reason in `why`, where the ranks cannot solve (the default).
+  virtual bool solve(const runtime::SystemMatrix& a, const runtime::Set& rows,
+                     std::span<const double> b, std::span<double> x, std::string& why) const {
+    (void)a, (void)rows, (void)b, (void)x;
+    why = "this build has no distributed solver";
+    return false;
+  }
 };
 
 }  // namespace simit::interp

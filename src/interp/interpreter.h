@@ -262,6 +262,9 @@ class Interpreter final : public ExecState {
   // x' y (or with `root`, its square root) over `set`: the owned elements, then every rank's.
   Value distributed_inner_product(const Value& x, const Value& y, const runtime::Set& set,
                                   bool root, const frontend::SourceSpan& at);
+  // A \ b over the ranks (Distribution::solve), its ghosts refreshed.
+  Value distributed_solve(const frontend::ast::Binary& b, const runtime::SystemMatrix& a,
+                          const Value& rhs);
   // Ghost entries of a global vector of type `t` from their owners (after a partial write).
   void refresh_ghosts(Value& v, const frontend::Type* t);
 

@@ -313,7 +313,10 @@ bool Interpreter::system_binary(const ast::Binary& b, const Value& l, const Valu
       break;
     case Op::LeftDiv:
       if (lm && r.is_tensor()) {
-        if (distributed) not_distributed(b.span, "a direct solve ('\\')");
+        if (distributed) {
+          out = distributed_solve(b, *l.matrix(), r);
+          return true;
+        }
         const SystemMatrix& a = *l.matrix();
         if (!a.is_float() || r.tensor().kind() != ComponentKind::Float)
           throw Fault(std::string("the solve operator '\\' needs float components, not ") +

@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
 """A scene run in one process against the same scene on two MPI ranks (simit run --distributed).
 
-Usage: run_compare.py SIMIT SCENE WORK --tolerance T --iterations K -- MPIRUN ARGS...
+Usage: run_compare.py SIMIT SCENE WORK --tolerance T --iterations K [--stats NAME,...]
+                      [--frames N] -- MPIRUN ARGS...
 
 Checks: two 2-rank runs write identical bytes (final positions, every .vtu frame, the stats
 without their timing columns), and so does a 2-rank run with --executor jit (maps compiled);
 the final positions of one process and of two ranks differ by at most T (relative to the
-largest coordinate); each frame's CG iterations differ by at most K; each rank reports its
+largest coordinate), and so do the stats named by --stats (relative to their largest value);
+each frame's CG iterations differ by at most K; each rank reports its
 part of every set, both own elements and hold ghosts, and the owned counts add up to the sets'
 sizes in one process.
 Exit status 0 when every check holds, 1 otherwise (with the reason).
@@ -54,6 +56,8 @@ def main():
     parser.add_argument("work")
     parser.add_argument("--tolerance", type=float, required=True)
     parser.add_argument("--iterations", type=int, required=True)
+    parser.add_argument("--stats", default="")
+    parser.add_argument("--frames", default="")
     args = parser.parse_args(argv[:split])
     mpirun = argv[split + 1:]
     shutil.rmtree(args.work, ignore_errors=True)
@@ -63,6 +67,8 @@ def main():
         folder = os.path.join(args.work, name)
         command = [args.simit, "run", args.scene, "--output", folder,
                    "--final-csv", folder + ".csv"]
+        if args.frames:
+            command += ["--frames", args.frames]
         if name != "one":
             command = mpirun + [args.simit, "run", "--distributed"] + command[2:]
         if name == "two_jit":
@@ -119,6 +125,19 @@ def main():
             if abs(int(r[column]) - int(s[column])) > args.iterations:
                 failures.append("frame %s: CG iterations %s and %s differ by more than %d"
                                 % (r[0], r[column], s[column], args.iterations))
+    for name in [n for n in args.stats.split(",") if n]:
+        if name not in header:
+            failures.append("no stats column '%s'" % name)
+            continue
+        column = [n for n in stats_one[0]].index(name)
+        ones = [float(r[column]) for r in stats_one[1:]]
+        twos = [float(r[column]) for r in stats_two[1:]]
+        scale = max(abs(v) for v in ones) or 1.0
+        worst = max(abs(x - y) for x, y in zip(ones, twos))
+        print("%s: largest difference %.3g of its largest value" % (name, worst / scale))
+        if worst > args.tolerance * scale:
+            failures.append("%s differs by %.3g, more than %.3g" % (name, worst / scale,
+                                                                  args.tolerance))
     if len(stats_one) != len(stats_two):
         failures.append("%d stats rows in one process, %d on two ranks" % (len(stats_one),
                                                                            len(stats_two)))

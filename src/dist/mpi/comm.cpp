@@ -69,6 +69,12 @@ int64_t Session::sum(int64_t value) const {
   return total;
 }
 
+int64_t Session::sum_below(int64_t value) const {
+  int64_t below = 0;
+  check(MPI_Exscan(&value, &below, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Exscan");
+  return rank_ == 0 ? 0 : below;  // MPI leaves rank 0's undefined
+}
+
 std::vector<int64_t> Session::gather(int64_t value, int root) const {
   std::vector<int64_t> all(rank_ == root ? static_cast<size_t>(size_) : 0);
   check(MPI_Gather(&value, 1, MPI_INT64_T, all.data(), 1, MPI_INT64_T, root, MPI_COMM_WORLD),

@@ -33,6 +33,9 @@ class Session {
 
   // The sum over the ranks of each rank's `value`, on every rank.
   int64_t sum(int64_t value) const;
+  // The sum of the ranks' `value`s below this one (0 on rank 0): where a rank's rows start in
+  // a numbering of every rank's rows, one range after another.
+  int64_t sum_below(int64_t value) const;
   // Every rank's `value`, in rank order, on `root` (empty elsewhere).
   std::vector<int64_t> gather(int64_t value, int root = 0) const;
   // `values` as `root` holds them, on every rank (resized there).

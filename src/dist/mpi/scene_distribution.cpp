@@ -9,6 +9,9 @@
 #include "dist/mpi/comm.h"
 #include "dist/overlap.h"
 #include "dist/set_parts.h"
+#ifdef SIMIT_HAVE_PETSC
+#include "dist/mpi/petsc_solver.h"
+#endif
 
 namespace simit::dist::mpi {
 
@@ -50,6 +53,21 @@ class SceneDistribution final : public scene::Distributed {
       }
     session_.refresh_ghosts(it->second.plan, values, element_bytes);
   }
+  bool solve(const runtime::SystemMatrix& a, const runtime::Set& rows, std::span<const double> b,
+             std::span<double> x, std::string& why) const override {
+#ifdef SIMIT_HAVE_PETSC
+    auto it = parts_.find(&rows);
+    if (it == parts_.end()) {
+      why = rows.describe() + " is not split over the ranks";
+      return false;
+    }
+    return petsc_.solve(a, it->second.layout, it->second.plan, b, x, why);
+#else
+    (void)a, (void)rows, (void)b, (void)x;
+    why = "this simit was built without PETSc (libpetsc-real-dev)";
+    return false;
+#endif
+  }
   std::string describe_parts(const std::vector<runtime::Set*>& local) const override;
   std::string describe_traffic() const override;
   bool any(bool flag) const override { return session_.any(flag); }
@@ -69,6 +87,9 @@ class SceneDistribution final : public scene::Distributed {
     int64_t refreshes = 0, messages = 0, bytes = 0, sums = 0;
   };
   mutable Traffic traffic_;
+#ifdef SIMIT_HAVE_PETSC
+  mutable PetscSolver petsc_{session_};  // after the session: ends before MPI does
+#endif
 };
 
 // 1234567 as "1,234,567".
