@@ -136,30 +136,35 @@ def measure_partition(simit, mesh, vertices, parts, saved, work):
 
 # --- 2. The time per row of one CG iteration --------------------------------------------------
 
-def measure_cg(simit, work, frames):
+def measure_cg(simit, work, frames, runs):
     scene = os.path.join(ROOT, "examples", "fem", "dragon160k.toml")
     vertices = header_count(os.path.join(ROOT, "examples", "data", "dragon160k.node"))
     out = os.path.join(work, "fem")
     cmd = [simit, "run", scene, "--executor", "jit", "--threads", "1", "--frames", str(frames),
            "--output", out]
-    run(cmd, "simit run (the CG time per row)")
-    with open(os.path.join(out, "dragon160k_stats.csv")) as f:
-        stats = list(csv.DictReader(f))
-    if len(stats) < 2:
-        raise ModelError("the fem run wrote fewer than 2 frames")
-    per_row = [float(s["solve_ms"]) * 1e3 / int(s["cg_iterations"]) / vertices
-               for s in stats[1:]]  # the first frame's solve includes first touches
+    stats, per_row = [], []
+    for _ in range(runs):
+        run(cmd, "simit run (the CG time per row)")
+        with open(os.path.join(out, "dragon160k_stats.csv")) as f:
+            frames_run = list(csv.DictReader(f))
+        if len(frames_run) < 2:
+            raise ModelError("the fem run wrote fewer than 2 frames")
+        stats.append(frames_run)
+        # The first frame's solve includes first touches; of the others the least counts,
+        # since other work on the shared cores only adds to a frame's time.
+        per_row += [float(s["solve_ms"]) * 1e3 / int(s["cg_iterations"]) / vertices
+                    for s in frames_run[1:]]
     return {
         "vertices": vertices,
-        "frames": stats,
-        "us_per_row": statistics.median(per_row),
+        "runs": stats,
+        "us_per_row": min(per_row),
         "command": " ".join(["simit"] + cmd[1:-2]).replace(ROOT + os.sep, ""),
     }
 
 
 # --- 3. The cost of a message -----------------------------------------------------------------
 
-def measure_mpi(work):
+def measure_mpi(work, runs):
     for tool in ("mpicxx", "mpirun"):
         if not shutil.which(tool):
             raise ModelError(f"{tool} not found: the message costs need OpenMPI")
@@ -167,13 +172,23 @@ def measure_mpi(work):
     run(["mpicxx", "-O2", "-std=c++20", os.path.join(BENCH, "mpi_message_cost.cpp"), "-o", exe],
         "building bench/mpi_message_cost.cpp")
     env = dict(os.environ, **MPI_ENV)
-    stdout, _ = run(["mpirun", "-np", "2", "--oversubscribe", exe], "mpi_message_cost", env=env)
-    rows = list(csv.DictReader(io.StringIO(stdout)))
-    pingpong = [(int(r["bytes"]), float(r["median_us"]), float(r["min_us"]))
-                for r in rows if r["kind"] == "pingpong"]
-    allgather = [float(r["median_us"]) for r in rows if r["kind"] == "allgather"]
-    if not pingpong or not allgather:
+    # Other work on the shared cores only ever adds to a figure (a rank descheduled mid-message
+    # waits for its core): of several runs' medians, the least is the machine's own cost.
+    pingpong_runs, allgather_runs = {}, []
+    for _ in range(runs):
+        stdout, _ = run(["mpirun", "-np", "2", "--oversubscribe", exe], "mpi_message_cost",
+                        env=env)
+        for r in csv.DictReader(io.StringIO(stdout)):
+            if r["kind"] == "pingpong":
+                pingpong_runs.setdefault(int(r["bytes"]), []).append(
+                    (float(r["median_us"]), float(r["min_us"])))
+            elif r["kind"] == "allgather":
+                allgather_runs.append(float(r["median_us"]))
+    if not pingpong_runs or not allgather_runs:
         raise ModelError(f"mpi_message_cost printed no figures:\n{stdout}")
+    pingpong = [(b, min(m for m, _ in v), min(lo for _, lo in v))
+                for b, v in sorted(pingpong_runs.items())]
+    allgather = [min(allgather_runs)]
     # Bandwidth: the least-squares slope of time over size where the bytes dominate (64 KiB
     # and up); latency: the smallest message's time.
     big = [(b, t) for b, t, _ in pingpong if b >= 65536]
@@ -187,6 +202,9 @@ def measure_mpi(work):
         "bytes_per_us": 1.0 / slope,
         "allgather_us": allgather[0],
         "mpi": version.splitlines()[0].strip(),
+        "runs": runs,
+        "latency_runs": [m for m, _ in pingpong_runs[pingpong[0][0]]],
+        "allgather_runs": allgather_runs,
     }
 
 
@@ -199,13 +217,13 @@ def model(partition, vertices, cg, mpi, latency_scale=1.0):
         owned = vertices if k == 1 else math.ceil(vertices * float(p["vertex_imbalance"]) / k)
         ghosts, neighbours = int(p["most_ghosts"]), int(p["most_neighbours"])
         compute = owned * cg["us_per_row"]
-        exchange = (neighbours * mpi["latency_us"] * latency_scale +
-                    ghosts * GHOST_BYTES / mpi["bytes_per_us"])
+        ghost_bytes = ghosts * GHOST_BYTES / mpi["bytes_per_us"]
+        exchange = neighbours * mpi["latency_us"] * latency_scale + ghost_bytes
         reductions = 2 * math.ceil(math.log2(k)) * mpi["allgather_us"] * latency_scale
         rows.append({
             "ranks": k, "rows_per_rank": owned, "ghosts": ghosts, "neighbours": neighbours,
             "compute_us": compute, "exchange_us": exchange, "reductions_us": reductions,
-            "total_us": compute + exchange + reductions,
+            "total_us": compute + exchange + reductions, "exchange_bytes_us": ghost_bytes,
             "cut_edges": int(p["cut_edges"]), "vertex_imbalance": float(p["vertex_imbalance"]),
             "element_imbalance": float(p["element_imbalance"]),
             "ghosts_all_parts": int(p["ghosts"]), "partition_ms": float(p["ms"]),
@@ -217,14 +235,15 @@ def model(partition, vertices, cg, mpi, latency_scale=1.0):
 
 
 def latency_for_half(partition, vertices, cg, mpi):
-    """The factor on both measured latencies at which 1,024 ranks fall to 50% efficiency."""
-    at = list(partition).index(1024) if 1024 in partition else -1
+    """The factor on both measured latencies at which the most ranks up to 1,024 fall to 50%
+    efficiency; None where no factor does."""
+    at = max(i for i, k in enumerate(partition) if k <= 1024)
     base = model(partition, vertices, cg, mpi)[at]
     no_latency = model(partition, vertices, cg, mpi, latency_scale=0.0)[at]
     latency_part = base["total_us"] - no_latency["total_us"]
     target = model(partition, vertices, cg, mpi)[0]["total_us"] / (0.5 * base["ranks"])
-    if target <= no_latency["total_us"]:
-        return None  # under 50% even with free messages
+    if latency_part <= 0 or target <= no_latency["total_us"]:
+        return None  # one rank only, or under 50% even with free messages
     return (target - no_latency["total_us"]) / latency_part
 
 
@@ -261,7 +280,13 @@ def small_blocks_per_row(simit, vertices):
     return mesh_blocks_per_row(parse_partition(stdout, "simit partition", vertices), vertices)
 
 
-def explanation(rows, factor):
+def first_under_half(partition, vertices, cg, mpi, scale):
+    """The least rank count whose efficiency falls under 50% with the latencies scaled."""
+    rows = model(partition, vertices, cg, mpi, latency_scale=scale)
+    return next((r["ranks"] for r in rows if r["efficiency"] < 0.5), None)
+
+
+def explanation(rows, factor, mpi, crossings):
     within = [r for r in rows if r["ranks"] <= 1024]
     last = within[-1]
     below = next((r for r in rows if r["efficiency"] < 0.5), None)
@@ -287,25 +312,38 @@ def explanation(rows, factor):
                          f"{terms(below)}.")
     first = next((r for r in rows if r["ranks"] > 1), None)
     if first:
-        grow = last["exchange_us"] + last["reductions_us"]
+        most = max(within, key=lambda r: r["exchange_bytes_us"])
+        shrink = (f"Their bytes do (the ghosts' bytes cost {fmt(most['exchange_bytes_us'])} us "
+                  f"at {most['ranks']} ranks, {fmt(last['exchange_bytes_us'])} us at "
+                  f"{last['ranks']:,}), but their count grows"
+                  if most is not last else "Their count grows")
         lines.append(
             f"Why: the compute halves with every doubling of K, while the messages do not shrink "
             f"({fmt(first['exchange_us'] + first['reductions_us'])} us at {first['ranks']} "
-            f"ranks, {fmt(grow)} us at {last['ranks']:,}): the parts' neighbours grow (from "
-            f"{first['neighbours']} to {last['neighbours']}) and the reductions take "
-            f"ceil(log2 K) steps, while the ghosts' bytes, which shrink with the parts, cost "
-            f"little at these sizes. The load imbalance (the largest part "
-            f"{last['vertex_imbalance']:.3f}x the mean) costs the rest.")
+            f"ranks, {fmt(last['exchange_us'] + last['reductions_us'])} us at "
+            f"{last['ranks']:,}). {shrink}: a part's neighbours, from {first['neighbours']} to "
+            f"{last['neighbours']}, "
+            f"each a message's latency, and the reductions' ceil(log2 K) allgather steps. The "
+            f"rest of the loss is the load imbalance (the largest part "
+            f"{last['vertex_imbalance']:.3f}x the mean).")
+    for scale, k in crossings:
+        lines.append(f"With both latencies {'halved' if scale < 1 else 'doubled'}, the "
+                     f"efficiency falls under 50% at " +
+                     (f"{k:,} ranks." if k else "none of these rank counts."))
     if factor is not None:
         lines.append(
-            f"Both measured latencies (the message's and the allgather step's) multiplied by "
-            f"{factor:.2g} would put {last['ranks']:,} ranks at 50% efficiency.")
+            f"Both measured latencies multiplied by {factor:.2g} (a message's "
+            f"{fmt(factor * mpi['latency_us'], 2)} us, an allgather step's "
+            f"{fmt(factor * mpi['allgather_us'], 2)} us) would put {last['ranks']:,} ranks at "
+            f"50% efficiency.")
     return lines
 
 
 def write_markdown(path, rows, info):
     cg, mpi = info["cg"], info["mpi"]
     beyond = [r for r in rows if r["ranks"] > 1024]
+    top = [r for r in rows if r["ranks"] <= 1024][-1]
+    top_mb = top["rows_per_rank"] * info["blocks_big"] * 72 / 1e6
     counts = ", ".join(f"{r['ranks']:,}" for r in rows)
     out = []
     out.append("# Strong scaling of a distributed CG iteration, 1 to 1,024 ranks (a model)\n")
@@ -336,20 +374,23 @@ def write_markdown(path, rows, info):
         "may be different parts, so the exchange is an upper bound).\n"
         f"- **Time per row of one CG iteration**: {fmt(cg['us_per_row'] * 1e3)} ns, from "
         f"`{cg['command']}`: the stats CSV's solve_ms / cg_iterations / vertices "
-        f"({cg['vertices']:,}, {info['blocks_small']:.1f} blocks per row), the median of the "
-        "frames after the first ("
-        + ", ".join(f"frame {s['frame']}: {fmt(float(s['solve_ms']))} ms for "
-                    f"{s['cg_iterations']} iterations" for s in cg["frames"]) + "). "
+        f"({cg['vertices']:,}, {info['blocks_small']:.1f} blocks per row), the least of the "
+        f"frames after the first in {len(cg['runs'])} runs (solve ms / CG iterations: "
+        + "; ".join(", ".join(f"{fmt(float(s['solve_ms']))} / {s['cg_iterations']}"
+                              for s in frames) for frames in cg["runs"]) + "). "
         "solve_ms times the whole solver loop of a frame, so the per-row figure includes the "
         "loop's vector updates and its two inner products on one rank.\n"
-        f"- **Messages** (`bench/mpi_message_cost.cpp`, 2 ranks, medians of many repeats): "
-        f"latency {fmt(mpi['latency_us'], 2)} us (half a round trip of 8 bytes), bandwidth "
+        f"- **Messages** (`bench/mpi_message_cost.cpp`, 2 ranks; per figure the median of many "
+        f"repeats, the least of {mpi['runs']} runs, since other work on the shared cores only "
+        f"adds to it): latency {fmt(mpi['latency_us'], 2)} us (half a round trip of 8 bytes; "
+        f"the runs: {', '.join(fmt(x, 2) for x in mpi['latency_runs'])}), bandwidth "
         f"{fmt(mpi['bytes_per_us'] / 1e3, 2)} GB/s (the least-squares slope of time over size "
         "from 64 KiB to 1 MiB), MPI_Allgather of one double on 2 ranks "
-        f"{fmt(mpi['allgather_us'], 2)} us. **These are shared-memory costs between two "
-        "processes on one 2-core virtual machine**, not a network's; on this shared machine "
-        "they move by up to 2x from run to run.\n")
-    out.append("| bytes | half round trip, median us | least us |\n|---:|---:|---:|")
+        f"{fmt(mpi['allgather_us'], 2)} us (the runs: "
+        f"{', '.join(fmt(x, 2) for x in mpi['allgather_runs'])}). **These are shared-memory "
+        "costs between two processes on one 2-core virtual machine**, not a network's.\n")
+    out.append("| bytes | half round trip, median us | least of any repeat, us |\n"
+               "|---:|---:|---:|")
     for b, t, lo in mpi["pingpong"]:
         out.append(f"| {b:,} | {t:.2f} | {lo:.2f} |")
     out.append("")
@@ -376,16 +417,16 @@ def write_markdown(path, rows, info):
         out.append("| " + " | ".join(cells) + " |")
     out.append("")
     out.append("## Where it stops scaling\n")
-    for line in explanation(rows, info["factor"]):
+    for line in explanation(rows, info["factor"], mpi, info["crossings"]):
         out.append(line + "\n")
     out.append("## What the model leaves out\n")
     out.append(
         "- **The cache.** The time per row is measured on one rank of "
         f"{cg['vertices']:,} rows, whose CG iteration does not fit this machine's cache "
-        "(bench/results/README.md). A part of a few thousand rows holds a few MB of matrix "
-        "(72 bytes a block) and fits a node's cache: its rows would run faster than measured, "
-        "so at high K the compute term is an upper bound and the real efficiency lower than "
-        "modelled.\n"
+        "(bench/results/README.md). The busiest part at "
+        f"{top['ranks']:,} ranks holds {top_mb:.1f} MB of matrix blocks (72 bytes each), "
+        "within a server's cache: its rows would run faster than measured, so at high K the "
+        "compute term is an upper bound and the real efficiency lower than modelled.\n"
         f"- **The mesh's rows.** The refined mesh has {info['blocks_big']:.1f} blocks per row "
         f"against the measured mesh's {info['blocks_small']:.1f}: its rows cost about "
         f"{100 * (info['blocks_big'] / info['blocks_small'] - 1):.0f}% more, which the model "
@@ -431,9 +472,17 @@ def main():
                     "temporary folder, removed at the end)")
     ap.add_argument("--frames", type=int, default=5,
                     help="frames of the fem run that measures the CG (default 5, at least 2)")
+    ap.add_argument("--cg-runs", type=int, default=3,
+                    help="runs of the fem scene; the least frame counts (default 3)")
+    ap.add_argument("--mpi-runs", type=int, default=3,
+                    help="runs of the message costs; the least median counts (default 3)")
     ap.add_argument("--results", default=os.path.join(BENCH, "results"),
                     help="where scaling_model.md and .csv go")
     args = ap.parse_args()
+    if args.cg_runs < 1:
+        ap.error("--cg-runs must be at least 1")
+    if args.mpi_runs < 1:
+        ap.error("--mpi-runs must be at least 1")
     if args.frames < 2:
         ap.error("--frames must be at least 2 (the first frame is not counted)")
     try:
@@ -456,9 +505,9 @@ def main():
         partition, how = measure_partition(simit, mesh, vertices, parts, args.partition_csv,
                                            work)
         print("message costs ...", flush=True)
-        mpi = measure_mpi(work)
+        mpi = measure_mpi(work, args.mpi_runs)
         print("CG time per row ...", flush=True)
-        cg = measure_cg(simit, work, args.frames)
+        cg = measure_cg(simit, work, args.frames, args.cg_runs)
         rows = model(partition, vertices, cg, mpi)
         note = (f"`{os.path.basename(base)}`" if args.mesh else
                 "dragon160k refined twice by regular 1:8 subdivision (`bench/refine_tets.py`, "
@@ -467,7 +516,9 @@ def main():
                 "blocks_big": mesh_blocks_per_row(partition, vertices),
                 "blocks_small": small_blocks_per_row(simit, cg["vertices"]),
                 "partition_how": how, "machine": machine(),
-                "factor": latency_for_half(partition, vertices, cg, mpi)}
+                "factor": latency_for_half(partition, vertices, cg, mpi),
+                "crossings": [(f, first_under_half(partition, vertices, cg, mpi, f))
+                              for f in (0.5, 2.0)]}
         os.makedirs(args.results, exist_ok=True)
         write_csv(os.path.join(args.results, "scaling_model.csv"), rows)
         write_markdown(os.path.join(args.results, "scaling_model.md"), rows, info)
@@ -482,7 +533,7 @@ def main():
         print(f"{r['ranks']:>5} {r['rows_per_rank']:>9,} {r['ghosts']:>7,} {r['neighbours']:>5} "
               f"{r['compute_us']:>10.1f} {r['exchange_us']:>9.1f} {r['reductions_us']:>7.1f} "
               f"{r['total_us']:>10.1f} {r['speedup']:>8.1f} {r['efficiency']:>5.0%}")
-    for line in explanation(rows, info["factor"]):
+    for line in explanation(rows, info["factor"], mpi, info["crossings"]):
         print(line.replace("**", ""))
     print(f"wrote {os.path.join(args.results, 'scaling_model.md')} and scaling_model.csv")
 
