@@ -35,6 +35,8 @@ class Distributed : public interp::Distribution {
   // Rank 0's report of what the ranks exchanged so far, one line per rank: ghost refreshes,
   // bytes and messages sent, sums across ranks; "" on the other ranks. Collective.
   virtual std::string describe_traffic() const = 0;
+  // `text` as rank 0 holds it, on every rank. Collective.
+  virtual void broadcast(std::string& text) const = 0;
   // Whether `flag` holds on any rank (on every rank). Collective.
   virtual bool any(bool flag) const = 0;
   // Ends every rank of the run with `status`: one rank's error, while the others may be

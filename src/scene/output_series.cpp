@@ -407,8 +407,31 @@ void OutputSeries::write_frame(const MeshCache& meshes, int frame, bool last) {
   if (cells_)
     for (const std::string& f : cell_fields_)
       cell_data.push_back(store.add(*cells_->set, f, cell_rows_));
-  pvd_->write_frame(frame * file_.frame_time, m, point_data, cell_data);
+  if (pieces_ > 0) {
+    // The ranks wrote their pieces of this frame: the .pvtu joins them.
+    const std::string file = pvd_->next_frame_file(".pvtu");
+    const int index = static_cast<int>(pvd_->frames());
+    std::vector<std::string> pieces;
+    for (int r = 0; r < pieces_; ++r) pieces.push_back(PieceSeries::piece_file(name_, index, r));
+    runtime::write_pvtu(pvd_->folder() + file, pieces, point_data, cell_data);
+    pvd_->add_frame(frame * file_.frame_time, file);
+  } else {
+    pvd_->write_frame(frame * file_.frame_time, m, point_data, cell_data);
+  }
   if (last) write_picture();
+}
+
+PieceSeries::Settings OutputSeries::piece_settings() const {
+  PieceSeries::Settings s;
+  s.folder = folder_;
+  s.name = name_;
+  s.points = points_ ? points_->name : "";
+  s.position = position_field_;
+  s.cells = cells_ ? cells_->name : "";
+  s.point_fields = point_fields_;
+  s.cell_fields = cell_fields_;
+  s.every = every_;
+  return s;
 }
 
 void OutputSeries::write_picture() {

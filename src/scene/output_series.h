@@ -13,6 +13,7 @@
 #include "runtime/mesh/pvd_writer.h"
 #include "scene/mesh_binding.h"
 #include "scene/mesh_cache.h"
+#include "scene/output_pieces.h"
 #include "scene/scene_file.h"
 #include "simit/scene.h"
 
@@ -42,6 +43,12 @@ class OutputSeries {
   void write_final_csv() const;
 
   bool every_frame(int frame) const { return frame % every_ == 0; }
+  // A distributed run on `ranks` ranks: each frame becomes a .pvtu joining the ranks' pieces
+  // (scene/output_pieces.h), which they write before write_frame; what the pieces hold is
+  // piece_settings(). Only once open() made the series (writes_frames()).
+  bool writes_frames() const { return pvd_ != nullptr; }
+  PieceSeries::Settings piece_settings() const;
+  void join_pieces(int ranks) { pieces_ = ranks; }
   // The .pvd written, or empty when nothing is.
   std::string pvd_path() const { return pvd_ ? pvd_->path() : std::string(); }
 
@@ -74,6 +81,7 @@ class OutputSeries {
   runtime::Mesh frame_;  // the cells (the mesh's order and numbers), the points of each frame
   int every_ = 1;
   std::unique_ptr<runtime::PvdWriter> pvd_;
+  int pieces_ = 0;  // ranks whose pieces each frame's .pvtu joins; 0: one .vtu a frame
   std::ofstream csv_;
 };
 

@@ -61,6 +61,33 @@ void SceneRun::gather() const {
   if (options_.distributed) options_.distributed->gather(local_sets(), whole_sets());
 }
 
+// Rank 0 checked [output]: it tells the others what their pieces hold.
+void SceneRun::start_pieces() {
+  const Distributed& d = *options_.distributed;
+  std::string text =
+      d.rank() == 0 && output_.writes_frames() ? PieceSeries::encode(output_.piece_settings()) : "";
+  d.broadcast(text);
+  if (text.empty()) return;
+  PieceSeries::Settings settings = PieceSeries::decode(text);
+  const runtime::Set* points = nullptr;
+  const runtime::Set* cells = nullptr;
+  for (size_t k = 0; k < sets_.sets.size() && k < local_.size(); ++k) {
+    if (sets_.sets[k]->name == settings.points) points = local_[k].get();
+    if (sets_.sets[k]->name == settings.cells) cells = local_[k].get();
+  }
+  if (!points) return;
+  const int owned_cells = cells ? d.owned(*cells) : 0;
+  pieces_.emplace(std::move(settings), d.rank(), *points, cells, owned_cells);
+  if (d.rank() == 0) output_.join_pieces(d.ranks());
+}
+
+// Every rank's piece of a frame the series writes, all of them there before rank 0's .pvtu.
+void SceneRun::write_pieces(int frame, bool last) {
+  if (!pieces_ || !(pieces_->every_frame(frame) || last)) return;
+  pieces_->write();
+  options_.distributed->any(false);
+}
+
 // Everything `name` (the scene's `key` procedure) uses must be bound by the scene.
 void SceneRun::check_needs(const std::string& key, const std::string& name) const {
   const ast::FuncDecl& f = *file_.program->find_func(name);
@@ -223,12 +250,14 @@ void SceneRun::prepare(std::ostream& out) {
   engine_ = std::make_unique<api::Engine>(file_.program, engine_options(out));
   bind(*engine_);
   output_.open(file_.stat_names);
+  if (options_.distributed && options_.distributed->ranks() > 1) start_pieces();
 }
 
 void SceneRun::initialise(bool last) {
   if (!file_.init_name.empty()) call(*engine_, file_.init_name);
   gather();
   check_finite_state(0, {});
+  write_pieces(0, last);
   output_.write_frame(meshes_, 0, last);
   last_written_ = 0;
 }
@@ -244,6 +273,7 @@ FrameResult SceneRun::frame(int frame, bool last) {
   r.stats = step_stats(r.results);
   gather();
   check_finite_state(frame, r.results);
+  write_pieces(frame, last);
   if (output_.every_frame(frame) || last) {
     output_.write_frame(meshes_, frame, last);
     last_written_ = frame;

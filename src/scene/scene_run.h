@@ -5,6 +5,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -87,6 +88,9 @@ class SceneRun {
   std::vector<runtime::Set*> local_sets() const;
   void localize();
   void gather() const;
+  // A distributed run on several ranks: the frames as pieces joined by a .pvtu.
+  void start_pieces();
+  void write_pieces(int frame, bool last);
 
   const SceneFile& file_;
   const SceneOptions& options_;
@@ -98,6 +102,7 @@ class SceneRun {
   std::vector<std::unique_ptr<runtime::Set>> local_;
   std::map<std::string, SceneTensor> tensors_;
   OutputSeries output_;
+  std::optional<PieceSeries> pieces_;  // a distributed run's piece of each frame
   // --jit-stats without a debugger's trap: Ctrl-C stops the run through this one.
   mutable interp::Trap own_trap_;
   // Declared after the sets and tensors it is bound to: destroyed before them.

@@ -2,7 +2,8 @@
 # A distributed run that stops in frame 2 (scenes/escape.toml: a run-time error on whichever
 # rank holds the first point to pass x = 1.3; scenes/escape_nan.toml: a NaN there, which the
 # finite check finds): every rank stops, the exit status is not zero, the message is printed
-# (it contains MESSAGE), and frames 0 and 1 are written whole, nothing after them.
+# (it contains MESSAGE), and frames 0 and 1 are written whole (each a .pvtu and its pieces),
+# nothing after them.
 # Usage: error_run.sh SIMIT SCENE WORK MESSAGE MPIRUN ARGS...
 set -uo pipefail
 simit="$1" scene="$2" work="$3" message="$4"
@@ -15,10 +16,11 @@ fail() { echo "FAILED: $1"; cat "$work/stderr"; exit 1; }
 [ "$status" -eq 124 ] && fail "the ranks did not stop (timeout)"
 [ "$status" -ne 0 ] || fail "exit status 0"
 grep -qF "$message" "$work/stderr" || fail "no message '$message'"
-for f in bunny_000000.vtu bunny_000001.vtu bunny.pvd; do
+for f in bunny_000000.pvtu bunny_000001.pvtu bunny_000001_p0.vtu bunny_000001_p1.vtu bunny.pvd; do
   [ -s "$work/out/$f" ] || fail "$f missing"
 done
-[ -e "$work/out/bunny_000002.vtu" ] && fail "frame 2 written"
-leftovers=$(find "$work/out" -name '*.tmp*' | wc -l)
+[ -e "$work/out/bunny_000002.pvtu" ] && fail "frame 2 written"
+# An atomic file's temporary: FILE.XXXXXX.
+leftovers=$(find "$work/out" -regextype posix-extended -regex '.*\.(vtu|pvtu|pvd)\.[A-Za-z0-9]{6}' | wc -l)
 [ "$leftovers" -eq 0 ] || fail "temporary files left: $leftovers"
 echo "ok: exit status $status, the message printed, frames 0 and 1 written, nothing after"

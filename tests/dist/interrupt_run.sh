@@ -13,11 +13,11 @@ pid=$!
 fail() { echo "FAILED: $1"; cat "$work/stderr"; kill -KILL "$pid" 2>/dev/null; exit 1; }
 # Frame 1 written: the ranks are in their frames.
 for _ in $(seq 1200); do
-  [ -e "$work/out/bunny_000001.vtu" ] && break
+  [ -e "$work/out/bunny_000001.pvtu" ] && break
   kill -0 "$pid" 2>/dev/null || fail "the run ended before frame 1"
   sleep 0.1
 done
-[ -e "$work/out/bunny_000001.vtu" ] || fail "no frame 1 after 120 s"
+[ -e "$work/out/bunny_000001.pvtu" ] || fail "no frame 1 after 120 s"
 kill -INT "$pid"
 for _ in $(seq 300); do
   kill -0 "$pid" 2>/dev/null || break
@@ -29,7 +29,8 @@ status=$?
 [ "$status" -ne 0 ] || fail "exit status 0"
 pgrep -f -- "--output $work/out" > /dev/null && fail "a rank is still running"
 [ -s "$work/out/bunny.pvd" ] || fail "no .pvd"
-leftovers=$(find "$work/out" -name '*.tmp*' | wc -l)
+# An atomic file's temporary: FILE.XXXXXX.
+leftovers=$(find "$work/out" -regextype posix-extended -regex '.*\.(vtu|pvtu|pvd)\.[A-Za-z0-9]{6}' | wc -l)
 [ "$leftovers" -eq 0 ] || fail "temporary files left: $leftovers"
-frames=$(find "$work/out" -name 'bunny_*.vtu' | wc -l)
+frames=$(find "$work/out" -name 'bunny_*.pvtu' | wc -l)
 echo "ok: exit status $status after Ctrl-C, $frames frames written whole, no rank left"

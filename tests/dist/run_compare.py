@@ -48,6 +48,49 @@ def untimed_stats(folder):
     return [[row[i] for i in keep] for row in rows], rows[0]
 
 
+def header_counts(path):
+    """NumberOfPoints and NumberOfCells of a .vtu (its XML header, before the raw data)."""
+    with open(path, "rb") as f:
+        head = f.read(4096).decode("latin-1")
+    m = re.search(r'NumberOfPoints="(\d+)" NumberOfCells="(\d+)"', head)
+    return (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+
+
+def check_pieces(one, two):
+    """Each frame of the 2-rank series is a .pvtu joining one piece per rank: the pieces exist,
+    their cells add up to the one-process frame's and their points cover its points."""
+    failures = []
+    pvtus = sorted(n for n in os.listdir(two) if n.endswith(".pvtu"))
+    if not pvtus:
+        return ["the 2-rank run wrote no .pvtu frame"]
+    for name in pvtus:
+        with open(os.path.join(two, name)) as f:
+            text = f.read()
+        pieces = re.findall(r'<Piece Source="([^"]+)"/>', text)
+        if len(pieces) != 2:
+            failures.append("%s joins %d pieces, not 2" % (name, len(pieces)))
+            continue
+        if name not in open(os.path.join(two, [n for n in os.listdir(two)
+                                                if n.endswith(".pvd")][0])).read():
+            failures.append("%s is not in the .pvd" % name)
+        points = cells = 0
+        for piece in pieces:
+            path = os.path.join(two, piece)
+            if not os.path.exists(path):
+                failures.append("%s names %s, which does not exist" % (name, piece))
+                continue
+            p, c = header_counts(path)
+            points += p
+            cells += c
+        serial = os.path.join(one, name[:-len(".pvtu")] + ".vtu")
+        p1, c1 = header_counts(serial)
+        if cells != c1 or points < p1:
+            failures.append("%s: pieces hold %d cells and %d points, one process %d and %d"
+                            % (name, cells, points, c1, p1))
+    print("%d frames written as .pvtu, each joining 2 pieces" % len(pvtus))
+    return failures
+
+
 def main():
     argv = sys.argv[1:]
     split = argv.index("--")
@@ -79,9 +122,10 @@ def main():
     failures = []
     # Two 2-rank runs, and one with compiled maps: the same bytes.
     a = os.path.join(args.work, "two_a")
-    frames = sorted(n for n in os.listdir(a) if n.endswith(".vtu"))
+    frames = sorted(n for n in os.listdir(a) if n.endswith(".vtu") or n.endswith(".pvtu"))
     if not frames:
         failures.append("the 2-rank run wrote no .vtu frame")
+    failures += check_pieces(os.path.join(args.work, "one"), a)
     others = [("two_b", "two 2-rank runs")]
     if args.jit:
         others.append(("two_jit", "2-rank runs with and without the JIT"))

@@ -93,13 +93,26 @@ TEST(Layers, PublicHeadersIncludeOnlyPublicHeaders) {
 // and the interpreter's seam of a distributed run, which the scene's (scene/distributed.h)
 // extends for src/dist to implement.
 TEST(Layers, ScenesUseTheEngineAndTheMeshReadersOnly) {
-  expect_only("src/scene",
-              {"api/binding_check.h", "api/compiled_program.h", "api/engine.h", "api/set_access.h",
-               "api/stop_on_sigint.h", "api/tensor_values.h", "interp/distribution.h",
-               "interp/value.h", "runtime/fault.h", "runtime/math/math_functions.h",
-               "runtime/mesh/atomic_file.h", "runtime/mesh/mesh.h", "runtime/mesh/mesh_reader.h",
-               "runtime/mesh/pvd_writer.h", "runtime/mesh/quicklook.h", "runtime/mesh/reorder.h",
-               "runtime/mesh/topology.h", "runtime/set.h", "runtime/tensor.h"});
+  expect_only("src/scene", {"api/binding_check.h",
+                            "api/compiled_program.h",
+                            "api/engine.h",
+                            "api/set_access.h",
+                            "api/stop_on_sigint.h",
+                            "api/tensor_values.h",
+                            "interp/distribution.h",
+                            "interp/value.h",
+                            "runtime/fault.h",
+                            "runtime/math/math_functions.h",
+                            "runtime/mesh/atomic_file.h",
+                            "runtime/mesh/mesh.h",
+                            "runtime/mesh/mesh_reader.h",
+                            "runtime/mesh/pvd_writer.h",
+                            "runtime/mesh/vtu_writer.h",
+                            "runtime/mesh/quicklook.h",
+                            "runtime/mesh/reorder.h",
+                            "runtime/mesh/topology.h",
+                            "runtime/set.h",
+                            "runtime/tensor.h"});
 }
 
 }  // namespace

@@ -71,6 +71,11 @@ class SceneDistribution final : public scene::Distributed {
   std::string describe_parts(const std::vector<runtime::Set*>& local) const override;
   std::string describe_traffic() const override;
   bool any(bool flag) const override { return session_.any(flag); }
+  void broadcast(std::string& text) const override {
+    std::vector<int32_t> codes(text.begin(), text.end());
+    session_.broadcast(codes);
+    text.assign(codes.begin(), codes.end());
+  }
   [[noreturn]] void abort(int status) const override { session_.abort(status); }
   [[noreturn]] void wait_for_abort() const override { session_.wait_for_abort(); }
 

@@ -34,13 +34,21 @@ PvdWriter::PvdWriter(std::string pvd_path) : pvd_path_(std::move(pvd_path)) {
 std::string PvdWriter::write_frame(double time, const Mesh& mesh,
                                    const std::vector<VtuArray>& point_data,
                                    const std::vector<VtuArray>& cell_data) {
-  char number[16];
-  std::snprintf(number, sizeof number, "_%06zu.vtu", frames_.size());
-  std::string file = stem_ + number;
+  std::string file = next_frame_file(".vtu");
   write_vtu(folder_ + file, mesh, point_data, cell_data);
-  frames_.push_back({time, file});
-  write_collection();
+  add_frame(time, file);
   return folder_ + file;
+}
+
+std::string PvdWriter::next_frame_file(const std::string& extension) const {
+  char number[16];
+  std::snprintf(number, sizeof number, "_%06zu", frames_.size());
+  return stem_ + number + extension;
+}
+
+void PvdWriter::add_frame(double time, std::string file) {
+  frames_.push_back({time, std::move(file)});
+  write_collection();
 }
 
 void PvdWriter::write_collection() const {

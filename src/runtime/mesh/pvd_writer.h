@@ -18,6 +18,14 @@ class PvdWriter {
   std::string write_frame(double time, const Mesh& mesh, const std::vector<VtuArray>& point_data,
                           const std::vector<VtuArray>& cell_data);
 
+  // Lists a frame written elsewhere (a .pvtu joining the ranks' pieces: `file` relative to
+  // the .pvd's folder) and rewrites the .pvd.
+  void add_frame(double time, std::string file);
+  // The next frame's file name with `extension` (NAME_000007.vtu, or .pvtu), relative to the
+  // .pvd's folder.
+  std::string next_frame_file(const std::string& extension) const;
+  const std::string& folder() const { return folder_; }
+
   size_t frames() const { return frames_.size(); }
   const std::string& path() const { return pvd_path_; }
 

@@ -181,4 +181,33 @@ void write_vtu(const std::string& path, const Mesh& mesh, const std::vector<VtuA
   out.commit();
 }
 
+void write_pvtu(const std::string& path, const std::vector<std::string>& pieces,
+                const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data) {
+  auto declare = [](std::ostringstream& xml, const VtuArray& a) {
+    const bool is_float = std::holds_alternative<std::span<const double>>(a.values);
+    xml << "      <PDataArray type=\"" << (is_float ? "Float64" : "Int32") << "\" Name=\""
+        << xml_escape(a.name) << "\" NumberOfComponents=\"" << a.components << "\"/>\n";
+  };
+  const char* order = std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
+  std::ostringstream xml;
+  xml << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\" byte_order=\"" << order
+      << "\" header_type=\"UInt64\">\n"
+      << "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+      << "    <PPoints>\n"
+      << "      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
+      << "    </PPoints>\n";
+  xml << "    <PPointData>\n";
+  for (const VtuArray& a : point_data) declare(xml, a);
+  xml << "    </PPointData>\n    <PCellData>\n";
+  for (const VtuArray& a : cell_data) declare(xml, a);
+  xml << "    </PCellData>\n";
+  for (const std::string& piece : pieces)
+    xml << "    <Piece Source=\"" << xml_escape(piece) << "\"/>\n";
+  xml << "  </PUnstructuredGrid>\n</VTKFile>\n";
+  AtomicFile out(path);
+  out.write(xml.str());
+  out.commit();
+}
+
 }  // namespace simit::runtime

@@ -27,6 +27,12 @@ struct VtuArray {
 void write_vtu(const std::string& path, const Mesh& mesh, const std::vector<VtuArray>& point_data,
                const std::vector<VtuArray>& cell_data);
 
+// Writes the .pvtu at `path` that joins `pieces` (.vtu files of one frame, one per MPI rank,
+// named relative to the .pvtu's folder) into one dataset: the arrays declared as `point_data`
+// and `cell_data` declare them (their values are not read; every piece holds them).
+void write_pvtu(const std::string& path, const std::vector<std::string>& pieces,
+                const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data);
+
 // XML attribute text with &, <, >, " and ' escaped.
 std::string xml_escape(const std::string& text);
 
