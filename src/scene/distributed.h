@@ -4,6 +4,7 @@
 // the program over its own part of every set (interp/distribution.h); rank 0 alone writes.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,8 @@ class Distributed : public interp::Distribution {
   // Rank 0's report of what the ranks exchanged so far, one line per rank: ghost refreshes,
   // bytes and messages sent, sums across ranks; "" on the other ranks. Collective.
   virtual std::string describe_traffic() const = 0;
+  // Each of `values` replaced by its least over the ranks, on every rank. Collective.
+  virtual void least(std::vector<int64_t>& values) const = 0;
   // `text` as rank 0 holds it, on every rank. Collective.
   virtual void broadcast(std::string& text) const = 0;
   // Whether `flag` holds on any rank (on every rank). Collective.

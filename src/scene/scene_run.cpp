@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 
 #include "api/stop_on_sigint.h"
@@ -57,8 +58,11 @@ std::vector<runtime::Set*> SceneRun::local_sets() const {
   return local;
 }
 
-void SceneRun::gather() const {
-  if (options_.distributed) options_.distributed->gather(local_sets(), whole_sets());
+// Rank 0's whole sets are read for the last frame (the picture, --final-csv) and, on one
+// rank, for every frame written (one .vtu a frame); several ranks write pieces instead.
+void SceneRun::gather(bool last) const {
+  if (options_.distributed && (last || !pieces_))
+    options_.distributed->gather(local_sets(), whole_sets());
 }
 
 // Rank 0 checked [output]: it tells the others what their pieces hold.
@@ -165,13 +169,15 @@ void SceneRun::print_sizes(std::ostream& out, int frames) const {
 
 namespace {
 
-// The first non-finite component of a float field of `set` in the mesh's order (the element
-// of least mesh number, then its first such component): element and component, or -1.
+// The first non-finite component of a float field among the first `elements` of `set` in the
+// mesh's order (the element of least mesh number, then its first such component): element and
+// component, or -1.
 template <typename T>
-std::pair<int, int> first_non_finite(const runtime::Set& set, const runtime::Field& f) {
+std::pair<int, int> first_non_finite(const runtime::Set& set, const runtime::Field& f,
+                                     int elements) {
   const T* p = f.data<T>();
   const size_t components = f.components();
-  const size_t count = components * static_cast<size_t>(set.size());
+  const size_t count = components * static_cast<size_t>(elements);
   std::pair<int, int> first = {-1, -1};
   for (size_t i = 0; i < count; ++i) {
     if (std::isfinite(p[i])) continue;
@@ -193,39 +199,60 @@ std::string number_text(double v) { return std::isnan(v) ? "nan" : v > 0 ? "inf"
 // instead of filling the rest of the series. Frame 0 is the state after init.
 void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& results) const {
   if (!options_.finite_check || !file_.finite_check) return;
-  // A distributed run checks the gathered sets, on rank 0 (an error there stops every rank).
-  if (options_.distributed && options_.distributed->rank() != 0) return;
   const std::string when = frame > 0                 ? "after frame " + std::to_string(frame)
                            : file_.init_name.empty() ? "in the initial state (frame 0)"
                                                      : "after init (frame 0)";
   const std::string hint =
       " (--check-finite stops at the statement that makes it; --no-finite-check lets it through)";
-  for (const auto& s : sets_.sets) {
-    const runtime::Set& set = *s->set;
-    for (int k = 0; k < set.field_count(); ++k) {
-      const runtime::Field& f = set.field(k);
+  // Per set and float field, in order: the first non-finite element. A distributed run's ranks
+  // each look at the elements they own; the least mesh number over the ranks wins, and the
+  // rank that owns it reports it (the others wait for its abort), as one process would.
+  const Distributed* ranks = options_.distributed.get();
+  struct Found {
+    const runtime::Set* set;
+    const std::string* name;
+    int field, element, component;
+  };
+  std::vector<Found> found;
+  std::vector<int64_t> least;
+  for (size_t k = 0; k < sets_.sets.size(); ++k) {
+    const runtime::Set& set = ranks ? *local_[k] : *sets_.sets[k]->set;
+    const int elements = ranks ? ranks->owned(set) : set.size();
+    for (int i = 0; i < set.field_count(); ++i) {
+      const runtime::Field& f = set.field(i);
       if (f.type().kind != ComponentKind::Float) continue;
-      auto [element, component] =
-          f.type().single ? first_non_finite<float>(set, f) : first_non_finite<double>(set, f);
-      if (element < 0) continue;
-      const double v = f.type().single
-                           ? f.data<float>()[size_t(element) * f.components() + component]
-                           : f.data<double>()[size_t(element) * f.components() + component];
-      const std::string part =
-          f.components() > 1 ? " (component " + std::to_string(component) + ")" : "";
-      throw RunFailure(file_.path + ": error: " + when + ": field '" + f.name() + "' of element " +
-                       std::to_string(set.mesh_number(element)) + " of set '" + s->name + "' is " +
-                       number_text(v) + part + hint);
+      auto [element, component] = f.type().single ? first_non_finite<float>(set, f, elements)
+                                                  : first_non_finite<double>(set, f, elements);
+      found.push_back({&set, &sets_.sets[k]->name, i, element, component});
+      least.push_back(element < 0 ? INT64_MAX : set.mesh_number(element));
     }
   }
+  if (ranks) ranks->least(least);
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (least[i] == INT64_MAX) continue;
+    const Found& x = found[i];
+    if (ranks && (x.element < 0 || x.set->mesh_number(x.element) != least[i]))
+      ranks->wait_for_abort();  // another rank owns it
+    const runtime::Field& f = x.set->field(x.field);
+    const size_t at = static_cast<size_t>(x.element) * f.components() + x.component;
+    const double v = f.type().single ? f.data<float>()[at] : f.data<double>()[at];
+    const std::string part =
+        f.components() > 1 ? " (component " + std::to_string(x.component) + ")" : "";
+    throw RunFailure(file_.path + ": error: " + when + ": field '" + f.name() + "' of element " +
+                     std::to_string(least[i]) + " of set '" + *x.name + "' is " + number_text(v) +
+                     part + hint);
+  }
+  // The step's results are the same on every rank: rank 0 reports them.
   const std::vector<ast::Param>& declared = file_.program->find_func(file_.step_name)->results;
   for (size_t i = 0; i < results.size() && i < declared.size(); ++i) {
     const runtime::Tensor v = results[i].to_tensor();
     if (v.kind() != ComponentKind::Float) continue;
     for (size_t c = 0; c < v.size(); ++c)
-      if (!std::isfinite(v.floats()[c]))
+      if (!std::isfinite(v.floats()[c])) {
+        if (ranks && ranks->rank() != 0) ranks->wait_for_abort();
         throw RunFailure(file_.path + ": error: " + when + ": the result '" + declared[i].name +
                          "' of " + file_.step_name + " is " + number_text(v.floats()[c]) + hint);
+      }
   }
 }
 
@@ -255,7 +282,7 @@ void SceneRun::prepare(std::ostream& out) {
 
 void SceneRun::initialise(bool last) {
   if (!file_.init_name.empty()) call(*engine_, file_.init_name);
-  gather();
+  gather(last);
   check_finite_state(0, {});
   write_pieces(0, last);
   output_.write_frame(meshes_, 0, last);
@@ -271,7 +298,7 @@ FrameResult SceneRun::frame(int frame, bool last) {
   r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   r.assembly_ms = std::min(r.ms, 1e3 * engine_->stats().assembly_seconds);
   r.stats = step_stats(r.results);
-  gather();
+  gather(last);
   check_finite_state(frame, r.results);
   write_pieces(frame, last);
   if (output_.every_frame(frame) || last) {

@@ -83,11 +83,11 @@ class SceneRun {
   void print_sizes(std::ostream& out, int frames) const;
   void check_finite_state(int frame, const std::vector<interp::Value>& results) const;
   // A distributed run: the sets as bind() binds them (the local parts), and the local fields
-  // gathered into the whole sets on rank 0 before they are checked or written.
+  // gathered into the whole sets on rank 0 where it reads them.
   std::vector<runtime::Set*> whole_sets() const;
   std::vector<runtime::Set*> local_sets() const;
   void localize();
-  void gather() const;
+  void gather(bool last) const;
   // A distributed run on several ranks: the frames as pieces joined by a .pvtu.
   void start_pieces();
   void write_pieces(int frame, bool last);

@@ -75,6 +75,13 @@ int64_t Session::sum_below(int64_t value) const {
   return rank_ == 0 ? 0 : below;  // MPI leaves rank 0's undefined
 }
 
+void Session::least(std::vector<int64_t>& values) const {
+  if (values.empty()) return;
+  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_INT64_T,
+                      MPI_MIN, MPI_COMM_WORLD),
+        "MPI_Allreduce");
+}
+
 std::vector<int64_t> Session::gather(int64_t value, int root) const {
   std::vector<int64_t> all(rank_ == root ? static_cast<size_t>(size_) : 0);
   check(MPI_Gather(&value, 1, MPI_INT64_T, all.data(), 1, MPI_INT64_T, root, MPI_COMM_WORLD),

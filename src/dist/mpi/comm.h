@@ -61,6 +61,8 @@ class Session {
   std::vector<std::byte> gather_owned(std::span<const int32_t> global,
                                       std::span<const std::byte> values, size_t element_bytes,
                                       int32_t whole, int root = 0) const;
+  // Each of `values` replaced by its least over the ranks (the same count on every rank).
+  void least(std::vector<int64_t>& values) const;
   // Whether `flag` is true on any rank (on every rank).
   bool any(bool flag) const;
   // Ends every rank of the run with `status` (not collective: one rank's failure).

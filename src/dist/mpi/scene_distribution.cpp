@@ -71,6 +71,7 @@ class SceneDistribution final : public scene::Distributed {
   std::string describe_parts(const std::vector<runtime::Set*>& local) const override;
   std::string describe_traffic() const override;
   bool any(bool flag) const override { return session_.any(flag); }
+  void least(std::vector<int64_t>& values) const override { session_.least(values); }
   void broadcast(std::string& text) const override {
     std::vector<int32_t> codes(text.begin(), text.end());
     session_.broadcast(codes);
