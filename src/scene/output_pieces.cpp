@@ -2,12 +2,12 @@
 #include "scene/output_pieces.h"
 
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <sstream>
 
 #include "runtime/mesh/mesh.h"
 #include "runtime/mesh/vtu_writer.h"
+#include "scene/vtu_arrays.h"
 
 namespace simit::scene {
 
@@ -20,29 +20,6 @@ std::string take(std::istringstream& in) {
   std::string line;
   std::getline(in, line);
   return line;
-}
-
-// A field of `set`'s first `count` elements as a VTK array (float32 and bool values copied
-// into double and int32 arrays kept in `store`).
-runtime::VtuArray field_array(const runtime::Set& set, const std::string& name, size_t count,
-                              std::deque<std::vector<double>>& doubles,
-                              std::deque<std::vector<int32_t>>& ints) {
-  const runtime::Field& f = set.field(name);
-  const runtime::FieldType& t = f.type();
-  const size_t n = count * t.components();
-  runtime::VtuArray a{name, static_cast<int>(t.components()), std::span<const double>()};
-  if (t.kind == runtime::ComponentKind::Float && !t.single) {
-    a.values = std::span<const double>(f.data<double>(), n);
-  } else if (t.kind == runtime::ComponentKind::Float) {
-    const float* p = f.data<float>();
-    a.values = std::span<const double>(doubles.emplace_back(p, p + n));
-  } else if (t.kind == runtime::ComponentKind::Int) {
-    a.values = std::span<const int32_t>(f.data<int32_t>(), n);
-  } else if (t.kind == runtime::ComponentKind::Bool) {
-    const bool* p = f.data<bool>();
-    a.values = std::span<const int32_t>(ints.emplace_back(p, p + n));
-  }
-  return a;
 }
 
 }  // namespace
@@ -83,9 +60,7 @@ void PieceSeries::write() {
     const runtime::Field& x = points_.field(settings_.position);
     mesh.points.resize(points);
     for (size_t p = 0; p < points; ++p)
-      for (int d = 0; d < 3; ++d)
-        mesh.points[p][d] = x.type().single ? x.at<float>(static_cast<int>(p))[d]
-                                            : x.at<double>(static_cast<int>(p))[d];
+      for (int d = 0; d < 3; ++d) mesh.points[p][d] = coordinate(x, static_cast<int>(p), d);
   } else {
     mesh.points.assign(points, runtime::Point{0.0, 0.0, 0.0});
   }
@@ -99,15 +74,13 @@ void PieceSeries::write() {
       else
         mesh.edges.push_back({v(0), v(1)});
     }
-  std::deque<std::vector<double>> doubles;
-  std::deque<std::vector<int32_t>> ints;
+  ArrayStore store;
   std::vector<runtime::VtuArray> point_data, cell_data;
   for (const std::string& f : settings_.point_fields)
-    point_data.push_back(field_array(points_, f, points, doubles, ints));
+    point_data.push_back(store.add(points_, f, {}));
   if (cells_)
     for (const std::string& f : settings_.cell_fields)
-      cell_data.push_back(
-          field_array(*cells_, f, static_cast<size_t>(owned_cells_), doubles, ints));
+      cell_data.push_back(store.add(*cells_, f, {}, owned_cells_));
   const std::string file = piece_file(settings_.name, index_++, rank_);
   runtime::write_vtu((std::filesystem::path(settings_.folder) / file).string(), mesh, point_data,
                      cell_data);

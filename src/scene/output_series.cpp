@@ -9,6 +9,7 @@
 
 #include "runtime/mesh/atomic_file.h"
 #include "runtime/mesh/quicklook.h"
+#include "scene/vtu_arrays.h"
 
 namespace simit::scene {
 
@@ -19,56 +20,6 @@ using runtime::FieldType;
 namespace {
 
 const char* const kTable = "[output]";
-
-// Field values of a set as a VTK array, in the order of `rows` (row r holds element rows[r];
-// the set's own order when empty), converted to double or int32 where needed.
-struct ArrayStore {
-  std::deque<std::vector<double>> doubles;
-  std::deque<std::vector<int32_t>> ints;
-
-  template <typename To, typename From>
-  std::span<const To> copy(std::deque<std::vector<To>>& store, const From* p, size_t components,
-                           size_t count, std::span<const int32_t> rows) {
-    std::vector<To>& out = store.emplace_back();
-    out.reserve(count * components);
-    for (size_t r = 0; r < count; ++r) {
-      const From* e = p + (rows.empty() ? r : static_cast<size_t>(rows[r])) * components;
-      out.insert(out.end(), e, e + components);
-    }
-    return out;
-  }
-
-  runtime::VtuArray add(const runtime::Set& set, const std::string& name,
-                        std::span<const int32_t> rows) {
-    const runtime::Field& f = set.field(name);
-    const FieldType& ft = f.type();
-    const size_t comps = ft.components(), count = static_cast<size_t>(set.size());
-    runtime::VtuArray a{name, static_cast<int>(comps), std::span<const double>()};
-    switch (ft.kind) {
-      case ComponentKind::Float:
-        if (!ft.single && rows.empty())
-          a.values = std::span<const double>(f.data<double>(), comps * count);
-        else if (!ft.single)
-          a.values = copy(doubles, f.data<double>(), comps, count, rows);
-        else
-          a.values = copy(doubles, f.data<float>(), comps, count, rows);
-        break;
-      case ComponentKind::Int:
-        if (rows.empty())
-          a.values = std::span<const int32_t>(f.data<int32_t>(), comps * count);
-        else
-          a.values = copy(ints, f.data<int32_t>(), comps, count, rows);
-        break;
-      case ComponentKind::Bool: a.values = copy(ints, f.data<bool>(), comps, count, rows); break;
-      default: break;
-    }
-    return a;
-  }
-};
-
-double coordinate(const runtime::Field& f, int i, int d) {
-  return f.type().single ? f.at<float>(i)[d] : f.at<double>(i)[d];
-}
 
 // Row r of the output holds element rows[r] of `set`: the set in its mesh's order. Empty for a
 // set in that order already.
