@@ -204,10 +204,18 @@ void add_partition(CLI::App& app, Commands& c) {
       ->check(CLI::Range(1, 1 << 20));
   c.partition->add_flag("--csv", c.partition_options.csv,
                         "Print comma-separated lines instead of the table");
+  c.partition
+      ->add_option("--reorder", c.partition_options.reorder,
+                   "Renumber the vertices first, as a scene's `reorder` key does (default: rcm, "
+                   "a scene's default)")
+      ->type_name("rcm|hilbert|off")
+      ->check(CLI::IsMember({"rcm", "hilbert", "off"}));
   c.partition->footer(
-      "Every two vertices of an element (tet, triangle, edge) are adjacent; METIS's k-way "
-      "partitioner cuts that graph, with a fixed seed (the same parts on every run), balancing "
-      "the parts' vertices and the elements they own. An element "
+      "Every two vertices of an element (tet, triangle, edge) are adjacent. As in a "
+      "distributed run, each part owns whole chunks of 256 consecutive vertices (after the "
+      "renumbering), the chunks of the blocked sums: METIS's k-way partitioner cuts the graph "
+      "between chunks, with a fixed seed (the same parts on every run), balancing the parts' "
+      "vertices and the elements they own. An element "
       "belongs to the part of its lowest-numbered vertex; a part's ghosts are the vertices its "
       "elements reach that other parts own, its neighbours the parts that own them. Columns: "
       "cut edges (and their share of the graph's), the largest part's vertices and elements "

@@ -49,6 +49,9 @@ struct PartitionOptions {
   std::string mesh;
   std::vector<int> parts;
   bool csv = false;  // comma-separated lines instead of the table
+  // How the vertices are renumbered before the cut, as a scene's `reorder` key does it:
+  // "rcm" (a scene's default), "hilbert" or "off".
+  std::string reorder = "rcm";
 };
 int run_partition(const PartitionOptions& options, std::ostream& out, std::ostream& err);
 

@@ -1,10 +1,13 @@
-// `simit partition MESH --parts K,...`: the mesh's vertex graph cut into K parts by the
-// distributed layer's partitioner (dist/partition.h), and what each cut leaves to exchange.
+// `simit partition MESH --parts K,...`: the mesh's vertex graph cut into K parts as
+// `simit run --distributed` cuts it (dist/partition.h: whole chunks of the blocked sums), and
+// what each cut leaves to exchange.
 #include <chrono>
 #include <cstdio>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "runtime/blocked_sum.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/reorder.h"
 #include "simit/commands.h"
@@ -35,6 +38,23 @@ int run_partition(const PartitionOptions& options, std::ostream& out, std::ostre
     if (!mesh.triangles.empty()) lists.push_back(list_of(mesh.triangles));
     if (!mesh.edges.empty()) lists.push_back(list_of(mesh.edges));
     const auto vertices = static_cast<int32_t>(mesh.points.size());
+    // The scene's renumbering first: the chunks the parts own are runs of its numbers.
+    std::vector<int32_t> order;
+    if (options.reorder == "rcm")
+      order = runtime::reverse_cuthill_mckee(runtime::vertex_graph(vertices, lists));
+    else if (options.reorder == "hilbert")
+      order = runtime::hilbert_order(mesh.points);
+    std::vector<std::vector<int32_t>> renumbered;
+    renumbered.reserve(lists.size());
+    if (!order.empty()) {
+      const std::vector<int32_t> position = runtime::invert_permutation(order);
+      for (runtime::ElementList& list : lists) {
+        std::vector<int32_t>& to = renumbered.emplace_back();
+        to.reserve(list.indices.size());
+        for (int32_t v : list.indices) to.push_back(position[static_cast<size_t>(v)]);
+        list.indices = to;
+      }
+    }
     const runtime::VertexGraph graph = runtime::vertex_graph(vertices, lists);
     char line[256];
     std::snprintf(line, sizeof line, "%s: %d vertices, %zu tets, %zu triangles, %zu edges\n",
@@ -48,8 +68,12 @@ int run_partition(const PartitionOptions& options, std::ostream& out, std::ostre
                       "most neighbours       ms\n";
     out << header;
     for (int parts : options.parts) {
+      if (parts > vertices)
+        throw dist::PartitionError("cannot cut " + std::to_string(vertices) + " vertices into " +
+                                   std::to_string(parts) + " parts: each part needs a vertex");
       const auto start = std::chrono::steady_clock::now();
-      const std::vector<int32_t> owner = dist::partition_vertices(graph, parts, lists);
+      const std::vector<int32_t> owner = dist::partition_in_chunks(
+          vertices, lists, parts, static_cast<int32_t>(runtime::kSumChunk));
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();

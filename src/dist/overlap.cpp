@@ -2,6 +2,7 @@
 #include "dist/overlap.h"
 
 #include <algorithm>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -21,8 +22,8 @@ using RankIndex = std::pair<int32_t, int32_t>;  // (other rank, local index)
 }
 
 // The plan of a set from its sends (other rank, local index of an owned item; repeats
-// allowed) and its ghosts' owners. Owned items and ghosts each lie in ascending global order,
-// so ascending local indices within a link are ascending global ones, as the plan promises.
+// allowed) and its ghosts' owners. Local indices ascend with global ones, so ascending local
+// indices within a link are ascending global ones, as the plan promises.
 GhostPlan make_plan(std::vector<RankIndex> sends, const SetPart& part) {
   std::sort(sends.begin(), sends.end());
   sends.erase(std::unique(sends.begin(), sends.end()), sends.end());
@@ -35,7 +36,7 @@ GhostPlan make_plan(std::vector<RankIndex> sends, const SetPart& part) {
   for (size_t k = 0; k < part.ghost_owner.size(); ++k) {
     GhostLink& link = links[part.ghost_owner[k]];
     link.rank = part.ghost_owner[k];
-    link.recv.push_back(part.owned + static_cast<int32_t>(k));
+    link.recv.push_back(part.ghosts[k]);
   }
   GhostPlan plan;
   plan.links.reserve(links.size());
@@ -46,8 +47,33 @@ GhostPlan make_plan(std::vector<RankIndex> sends, const SetPart& part) {
 // One list's elements on this rank, as the pass over the list finds them.
 struct ListPart {
   std::vector<int32_t> owned, ghosts, ghost_owner;  // global indices, ascending
-  std::vector<RankIndex> sends;                     // (other rank, index into `owned`)
+  std::vector<RankIndex> sends;                     // (other rank, GLOBAL element)
 };
+
+// `owned` and `ghosts` (global indices, each ascending, disjoint) merged into one part.
+SetPart merge_part(const std::vector<int32_t>& owned, const std::vector<int32_t>& ghosts,
+                   std::vector<int32_t> ghost_owner) {
+  SetPart part;
+  part.global.reserve(owned.size() + ghosts.size());
+  std::merge(owned.begin(), owned.end(), ghosts.begin(), ghosts.end(),
+             std::back_inserter(part.global));
+  part.owned.reserve(owned.size());
+  part.ghosts.reserve(ghosts.size());
+  size_t o = 0;
+  for (size_t i = 0; i < part.global.size(); ++i) {
+    const bool mine = o < owned.size() && owned[o] == part.global[i];
+    (mine ? part.owned : part.ghosts).push_back(static_cast<int32_t>(i));
+    o += mine ? 1 : 0;
+  }
+  part.ghost_owner = std::move(ghost_owner);
+  return part;
+}
+
+// The local index of each global one of `part` (binary search: global ascends).
+int32_t local_index(const SetPart& part, int32_t global) {
+  const auto it = std::lower_bound(part.global.begin(), part.global.end(), global);
+  return static_cast<int32_t>(it - part.global.begin());
+}
 
 }  // namespace
 
@@ -99,10 +125,9 @@ RankLayout overlap_layout(std::span<const int32_t> vertex_owner,
       if (!local) continue;
       const int32_t owner = element_owner(vs, vertex_owner);
       if (owner == rank) {
-        const auto at = static_cast<int32_t>(part.owned.size());
         part.owned.push_back(static_cast<int32_t>(e));
         for (int32_t q : owners)
-          if (q != rank) part.sends.emplace_back(q, at);
+          if (q != rank) part.sends.emplace_back(q, static_cast<int32_t>(e));
       } else {
         part.ghosts.push_back(static_cast<int32_t>(e));
         part.ghost_owner.push_back(owner);
@@ -122,14 +147,17 @@ RankLayout overlap_layout(std::span<const int32_t> vertex_owner,
   RankLayout layout;
   std::vector<int32_t> local_of(n, -1);
   SetPart& vertices = layout.vertices;
-  for (size_t v = 0; v < n; ++v)
-    if (vertex_owner[v] == rank) vertices.global.push_back(static_cast<int32_t>(v));
-  vertices.owned = static_cast<int32_t>(vertices.global.size());
-  for (size_t v = 0; v < n; ++v)
-    if (ghost_vertex[v]) {
-      vertices.global.push_back(static_cast<int32_t>(v));
+  for (size_t v = 0; v < n; ++v) {
+    if (vertex_owner[v] != rank && !ghost_vertex[v]) continue;
+    const auto local = static_cast<int32_t>(vertices.global.size());
+    vertices.global.push_back(static_cast<int32_t>(v));
+    if (vertex_owner[v] == rank) {
+      vertices.owned.push_back(local);
+    } else {
+      vertices.ghosts.push_back(local);
       vertices.ghost_owner.push_back(vertex_owner[v]);
     }
+  }
   for (size_t i = 0; i < vertices.global.size(); ++i)
     local_of[static_cast<size_t>(vertices.global[i])] = static_cast<int32_t>(i);
   for (auto& [q, v] : vertex_sends) v = local_of[static_cast<size_t>(v)];
@@ -137,11 +165,8 @@ RankLayout overlap_layout(std::span<const int32_t> vertex_owner,
 
   for (size_t l = 0; l < lists.size(); ++l) {
     ListPart& part = parts[l];
-    SetPart set;
-    set.global = std::move(part.owned);
-    set.owned = static_cast<int32_t>(set.global.size());
-    set.global.insert(set.global.end(), part.ghosts.begin(), part.ghosts.end());
-    set.ghost_owner = std::move(part.ghost_owner);
+    SetPart set = merge_part(part.owned, part.ghosts, std::move(part.ghost_owner));
+    for (auto& [q, e] : part.sends) e = local_index(set, e);
     layout.edge_plans.push_back(make_plan(std::move(part.sends), set));
     const auto arity = static_cast<size_t>(lists[l].arity);
     std::vector<int32_t>& connectivity = layout.local_connectivity.emplace_back();

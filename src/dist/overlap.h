@@ -14,11 +14,14 @@
 namespace simit::dist {
 
 // One set's part on one rank.
+// Its elements keep the whole set's order (global is ascending), owned and ghosts interleaved:
+// so a block of an owned vertex sums its elements' contributions in the order one process
+// does, and a row of an assembled matrix lists its columns in the same order.
 struct SetPart {
-  std::vector<int32_t> global;       // local index -> index in the whole set: the owned ones
-                                     // first (ascending), then the ghosts (ascending)
-  int32_t owned = 0;                 // global[0, owned) are this rank's own
-  std::vector<int32_t> ghost_owner;  // per ghost (local index owned + k): the rank owning it
+  std::vector<int32_t> global;       // local index -> index in the whole set, ascending
+  std::vector<int32_t> owned;        // local indices of this rank's own elements, ascending
+  std::vector<int32_t> ghosts;       // local indices of the others' elements, ascending
+  std::vector<int32_t> ghost_owner;  // per ghost: the rank owning it
 };
 
 // What this rank sends to and receives from one other rank when it refreshes a set's ghosts.

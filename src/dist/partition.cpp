@@ -12,7 +12,8 @@
 namespace simit::dist {
 
 std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts,
-                                        std::span<const runtime::ElementList> lists) {
+                                        std::span<const runtime::ElementList> lists,
+                                        std::span<const int32_t> sizes) {
   const int32_t n = graph.vertices();
   if (parts < 1)
     throw PartitionError("the number of parts must be at least 1, not " + std::to_string(parts));
@@ -29,12 +30,20 @@ std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int p
   std::vector<idx_t> adjncy(graph.neighbours.begin(), graph.neighbours.end());
   // With elements: two weights per vertex, 1 and the elements whose lowest vertex it is (the
   // ones its part will own), and METIS balances both.
+  if (!sizes.empty() && sizes.size() != static_cast<size_t>(n))
+    throw PartitionError(std::to_string(sizes.size()) + " vertex sizes for " + std::to_string(n) +
+                         " vertices");
+  auto size_of = [&](size_t v) { return sizes.empty() ? idx_t{1} : idx_t{sizes[v]}; };
   std::vector<idx_t> weights;
   idx_t constraints = 1;
+  if (!sizes.empty()) {
+    weights.resize(static_cast<size_t>(n));
+    for (size_t v = 0; v < static_cast<size_t>(n); ++v) weights[v] = size_of(v);
+  }
   if (!lists.empty()) {
     constraints = 2;
     weights.assign(2 * static_cast<size_t>(n), 0);
-    for (size_t v = 0; v < static_cast<size_t>(n); ++v) weights[2 * v] = 1;
+    for (size_t v = 0; v < static_cast<size_t>(n); ++v) weights[2 * v] = size_of(v);
     for (const runtime::ElementList& list : lists) {
       const auto arity = static_cast<size_t>(list.arity);
       for (size_t e = 0; e + arity <= list.indices.size(); e += arity) {
@@ -59,6 +68,42 @@ std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int p
         (status == METIS_ERROR_MEMORY ? "out of memory" : "error " + std::to_string(status)) + ")");
   std::copy(part.begin(), part.end(), owner.begin());
   return owner;
+}
+
+std::vector<int32_t> partition_in_chunks(int32_t vertices,
+                                         std::span<const runtime::ElementList> lists, int parts,
+                                         int32_t chunk) {
+  if (parts < 1)
+    throw PartitionError("the number of parts must be at least 1, not " + std::to_string(parts));
+  if (chunk < 1) throw PartitionError("chunks of " + std::to_string(chunk) + " vertices");
+  const int32_t chunks = vertices / chunk + (vertices % chunk != 0 ? 1 : 0);
+  const int32_t unit = chunks >= parts ? chunk : 1;
+  const int32_t units = unit == 1 ? vertices : chunks;
+  std::vector<int32_t> unit_part(static_cast<size_t>(units));
+  if (lists.empty() || units <= parts || parts == 1) {
+    // (With fewer vertices than parts, some parts own none.)
+    for (int32_t u = 0; u < units; ++u)
+      unit_part[static_cast<size_t>(u)] =
+          static_cast<int32_t>(static_cast<int64_t>(u) * parts / std::max<int32_t>(units, 1));
+  } else {
+    // The elements with each endpoint replaced by its chunk: an element's lowest chunk holds
+    // its lowest vertex, so the elements each chunk's part will own are weighed right.
+    std::vector<std::vector<int32_t>> coarse(lists.size());
+    std::vector<runtime::ElementList> unit_lists;
+    for (size_t l = 0; l < lists.size(); ++l) {
+      coarse[l].reserve(lists[l].indices.size());
+      for (int32_t v : lists[l].indices) coarse[l].push_back(v / unit);
+      unit_lists.push_back({coarse[l], lists[l].arity});
+    }
+    std::vector<int32_t> sizes(static_cast<size_t>(units), unit);
+    if (units > 0) sizes.back() = vertices - (units - 1) * unit;
+    unit_part =
+        partition_vertices(runtime::vertex_graph(units, unit_lists), parts, unit_lists, sizes);
+  }
+  std::vector<int32_t> part(static_cast<size_t>(vertices));
+  for (int32_t v = 0; v < vertices; ++v)
+    part[static_cast<size_t>(v)] = unit_part[static_cast<size_t>(v / unit)];
+  return part;
 }
 
 PartitionStats partition_stats(const runtime::VertexGraph& graph,

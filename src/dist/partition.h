@@ -26,10 +26,25 @@ class PartitionError : public std::runtime_error {
 };
 
 // The part of each vertex of `graph`, in [0, parts). With `lists`, the parts balance the
-// elements each will own as well as the vertices (two weights per vertex). One part: all
-// zero. Throws PartitionError when parts < 1, parts exceeds the vertices, or METIS fails.
+// elements each will own as well as the vertices (two weights per vertex). `sizes` (one per
+// vertex, or empty for 1 each) weighs a vertex that stands for several. One part: all zero.
+// Throws PartitionError when parts < 1, parts exceeds the vertices, or METIS fails.
 std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int parts,
-                                        std::span<const runtime::ElementList> lists = {});
+                                        std::span<const runtime::ElementList> lists = {},
+                                        std::span<const int32_t> sizes = {});
+
+// The part of each of `vertices` vertices, every part owning whole chunks of `chunk`
+// consecutive vertices: the chunks of the contract's blocked sums (runtime::kSumChunk), so that
+// a reduction over the set needs one partial per chunk, from its one owner
+// (docs/arithmetic.md, "Distributed runs"). METIS cuts the graph `lists` imply between the
+// chunks, balancing vertices and the elements each part will own; without lists, each part
+// takes a run of consecutive chunks, as it does when there are no more chunks than parts. With
+// fewer chunks than parts it does the same vertex by vertex (chunk 1), and with fewer vertices
+// than parts some parts own none. Throws PartitionError for parts or chunk below 1, or when
+// METIS fails.
+std::vector<int32_t> partition_in_chunks(int32_t vertices,
+                                         std::span<const runtime::ElementList> lists, int parts,
+                                         int32_t chunk);
 
 struct PartStats {
   int64_t vertices = 0;    // owned

@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
 #include "dist/partition.h"
+#include "runtime/blocked_sum.h"
 #include "runtime/mesh/reorder.h"
 
 namespace simit::dist {
@@ -72,19 +74,13 @@ class Reader {
   size_t at_ = 0;
 };
 
-// The rank of each vertex: METIS's parts where edge sets join the vertices, else blocks.
+// The rank of each vertex: whole chunks of the contract's blocked sums each
+// (dist/partition.h), so that a reduction over the set sends one partial per chunk.
 std::vector<int32_t> owners(const runtime::Set& vertices,
                             std::span<const runtime::ElementList> lists, int ranks) {
-  const int32_t n = vertices.size();
-  if (lists.empty() || n < ranks || ranks == 1) {
-    std::vector<int32_t> owner(static_cast<size_t>(n));
-    for (int32_t v = 0; v < n; ++v)
-      owner[static_cast<size_t>(v)] =
-          static_cast<int32_t>(static_cast<int64_t>(v) * ranks / std::max<int32_t>(n, 1));
-    return owner;
-  }
   try {
-    return partition_vertices(runtime::vertex_graph(n, lists), ranks, lists);
+    return partition_in_chunks(vertices.size(), lists, ranks,
+                               static_cast<int32_t>(runtime::kSumChunk));
   } catch (const std::exception& e) {
     throw std::runtime_error(vertices.describe() + " could not be partitioned: " + e.what());
   }
@@ -97,8 +93,9 @@ void write_part(Writer& w, const runtime::Set& whole, int endpoints, const SetPa
   w.int32(whole.arity());
   w.int32(endpoints);
   w.int32(whole.size());
-  w.int32(layout.owned);
   w.ints(layout.global);
+  w.ints(layout.owned);
+  w.ints(layout.ghosts);
   w.ints(layout.ghost_owner);
   w.int32(static_cast<int32_t>(plan.links.size()));
   for (const GhostLink& link : plan.links) {
@@ -123,6 +120,27 @@ void write_part(Writer& w, const runtime::Set& whole, int endpoints, const SetPa
     const std::byte* data = f.bytes();
     for (int32_t g : layout.global) w.bytes(data + static_cast<size_t>(g) * bytes, bytes);
   }
+}
+
+// Whether a decoded layout is one overlap_layout could give: global ascending in [0, whole),
+// owned and ghosts ascending and together every local index once, an owner per ghost.
+bool holds_together(const SetPart& layout, int32_t whole) {
+  const auto ascending = [](const std::vector<int32_t>& v) {
+    return std::adjacent_find(v.begin(), v.end(), std::greater_equal<>()) == v.end();
+  };
+  const size_t elements = layout.global.size();
+  if (!ascending(layout.global) || !ascending(layout.owned) || !ascending(layout.ghosts) ||
+      layout.owned.size() + layout.ghosts.size() != elements ||
+      layout.ghost_owner.size() != layout.ghosts.size() ||
+      (elements > 0 && (layout.global.front() < 0 || layout.global.back() >= whole)))
+    return false;
+  std::vector<uint8_t> seen(elements, 0);
+  for (const std::vector<int32_t>* list : {&layout.owned, &layout.ghosts})
+    for (int32_t i : *list) {
+      if (i < 0 || static_cast<size_t>(i) >= elements || seen[static_cast<size_t>(i)]) return false;
+      seen[static_cast<size_t>(i)] = 1;
+    }
+  return true;
 }
 
 }  // namespace
@@ -215,8 +233,9 @@ LocalSets decode_part(std::span<const std::byte> message) {
     const int32_t endpoints = in.int32();
     const int32_t whole_size = in.int32();
     SetPart layout;
-    layout.owned = in.int32();
     layout.global = in.ints();
+    layout.owned = in.ints();
+    layout.ghosts = in.ints();
     layout.ghost_owner = in.ints();
     GhostPlan plan;
     plan.links.resize(in.count(3 * sizeof(int32_t)));
@@ -228,8 +247,7 @@ LocalSets decode_part(std::span<const std::byte> message) {
     const std::vector<int32_t> connectivity = in.ints();
     std::vector<int32_t> numbers = in.ints();
     const size_t elements = layout.global.size();
-    if (layout.owned < 0 || static_cast<size_t>(layout.owned) > elements ||
-        numbers.size() != elements ||
+    if (!holds_together(layout, whole_size) || numbers.size() != elements ||
         (arity > 0 && (endpoints < 0 || static_cast<size_t>(endpoints) >= count ||
                        !out.sets[static_cast<size_t>(endpoints)] ||
                        connectivity.size() != elements * static_cast<size_t>(arity))))

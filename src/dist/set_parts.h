@@ -24,10 +24,11 @@ struct LocalSets {
 
 // The message of each of `ranks` ranks: its part of every set of `whole` (vertex sets, and
 // edge sets whose endpoints all lie in one of them, listed after or before it). A vertex set
-// is cut by METIS over the graph of its edge sets (dist/partition.h), or in blocks of
-// consecutive elements when no edge set joins its vertices or it has fewer than `ranks`; each
-// rank's part is its overlapping layout (dist/overlap.h). Throws std::runtime_error naming a
-// set it cannot cut (a grid, an edge set whose endpoints lie in several sets).
+// is cut in whole chunks of the blocked sums, by METIS over the graph of its edge sets, or in
+// runs of chunks when no edge set joins its vertices (partition_in_chunks, dist/partition.h);
+// each rank's part is its overlapping layout (dist/overlap.h), in the whole set's order. Throws
+// std::runtime_error naming a set it cannot cut (a grid, an edge set whose endpoints lie in several
+// sets).
 std::vector<std::vector<std::byte>> encode_parts(const std::vector<const runtime::Set*>& whole,
                                                  int ranks);
 

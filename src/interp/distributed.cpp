@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <span>
+#include <vector>
 
 #include "interp/distribution.h"
 #include "interp/frame.h"
@@ -42,15 +43,20 @@ Value Interpreter::distributed_inner_product(const Value& x, const Value& y,
     fail(at, "an inner product of vectors of " + std::to_string(u.size()) + " and " +
                  std::to_string(v.size()) + " components over " + set.describe());
   // A rank may hold no element of a set: it still takes part in the sum.
-  const size_t per_element = set.size() > 0 ? u.size() / static_cast<size_t>(set.size()) : 0;
   const size_t group = runtime::inner_product_group(u.shape());
-  if (runtime::inner_product_group(v.shape()) != group)
+  if (runtime::inner_product_group(v.shape()) != group || group == 0)
     fail(at, "an inner product of vectors blocked differently");
-  // The owned elements' sum in the contract's blocked order, then the ranks' sums in rank
-  // order (docs/arithmetic.md, "Distributed runs").
-  const size_t n = static_cast<size_t>(options_.distribution->owned(set)) * per_element;
-  const double partial = runtime::blocked_dot(u.floats(), v.floats(), n, group);
-  const double total = options_.distribution->sum(partial);
+  // Each element's products summed from +0.0 in order (docs/arithmetic.md, "Sums"); the seam
+  // adds the owners' element sums over the whole set in the blocked order ("Distributed runs").
+  std::vector<double> sums(u.size() / group);
+  const double* a = u.floats();
+  const double* b = v.floats();
+  for (size_t e = 0; e < sums.size(); ++e) {
+    double t = 0.0;
+    for (size_t c = e * group; c < (e + 1) * group; ++c) t = t + a[c] * b[c];
+    sums[e] = t;
+  }
+  const double total = options_.distribution->blocked_sum(set, sums);
   return Value::of_float(root ? std::sqrt(total) : total);
 }
 

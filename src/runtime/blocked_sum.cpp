@@ -41,6 +41,15 @@ std::complex<double> chunk_partial(const std::complex<double>* x, const std::com
   return chunk_partial_of(x, y, group, begin_elem, end_elem);
 }
 
+double chunk_partial_of_sums(const double* sums, size_t count) {
+  double lanes[kSumLanes] = {};
+  for (size_t e = 0; e < count && e < kSumChunk; ++e) {
+    double& lane = lanes[e % kSumLanes];
+    lane = lane + sums[e];
+  }
+  return fold_lanes(lanes);
+}
+
 double combine_partials(const double* partials, size_t chunks) {
   double sum = 0.0;
   for (size_t k = 0; k < chunks; ++k) sum = sum + partials[k];

@@ -38,6 +38,11 @@ double chunk_partial(const double* x, const double* y, size_t group, size_t begi
 std::complex<double> chunk_partial(const std::complex<double>* x, const std::complex<double>* y,
                                    size_t group, size_t begin_elem, size_t end_elem);
 
+// One chunk's partial from its element sums t_0 .. t_{count-1} (count <= kSumChunk), already
+// summed: the lanes and the tree of chunk_partial. A distributed run's ranks use it on the
+// element sums of chunks their owned elements fill, or that several ranks share.
+double chunk_partial_of_sums(const double* sums, size_t count);
+
 // +0.0 + partials[0] + partials[1] + ..., left to right.
 double combine_partials(const double* partials, size_t chunks);
 

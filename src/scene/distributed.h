@@ -19,7 +19,8 @@ class Distributed : public interp::Distribution {
   virtual int rank() const = 0;
   virtual int ranks() const = 0;
   // This rank's part of each of `whole` (vertex sets, and edge sets whose endpoints all lie in
-  // one of them), in the same order: the elements it owns first, then ghosts; fields copied,
+  // one of them), in the same order: the elements it owns and ghosts, in the whole set's order
+  // (owned() lists the owned ones); fields copied,
   // endpoints renumbered, mesh numbers kept. Only rank 0 has the whole sets (the others pass
   // nulls): it cuts them and sends each rank its part. Throws std::runtime_error on rank 0 for
   // sets it cannot split (the others then wait for its abort).

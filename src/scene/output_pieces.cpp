@@ -65,7 +65,7 @@ void PieceSeries::write() {
     mesh.points.assign(points, runtime::Point{0.0, 0.0, 0.0});
   }
   if (cells_)
-    for (int e = 0; e < owned_cells_; ++e) {
+    for (int32_t e : owned_cells_) {
       auto v = [&](int k) { return cells_->endpoint(e, k); };
       if (cells_->arity() == 4)
         mesh.tets.push_back({v(0), v(1), v(2), v(3)});
@@ -80,7 +80,8 @@ void PieceSeries::write() {
     point_data.push_back(store.add(points_, f, {}));
   if (cells_)
     for (const std::string& f : settings_.cell_fields)
-      cell_data.push_back(store.add(*cells_, f, {}, owned_cells_));
+      cell_data.push_back(
+          store.add(*cells_, f, owned_cells_, static_cast<int>(owned_cells_.size())));
   const std::string file = piece_file(settings_.name, index_++, rank_);
   runtime::write_vtu((std::filesystem::path(settings_.folder) / file).string(), mesh, point_data,
                      cell_data);

@@ -24,14 +24,14 @@ class PieceSeries {
   static std::string piece_file(const std::string& name, int index, int rank);
 
   // `points` and `cells` (null for none): this rank's parts of the sets [output] names, the
-  // first `owned_cells` cells its own.
+  // cells `owned_cells` (local indices, ascending) its own.
   PieceSeries(Settings settings, int rank, const runtime::Set& points, const runtime::Set* cells,
-              int owned_cells)
+              std::vector<int32_t> owned_cells)
       : settings_(std::move(settings)),
         rank_(rank),
         points_(points),
         cells_(cells),
-        owned_cells_(owned_cells) {}
+        owned_cells_(std::move(owned_cells)) {}
 
   bool every_frame(int frame) const { return frame % settings_.every == 0; }
   // Writes this rank's piece of the next frame (under a temporary name, renamed when complete).
@@ -42,7 +42,7 @@ class PieceSeries {
   int rank_;
   const runtime::Set& points_;
   const runtime::Set* cells_;
-  int owned_cells_;
+  std::vector<int32_t> owned_cells_;
   int index_ = 0;  // the next frame's number in the series
 };
 

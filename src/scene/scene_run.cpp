@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <optional>
+#include <vector>
 
 #include "api/stop_on_sigint.h"
 #include "runtime/fault.h"
@@ -80,8 +82,17 @@ void SceneRun::start_pieces() {
     if (sets_.sets[k]->name == settings.cells) cells = local_[k].get();
   }
   if (!points) return;
-  const int owned_cells = cells ? d.owned(*cells) : 0;
-  pieces_.emplace(std::move(settings), d.rank(), *points, cells, owned_cells);
+  std::vector<int32_t> owned_cells;
+  if (cells) {
+    const std::vector<int32_t>* owned = d.owned(*cells);
+    if (owned) {
+      owned_cells = *owned;
+    } else {
+      owned_cells.resize(static_cast<size_t>(cells->size()));
+      std::iota(owned_cells.begin(), owned_cells.end(), 0);
+    }
+  }
+  pieces_.emplace(std::move(settings), d.rank(), *points, cells, std::move(owned_cells));
   if (d.rank() == 0) output_.join_pieces(d.ranks());
 }
 
@@ -174,18 +185,20 @@ namespace {
 // component, or -1.
 template <typename T>
 std::pair<int, int> first_non_finite(const runtime::Set& set, const runtime::Field& f,
-                                     int elements) {
+                                     const std::vector<int32_t>* elements) {
   const T* p = f.data<T>();
   const size_t components = f.components();
-  const size_t count = components * static_cast<size_t>(elements);
+  const size_t count = elements ? elements->size() : static_cast<size_t>(set.size());
   std::pair<int, int> first = {-1, -1};
-  for (size_t i = 0; i < count; ++i) {
-    if (std::isfinite(p[i])) continue;
-    const int element = static_cast<int>(i / components);
-    if (first.first < 0 || set.mesh_number(element) < set.mesh_number(first.first))
-      first = {element, static_cast<int>(i % components)};
-    if (!set.has_mesh_numbers()) break;
-    i = (i / components + 1) * components - 1;  // the element's later components come after
+  for (size_t n = 0; n < count; ++n) {
+    const int element = elements ? (*elements)[n] : static_cast<int>(n);
+    for (size_t c = 0; c < components; ++c) {
+      if (std::isfinite(p[static_cast<size_t>(element) * components + c])) continue;
+      if (first.first < 0 || set.mesh_number(element) < set.mesh_number(first.first))
+        first = {element, static_cast<int>(c)};
+      break;  // the element's later components come after
+    }
+    if (first.first >= 0 && !set.has_mesh_numbers()) break;
   }
   return first;
 }
@@ -217,7 +230,7 @@ void SceneRun::check_finite_state(int frame, const std::vector<interp::Value>& r
   std::vector<int64_t> least;
   for (size_t k = 0; k < sets_.sets.size(); ++k) {
     const runtime::Set& set = ranks ? *local_[k] : *sets_.sets[k]->set;
-    const int elements = ranks ? ranks->owned(set) : set.size();
+    const std::vector<int32_t>* elements = ranks ? ranks->owned(set) : nullptr;
     for (int i = 0; i < set.field_count(); ++i) {
       const runtime::Field& f = set.field(i);
       if (f.type().kind != ComponentKind::Float) continue;

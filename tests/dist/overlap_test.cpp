@@ -47,35 +47,37 @@ struct SmallMesh {
 };
 
 // Rank 0 holds e0, e1, e2, e4 (not e3, whose endpoints ranks 1 and 2 own) and no triangle;
-// so vertices 0, 2 (its own) and 1, 3, 4 (ghosts).
+// so vertices 0, 2 (its own) and 1, 3, 4 (ghosts), all in the whole set's order.
 TEST(Overlap, RankZeroOfTheSmallMeshByHand) {
   const SmallMesh m;
   const RankLayout r = overlap_layout(m.owner, m.lists(), 3, 0);
-  EXPECT_EQ(r.vertices.global, (Ints{0, 2, 1, 3, 4}));
-  EXPECT_EQ(r.vertices.owned, 2);
+  EXPECT_EQ(r.vertices.global, (Ints{0, 1, 2, 3, 4}));
+  EXPECT_EQ(r.vertices.owned, (Ints{0, 2}));
+  EXPECT_EQ(r.vertices.ghosts, (Ints{1, 3, 4}));
   EXPECT_EQ(r.vertices.ghost_owner, (Ints{1, 1, 2}));
   ASSERT_EQ(r.vertex_plan.links.size(), 2u);
   // Rank 1 holds 0 and 2 (through e0, e1, e2); rank 2 holds 0 (through e4).
   EXPECT_EQ(r.vertex_plan.links[0].rank, 1);
-  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{0, 1}));
-  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{2, 3}));
+  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{0, 2}));
+  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{1, 3}));
   EXPECT_EQ(r.vertex_plan.links[1].rank, 2);
   EXPECT_EQ(r.vertex_plan.links[1].send, (Ints{0}));
   EXPECT_EQ(r.vertex_plan.links[1].recv, (Ints{4}));
   ASSERT_EQ(r.edge_sets.size(), 2u);
-  EXPECT_EQ(r.edge_sets[0].global, (Ints{0, 2, 4, 1}));
-  EXPECT_EQ(r.edge_sets[0].owned, 3);
+  EXPECT_EQ(r.edge_sets[0].global, (Ints{0, 1, 2, 4}));
+  EXPECT_EQ(r.edge_sets[0].owned, (Ints{0, 2, 3}));  // e0, e2, e4
+  EXPECT_EQ(r.edge_sets[0].ghosts, (Ints{1}));       // e1
   EXPECT_EQ(r.edge_sets[0].ghost_owner, (Ints{1}));
   ASSERT_EQ(r.edge_plans[0].links.size(), 2u);
   EXPECT_EQ(r.edge_plans[0].links[0].rank, 1);
-  EXPECT_EQ(r.edge_plans[0].links[0].send, (Ints{0, 1}));  // e0, e2
-  EXPECT_EQ(r.edge_plans[0].links[0].recv, (Ints{3}));     // e1
+  EXPECT_EQ(r.edge_plans[0].links[0].send, (Ints{0, 2}));  // e0, e2
+  EXPECT_EQ(r.edge_plans[0].links[0].recv, (Ints{1}));     // e1
   EXPECT_EQ(r.edge_plans[0].links[1].rank, 2);
-  EXPECT_EQ(r.edge_plans[0].links[1].send, (Ints{2}));  // e4
+  EXPECT_EQ(r.edge_plans[0].links[1].send, (Ints{3}));  // e4
   EXPECT_TRUE(r.edge_plans[0].links[1].recv.empty());
-  EXPECT_EQ(r.local_connectivity[0], (Ints{0, 2, 1, 3, 0, 4, 2, 1}));
+  EXPECT_EQ(r.local_connectivity[0], (Ints{0, 1, 1, 2, 2, 3, 0, 4}));
   EXPECT_TRUE(r.edge_sets[1].global.empty());
-  EXPECT_EQ(r.edge_sets[1].owned, 0);
+  EXPECT_TRUE(r.edge_sets[1].owned.empty());
   EXPECT_TRUE(r.edge_plans[1].links.empty());
   EXPECT_TRUE(r.local_connectivity[1].empty());
 }
@@ -84,46 +86,50 @@ TEST(Overlap, RankZeroOfTheSmallMeshByHand) {
 TEST(Overlap, RankOneOfTheSmallMeshByHand) {
   const SmallMesh m;
   const RankLayout r = overlap_layout(m.owner, m.lists(), 3, 1);
-  EXPECT_EQ(r.vertices.global, (Ints{1, 3, 0, 2, 4}));
-  EXPECT_EQ(r.vertices.owned, 2);
+  EXPECT_EQ(r.vertices.global, (Ints{0, 1, 2, 3, 4}));
+  EXPECT_EQ(r.vertices.owned, (Ints{1, 3}));
+  EXPECT_EQ(r.vertices.ghosts, (Ints{0, 2, 4}));
   EXPECT_EQ(r.vertices.ghost_owner, (Ints{0, 0, 2}));
   ASSERT_EQ(r.vertex_plan.links.size(), 2u);
   EXPECT_EQ(r.vertex_plan.links[0].rank, 0);
-  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{0, 1}));
-  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{2, 3}));
+  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{1, 3}));
+  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{0, 2}));
   // Rank 2 holds 3 through e3 and 1 through the triangle.
   EXPECT_EQ(r.vertex_plan.links[1].rank, 2);
-  EXPECT_EQ(r.vertex_plan.links[1].send, (Ints{0, 1}));
+  EXPECT_EQ(r.vertex_plan.links[1].send, (Ints{1, 3}));
   EXPECT_EQ(r.vertex_plan.links[1].recv, (Ints{4}));
-  EXPECT_EQ(r.edge_sets[0].global, (Ints{1, 3, 0, 2}));
-  EXPECT_EQ(r.edge_sets[0].owned, 2);
+  EXPECT_EQ(r.edge_sets[0].global, (Ints{0, 1, 2, 3}));
+  EXPECT_EQ(r.edge_sets[0].owned, (Ints{1, 3}));   // e1, e3
+  EXPECT_EQ(r.edge_sets[0].ghosts, (Ints{0, 2}));  // e0, e2
   EXPECT_EQ(r.edge_sets[0].ghost_owner, (Ints{0, 0}));
   EXPECT_EQ(r.edge_sets[1].global, (Ints{0}));
-  EXPECT_EQ(r.edge_sets[1].owned, 1);
+  EXPECT_EQ(r.edge_sets[1].owned, (Ints{0}));
   ASSERT_EQ(r.edge_plans[1].links.size(), 1u);
   EXPECT_EQ(r.edge_plans[1].links[0].rank, 2);
   EXPECT_EQ(r.edge_plans[1].links[0].send, (Ints{0}));
   EXPECT_TRUE(r.edge_plans[1].links[0].recv.empty());
-  EXPECT_EQ(r.local_connectivity[1], (Ints{4, 0, 1}));
+  EXPECT_EQ(r.local_connectivity[1], (Ints{4, 1, 3}));
 }
 
 // Rank 2 owns vertex 4 only and no element: it holds e3 (rank 1's), e4 (rank 0's) and the
-// triangle (rank 1's) as ghosts, and vertices 0, 1, 3 as ghosts.
+// triangle (rank 1's) as ghosts, and vertices 0, 1, 3 as ghosts: locally 0 1 3 4 are 0 1 2 3.
 TEST(Overlap, RankTwoOfTheSmallMeshByHand) {
   const SmallMesh m;
   const RankLayout r = overlap_layout(m.owner, m.lists(), 3, 2);
-  EXPECT_EQ(r.vertices.global, (Ints{4, 0, 1, 3}));
-  EXPECT_EQ(r.vertices.owned, 1);
+  EXPECT_EQ(r.vertices.global, (Ints{0, 1, 3, 4}));
+  EXPECT_EQ(r.vertices.owned, (Ints{3}));
+  EXPECT_EQ(r.vertices.ghosts, (Ints{0, 1, 2}));
   EXPECT_EQ(r.vertices.ghost_owner, (Ints{0, 1, 1}));
   ASSERT_EQ(r.vertex_plan.links.size(), 2u);
   EXPECT_EQ(r.vertex_plan.links[0].rank, 0);
-  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{0}));
-  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{1}));
+  EXPECT_EQ(r.vertex_plan.links[0].send, (Ints{3}));
+  EXPECT_EQ(r.vertex_plan.links[0].recv, (Ints{0}));
   EXPECT_EQ(r.vertex_plan.links[1].rank, 1);
-  EXPECT_EQ(r.vertex_plan.links[1].send, (Ints{0}));
-  EXPECT_EQ(r.vertex_plan.links[1].recv, (Ints{2, 3}));
+  EXPECT_EQ(r.vertex_plan.links[1].send, (Ints{3}));
+  EXPECT_EQ(r.vertex_plan.links[1].recv, (Ints{1, 2}));
   EXPECT_EQ(r.edge_sets[0].global, (Ints{3, 4}));
-  EXPECT_EQ(r.edge_sets[0].owned, 0);
+  EXPECT_TRUE(r.edge_sets[0].owned.empty());
+  EXPECT_EQ(r.edge_sets[0].ghosts, (Ints{0, 1}));
   EXPECT_EQ(r.edge_sets[0].ghost_owner, (Ints{1, 0}));
   ASSERT_EQ(r.edge_plans[0].links.size(), 2u);
   EXPECT_EQ(r.edge_plans[0].links[0].rank, 0);
@@ -131,10 +137,10 @@ TEST(Overlap, RankTwoOfTheSmallMeshByHand) {
   EXPECT_EQ(r.edge_plans[0].links[0].recv, (Ints{1}));
   EXPECT_EQ(r.edge_plans[0].links[1].rank, 1);
   EXPECT_EQ(r.edge_plans[0].links[1].recv, (Ints{0}));
-  EXPECT_EQ(r.local_connectivity[0], (Ints{3, 0, 1, 0}));
+  EXPECT_EQ(r.local_connectivity[0], (Ints{2, 3, 0, 3}));
   EXPECT_EQ(r.edge_sets[1].global, (Ints{0}));
   EXPECT_EQ(r.edge_sets[1].ghost_owner, (Ints{1}));
-  EXPECT_EQ(r.local_connectivity[1], (Ints{0, 2, 3}));
+  EXPECT_EQ(r.local_connectivity[1], (Ints{3, 1, 2}));
 }
 
 // A rank that owns no vertex holds nothing and exchanges nothing; one rank holds everything.
@@ -149,9 +155,10 @@ TEST(Overlap, ARankOwningNothingHoldsNothingAndASingleRankHoldsAll) {
   const Ints zero(5, 0);
   const RankLayout all = overlap_layout(zero, m.lists(), 1, 0);
   EXPECT_EQ(all.vertices.global, (Ints{0, 1, 2, 3, 4}));
-  EXPECT_EQ(all.vertices.owned, 5);
+  EXPECT_EQ(all.vertices.owned, (Ints{0, 1, 2, 3, 4}));
+  EXPECT_TRUE(all.vertices.ghosts.empty());
   EXPECT_TRUE(all.vertex_plan.links.empty());
-  EXPECT_EQ(all.edge_sets[0].owned, 5);
+  EXPECT_EQ(all.edge_sets[0].owned.size(), 5u);
   EXPECT_EQ(all.local_connectivity[0], m.edges);
   EXPECT_EQ(all.local_connectivity[1], m.triangles);
 }
@@ -192,9 +199,9 @@ int32_t lowest_owner(const ElementList& list, const Ints& owner, int32_t e) {
   return owner[static_cast<size_t>(lowest)];
 }
 
-// A set's part on rank r against the reference's set of its items on every rank: owned
-// first, then ghosts, each ascending, the ghosts' owners right, and the plan's lists what
-// the reference says each pair of ranks share.
+// A set's part on rank r against the reference's set of its items on every rank: all of
+// them ascending, the owned and the ghosts each ascending among them, the ghosts' owners right, and
+// the plan's lists what the reference says each pair of ranks share.
 void check_part(const SetPart& part, const GhostPlan& plan,
                 const std::vector<std::set<int32_t>>& held, const std::vector<int32_t>& item_owner,
                 int r, const std::string& what) {
@@ -208,10 +215,12 @@ void check_part(const SetPart& part, const GhostPlan& plan,
       ghost_owner.push_back(item_owner[static_cast<size_t>(x)]);
     }
   }
-  Ints expected = owned;
-  expected.insert(expected.end(), ghosts.begin(), ghosts.end());
+  const Ints expected(held[static_cast<size_t>(r)].begin(), held[static_cast<size_t>(r)].end());
   EXPECT_EQ(part.global, expected);
-  EXPECT_EQ(part.owned, static_cast<int32_t>(owned.size()));
+  EXPECT_EQ(to_global(part, part.owned), owned);
+  EXPECT_EQ(to_global(part, part.ghosts), ghosts);
+  EXPECT_TRUE(std::is_sorted(part.owned.begin(), part.owned.end()));
+  EXPECT_TRUE(std::is_sorted(part.ghosts.begin(), part.ghosts.end()));
   EXPECT_EQ(part.ghost_owner, ghost_owner);
   const int ranks = static_cast<int>(held.size());
   size_t links = 0;
@@ -249,7 +258,7 @@ void check_layouts(const Ints& owner, const std::vector<ElementList>& lists, int
   int64_t owned_vertices = 0;
   for (int r = 0; r < ranks; ++r) {
     const RankLayout& layout = layouts[static_cast<size_t>(r)];
-    owned_vertices += layout.vertices.owned;
+    owned_vertices += static_cast<int64_t>(layout.vertices.owned.size());
     check_part(layout.vertices, layout.vertex_plan, ref.vertices, owner, r, "vertices");
     ASSERT_EQ(layout.edge_sets.size(), lists.size());
     ASSERT_EQ(layout.edge_plans.size(), lists.size());
@@ -267,7 +276,7 @@ void check_layouts(const Ints& owner, const std::vector<ElementList>& lists, int
     for (int r = 0; r < ranks; ++r) {
       const RankLayout& layout = layouts[static_cast<size_t>(r)];
       const SetPart& set = layout.edge_sets[l];
-      owned_elements += set.owned;
+      owned_elements += static_cast<int64_t>(set.owned.size());
       check_part(set, layout.edge_plans[l], ref.lists[l], element_owner_of, r,
                  "list " + std::to_string(l));
       // Local connectivity names, through the local vertices, the element's own endpoints.
@@ -336,8 +345,8 @@ TEST(Overlap, TheBunnysPartsAgreeWithTheReference) {
     // A cut mesh has ghosts on every rank.
     for (int r = 0; r < parts; ++r) {
       const RankLayout layout = overlap_layout(owner, tet_list, parts, r);
-      EXPECT_LT(layout.vertices.owned, static_cast<int32_t>(layout.vertices.global.size()));
-      EXPECT_LT(layout.edge_sets[0].owned, static_cast<int32_t>(layout.edge_sets[0].global.size()));
+      EXPECT_FALSE(layout.vertices.ghosts.empty());
+      EXPECT_FALSE(layout.edge_sets[0].ghosts.empty());
     }
   }
 }

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -100,6 +101,55 @@ TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
     EXPECT_LT(s.vertex_imbalance(), 1.1) << parts;
     EXPECT_LT(s.element_imbalance(), 1.1) << parts;  // the second weight
   }
+}
+
+// Parts in whole chunks (the run's partition): the bunny, renumbered as a scene does (RCM),
+// cut into 2, 3 and 7 parts of whole chunks of 256 vertices, every chunk one part's; every
+// part owns vertices and elements, the parts stay balanced within a chunk's share, and with
+// a few chunks a part the cut stays a partitioner's. Without elements, runs of chunks; with fewer
+// chunks than parts, vertex by vertex.
+TEST(Partition, PartsInChunksOwnWholeChunks) {
+  const runtime::Mesh mesh = runtime::read_mesh(SIMIT_SOURCE_DIR "/examples/data/bunny.1.ele");
+  const auto n = static_cast<int32_t>(mesh.points.size());
+  std::vector<int32_t> tets;
+  for (const auto& t : mesh.tets) tets.insert(tets.end(), t.begin(), t.end());
+  const std::vector<ElementList> original = {{tets, 4}};
+  const std::vector<int32_t> position = runtime::invert_permutation(
+      runtime::reverse_cuthill_mckee(runtime::vertex_graph(n, original)));
+  for (int32_t& v : tets) v = position[static_cast<size_t>(v)];
+  const std::vector<ElementList> lists = {{tets, 4}};
+  const runtime::VertexGraph g = runtime::vertex_graph(n, lists);
+  const int32_t chunk = 256;
+  for (int parts : {2, 3, 7}) {
+    SCOPED_TRACE(std::to_string(parts) + " parts");
+    const std::vector<int32_t> owner = partition_in_chunks(n, lists, parts, chunk);
+    ASSERT_EQ(owner.size(), static_cast<size_t>(n));
+    for (int32_t v = 0; v < n; ++v)
+      ASSERT_EQ(owner[static_cast<size_t>(v)], owner[static_cast<size_t>(v / chunk * chunk)]) << v;
+    const PartitionStats s = partition_stats(g, lists, owner, parts);
+    for (const PartStats& p : s.per_part) {
+      EXPECT_GT(p.vertices, 0);
+      EXPECT_GT(p.elements, 0);
+    }
+    // A chunk is 1/15 of the bunny's 3,607 vertices: a part may be a chunk over its share.
+    EXPECT_LT(s.vertex_imbalance(), 1.0 + 1.5 * chunk * parts / static_cast<double>(n));
+    // With ~5 chunks a part, a partitioner's cut; at 7 parts of 15 chunks a part is two slabs
+    // of the RCM order, and a third of the edges cross (docs/distributed.md, "Partition").
+    if (parts <= 3) EXPECT_LT(s.cut_edges, s.graph_edges / 4);
+    EXPECT_EQ(partition_in_chunks(n, lists, parts, chunk), owner);
+  }
+  // No elements: runs of consecutive chunks, in order.
+  const std::vector<int32_t> runs = partition_in_chunks(1000, {}, 2, chunk);
+  for (int32_t v = 0; v < 1000; ++v)
+    EXPECT_EQ(runs[static_cast<size_t>(v)], v < 512 ? 0 : 1) << v;  // chunks 0-1 | 2-3
+  // Fewer chunks (2) than parts (3): vertex by vertex; fewer vertices than parts: some none.
+  const std::vector<int32_t> fine = partition_in_chunks(300, {}, 3, chunk);
+  EXPECT_EQ(fine[0], 0);
+  EXPECT_EQ(fine[100], 1);
+  EXPECT_EQ(fine[299], 2);
+  EXPECT_EQ(partition_in_chunks(2, {}, 3, chunk), (std::vector<int32_t>{0, 1}));
+  EXPECT_THROW(partition_in_chunks(10, {}, 0, chunk), PartitionError);
+  EXPECT_THROW(partition_in_chunks(10, {}, 2, 0), PartitionError);
 }
 
 TEST(Partition, OnePartOwnsEverythingAndTooManyPartsAreAnError) {

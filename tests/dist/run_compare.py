@@ -1,17 +1,19 @@
 #!/usr/bin/env python3
 """A scene run in one process against the same scene on two MPI ranks (simit run --distributed).
 
-Usage: run_compare.py SIMIT SCENE WORK --tolerance T --iterations K [--stats NAME,...]
-                      [--frames N] [--jit] -- MPIRUN ARGS...
+Usage: run_compare.py SIMIT SCENE WORK (--same-bits | --tolerance T --iterations K)
+                      [--stats NAME,...] [--frames N] [--jit] -- MPIRUN ARGS...
 
 Checks: two 2-rank runs write identical bytes (final positions, every .vtu frame, the stats
 without their timing columns), and so does a 2-rank run with --executor jit (maps compiled)
 when --jit says this simit has the JIT;
 the final positions of one process and of two ranks differ by at most T (relative to the
 largest coordinate), and so do the stats named by --stats (relative to their largest value);
-each frame's CG iterations differ by at most K; each rank reports its
-part of every set, both own elements and hold ghosts, and the owned counts add up to the sets'
-sizes in one process.
+each frame's CG iterations differ by at most K. With --same-bits, one process and two ranks
+write the same final positions and stats, byte for byte (the contract's promise where no
+direct solve runs: docs/arithmetic.md, "Distributed runs"). Each rank reports its part of
+every set: both own elements of every set and hold ghosts, and the owned counts add up to the
+sets' sizes in one process.
 Exit status 0 when every check holds, 1 otherwise (with the reason).
 """
 import argparse
@@ -98,12 +100,17 @@ def main():
     parser.add_argument("simit")
     parser.add_argument("scene")
     parser.add_argument("work")
-    parser.add_argument("--tolerance", type=float, required=True)
-    parser.add_argument("--iterations", type=int, required=True)
+    parser.add_argument("--same-bits", action="store_true")
+    parser.add_argument("--tolerance", type=float)
+    parser.add_argument("--iterations", type=int)
     parser.add_argument("--stats", default="")
     parser.add_argument("--frames", default="")
     parser.add_argument("--jit", action="store_true")
     args = parser.parse_args(argv[:split])
+    if args.same_bits:
+        args.tolerance, args.iterations = 0.0, 0
+    elif args.tolerance is None or args.iterations is None:
+        parser.error("give --same-bits, or --tolerance and --iterations")
     mpirun = argv[split + 1:]
     shutil.rmtree(args.work, ignore_errors=True)
     os.makedirs(args.work)
@@ -146,12 +153,16 @@ def main():
                  re.findall(r"(\w+) (\d+)[,;]", out["one"].splitlines()[0]))
     owned = {}
     for rank, line in re.findall(r"^rank (\d+): (.*)$", out["two_a"], re.M):
+        ghosts = 0
         for name, n, g in re.findall(r"(\w+) ([\d,]+) owned \+ ([\d,]+) ghosts", line):
             n, g = int(n.replace(",", "")), int(g.replace(",", ""))
             print("rank %s: %s %d owned, %d ghosts" % (rank, name, n, g))
-            if n == 0 or g == 0:
-                failures.append("rank %s: %s has %d owned and %d ghosts" % (rank, name, n, g))
+            if n == 0:
+                failures.append("rank %s owns no element of %s" % (rank, name))
+            ghosts += g
             owned[name] = owned.get(name, 0) + n
+        if ghosts == 0:
+            failures.append("rank %s holds no ghost" % rank)
     if not sizes or owned != sizes:
         failures.append("owned counts %s do not add up to the sets' sizes %s" % (owned, sizes))
     # One process against two ranks.
@@ -189,6 +200,14 @@ def main():
         if worst > args.tolerance * scale:
             failures.append("%s differs by %.3g, more than %.3g" % (name, worst / scale,
                                                                   args.tolerance))
+    if args.same_bits:
+        one_csv = os.path.join(args.work, "one.csv")
+        if not filecmp.cmp(one_csv, a + ".csv", shallow=False):
+            failures.append("one process and two ranks wrote different final positions")
+        if stats_one != stats_two:
+            failures.append("one process and two ranks wrote different stats")
+        else:
+            print("one process and two ranks: the same final positions and stats, byte for byte")
     if len(stats_one) != len(stats_two):
         failures.append("%d stats rows in one process, %d on two ranks" % (len(stats_one),
                                                                            len(stats_two)))

@@ -61,8 +61,8 @@ TEST(SetParts, EveryRankReceivesItsOverlappingPart) {
       EXPECT_EQ(tris.endpoint_sets()[0], &points);
       const SetPart& pl = part.layouts[1];
       const SetPart& tl = part.layouts[0];
-      owned_points += pl.owned;
-      owned_tris += tl.owned;
+      owned_points += static_cast<int64_t>(pl.owned.size());
+      owned_tris += static_cast<int64_t>(tl.owned.size());
       ASSERT_EQ(points.size(), static_cast<int>(pl.global.size()));
       for (int i = 0; i < points.size(); ++i) {
         const int g = pl.global[static_cast<size_t>(i)];
@@ -78,7 +78,7 @@ TEST(SetParts, EveryRankReceivesItsOverlappingPart) {
           EXPECT_EQ(pl.global[static_cast<size_t>(tris.endpoint(e, k))], strip.tris.endpoint(g, k));
       }
       // Each owned point's triangles are all here.
-      for (int i = 0; i < pl.owned; ++i) {
+      for (int i : pl.owned) {
         int held = 0, all = 0;
         for (int e = 0; e < tris.size(); ++e)
           for (int k = 0; k < 3; ++k) held += tris.endpoint(e, k) == i;

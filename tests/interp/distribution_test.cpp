@@ -1,7 +1,7 @@
 // The interpreter's side of a distributed run (interp/distribution.h), through a stand-in
-// for the ranks: reductions over a set sum the owned elements only and hand the partial sum
-// to the ranks, assembled vectors and matrix-vector products ask for their ghosts, and what
-// needs other ranks' rows is refused with a message at its statement.
+// for the ranks: reductions over a set hand the ranks their element sums, assembled vectors and
+// matrix-vector products ask for their ghosts, and what needs other ranks' rows is refused with a
+// message at its statement.
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -17,22 +17,26 @@ namespace {
 
 namespace ast = frontend::ast;
 
-// One rank that owns the first `owned` nodes; its "other ranks" add 1000 to every sum, and a
-// refresh writes -7 into every ghost entry, so that both show in the results.
+// One rank that owns nodes 0, 2 and 4 (1 and 3 are ghosts, between them, as the whole set's
+// order puts them); its "other ranks" add 1000 to the owned element sums, and a refresh
+// writes -7 into every ghost entry, so that both show in the results.
 class FakeRanks : public Distribution {
  public:
   const runtime::Set* nodes = nullptr;
-  int owned_nodes = 0;
+  std::vector<int32_t> owned_nodes = {0, 2, 4};
   mutable int refreshes = 0;
-  mutable std::vector<double> partials;
+  mutable std::vector<std::vector<double>> sums;
 
-  int owned(const runtime::Set& set) const override {
-    return &set == nodes ? owned_nodes : set.size();
+  const std::vector<int32_t>* owned(const runtime::Set& set) const override {
+    return &set == nodes ? &owned_nodes : nullptr;
   }
   bool split(const runtime::Set& set) const override { return &set == nodes; }
-  double sum(double partial) const override {
-    partials.push_back(partial);
-    return partial + 1000.0;
+  double blocked_sum(const runtime::Set& set, std::span<const double> element_sums) const override {
+    EXPECT_EQ(&set, nodes);
+    sums.emplace_back(element_sums.begin(), element_sums.end());
+    double total = 1000.0;
+    for (int32_t i : owned_nodes) total += element_sums[static_cast<size_t>(i)];
+    return total;
   }
   void refresh(const runtime::Set& set, std::span<std::byte> values,
                size_t element_bytes) const override {
@@ -40,7 +44,7 @@ class FakeRanks : public Distribution {
     EXPECT_EQ(&set, nodes);
     EXPECT_EQ(element_bytes, sizeof(double));
     const double ghost = -7.0;
-    for (int e = owned_nodes; e < set.size(); ++e)
+    for (int e : {1, 3})
       std::memcpy(values.data() + static_cast<size_t>(e) * element_bytes, &ghost, sizeof ghost);
   }
 };
@@ -99,7 +103,6 @@ class DistributionTest : public ::testing::Test {
     nodes_.add_many(5);
     for (int i = 0; i + 1 < 5; ++i) springs_.add({i, i + 1});  // a chain
     ranks_.nodes = &nodes_;
-    ranks_.owned_nodes = 3;
     Options o;
     o.distribution = &ranks_;
     in_ = std::make_unique<Interpreter>(*c_->program, o);
@@ -130,29 +133,30 @@ class DistributionTest : public ::testing::Test {
   std::unique_ptr<Interpreter> in_;
 };
 
-TEST_F(DistributionTest, ReductionsSumTheOwnedElementsThenTheRanks) {
+TEST_F(DistributionTest, ReductionsHandTheRanksTheirElementSums) {
   const std::vector<Value> r = run("inner");
-  // Owned: 1 2 3, so 1 + 4 + 9 = 14; the other ranks add 1000.
-  EXPECT_EQ(r.at(0).as_float(), 1014.0);
-  EXPECT_EQ(r.at(1).as_float(), 1014.0);
-  EXPECT_EQ(r.at(2).as_float(), std::sqrt(1014.0));
-  EXPECT_EQ(ranks_.partials, (std::vector<double>{14.0, 14.0, 14.0}));
+  // Owned: 1 3 5, so 1 + 9 + 25 = 35; the other ranks add 1000.
+  EXPECT_EQ(r.at(0).as_float(), 1035.0);
+  EXPECT_EQ(r.at(1).as_float(), 1035.0);
+  EXPECT_EQ(r.at(2).as_float(), std::sqrt(1035.0));
+  const std::vector<double> squares = {1.0, 4.0, 9.0, 16.0, 25.0};
+  EXPECT_EQ(ranks_.sums, (std::vector<std::vector<double>>(3, squares)));
 }
 
 TEST_F(DistributionTest, AMatrixVectorProductRefreshesItsGhosts) {
   const Value y = run("product").at(0);
   // The chain's stiffness (diagonal 2 per spring at a node) times 1..5: owned rows
-  // 2*1 - 2 = 0, -1 + 4*2 - 3 = 4, -2 + 4*3 - 4 = 6; the ghost rows come from the "owners" (-7).
+  // 2*1 - 2 = 0, -2 + 4*3 - 4 = 6, -4 + 2*5 = 6; the ghost rows come from the "owners" (-7).
   const double* v = y.tensor().floats();
-  EXPECT_EQ(std::vector<double>(v, v + 5), (std::vector<double>{0.0, 4.0, 6.0, -7.0, -7.0}));
+  EXPECT_EQ(std::vector<double>(v, v + 5), (std::vector<double>{0.0, -7.0, 6.0, -7.0, 6.0}));
   EXPECT_EQ(ranks_.refreshes, 1);
 }
 
 TEST_F(DistributionTest, AnAssembledVectorRefreshesItsGhosts) {
   const Value f = run("assembled").at(0);
   const double* v = f.tensor().floats();
-  // Each node's count of springs: 1 2 2 (owned), then the ghosts' owners' values.
-  EXPECT_EQ(std::vector<double>(v, v + 5), (std::vector<double>{1.0, 2.0, 2.0, -7.0, -7.0}));
+  // Each node's count of springs: 1 2 1 (owned), the ghosts their owners' values.
+  EXPECT_EQ(std::vector<double>(v, v + 5), (std::vector<double>{1.0, -7.0, 2.0, -7.0, 1.0}));
   EXPECT_EQ(ranks_.refreshes, 1);
 }
 

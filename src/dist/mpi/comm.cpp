@@ -185,15 +185,23 @@ void Session::refresh_ghosts(const GhostPlan& plan, std::span<std::byte> values,
   }
 }
 
-double Session::sum_in_rank_order(double partial) const {
-  // Every rank adds the same numbers in the same order, so every rank gets the same bits
-  // (a reduction's order is MPI's to choose, and may differ between runs).
-  std::vector<double> all(static_cast<size_t>(size_));
-  check(MPI_Allgather(&partial, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD),
+std::vector<double> Session::all_gather(std::span<const double> values) const {
+  const int mine = element_count(values.size(), "MPI_Allgatherv");
+  std::vector<int> counts(static_cast<size_t>(size_)), offsets(counts.size());
+  check(MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
         "MPI_Allgather");
-  double total = 0;
-  for (double x : all) total += x;
-  return total;
+  int64_t total = 0;
+  for (size_t r = 0; r < counts.size(); ++r) {
+    if (total + counts[r] > INT_MAX)
+      throw CommError("MPI_Allgatherv: more than an int counts, " + std::to_string(total) + "+");
+    offsets[r] = static_cast<int>(total);
+    total += counts[r];
+  }
+  std::vector<double> all(static_cast<size_t>(total));
+  check(MPI_Allgatherv(values.data(), mine, MPI_DOUBLE, all.data(), counts.data(), offsets.data(),
+                       MPI_DOUBLE, MPI_COMM_WORLD),
+        "MPI_Allgatherv");
+  return all;
 }
 
 std::vector<std::byte> Session::gather_owned(std::span<const int32_t> global,

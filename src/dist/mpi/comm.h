@@ -51,9 +51,9 @@ class Session {
   // or element_bytes is 0.
   void refresh_ghosts(const GhostPlan& plan, std::span<std::byte> values,
                       size_t element_bytes) const;
-  // The sum of every rank's `partial`, added in rank order (rank 0's, + rank 1's, + ...): the
-  // same bits on every rank, run after run.
-  double sum_in_rank_order(double partial) const;
+  // Every rank's `values` (any number per rank), one after another in rank order, on every
+  // rank.
+  std::vector<double> all_gather(std::span<const double> values) const;
   // Each rank's owned entries (element_bytes per element, values[i] for global[i], i < count
   // of `global`) put together on `root` into the whole array of `whole` elements; empty
   // elsewhere. Throws std::invalid_argument on root when the ranks' `global` do not name each

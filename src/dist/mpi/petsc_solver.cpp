@@ -41,27 +41,34 @@ bool PetscSolver::solve(const runtime::SystemMatrix& a, const SetPart& rows, con
   }
   const int bs = a.block_rows();
   const auto local = static_cast<int64_t>(rows.global.size());
-  const int64_t owned = rows.owned;
+  const auto owned = static_cast<int64_t>(rows.owned.size());
   if (!a.is_float() || bs != a.block_cols() || a.rows() != local || a.cols() != local ||
       static_cast<int64_t>(b.size()) != local * bs || x.size() != b.size()) {
     why = "the matrix and vectors do not match the set's part";
     return false;
   }
-  // The PETSc number of each local element: the owned ones from this rank's first, the
-  // ghosts' from their owners.
+  // The PETSc number of each local element: the owned ones from this rank's first, in order,
+  // the ghosts' from their owners.
   const int64_t first = session_.sum_below(owned);
   std::vector<int32_t> number(static_cast<size_t>(local), -1);
-  for (int64_t i = 0; i < owned; ++i)
-    number[static_cast<size_t>(i)] = static_cast<int32_t>(first + i);
+  std::vector<uint8_t> mine(static_cast<size_t>(local), 0);
+  for (int64_t n = 0; n < owned; ++n) {
+    const auto i = static_cast<size_t>(rows.owned[static_cast<size_t>(n)]);
+    number[i] = static_cast<int32_t>(first + n);
+    mine[i] = 1;
+  }
   session_.refresh_ghosts(plan, std::as_writable_bytes(std::span<int32_t>(number)),
                           sizeof(int32_t));
 
   const std::vector<int32_t>& row_ptr = a.pattern().row_ptr();
   const std::vector<int32_t>& col_idx = a.pattern().col_idx();
   std::vector<PetscInt> diagonal(static_cast<size_t>(owned)), off(static_cast<size_t>(owned));
-  for (int64_t i = 0; i < owned; ++i)
-    for (int32_t k = row_ptr[static_cast<size_t>(i)]; k < row_ptr[static_cast<size_t>(i) + 1]; ++k)
-      ++(col_idx[static_cast<size_t>(k)] < owned ? diagonal : off)[static_cast<size_t>(i)];
+  for (int64_t n = 0; n < owned; ++n) {
+    const auto i = static_cast<size_t>(rows.owned[static_cast<size_t>(n)]);
+    for (int32_t k = row_ptr[i]; k < row_ptr[i + 1]; ++k)
+      ++(mine[static_cast<size_t>(col_idx[static_cast<size_t>(k)])] ? diagonal
+                                                                    : off)[static_cast<size_t>(n)];
+  }
 
   Mat m = nullptr;
   Vec vb = nullptr, vx = nullptr;
@@ -77,10 +84,10 @@ bool PetscSolver::solve(const runtime::SystemMatrix& a, const SetPart& rows, con
       step(MatSetBlockSize(m, bs)) &&
       step(MatXAIJSetPreallocation(m, bs, diagonal.data(), off.data(), nullptr, nullptr)) &&
       step(MatSetOption(m, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
-  for (int64_t i = 0; i < owned && !e; ++i) {
-    const PetscInt row = number[static_cast<size_t>(i)];
-    for (int32_t k = row_ptr[static_cast<size_t>(i)]; k < row_ptr[static_cast<size_t>(i) + 1] && !e;
-         ++k) {
+  for (int64_t n = 0; n < owned && !e; ++n) {
+    const auto i = static_cast<size_t>(rows.owned[static_cast<size_t>(n)]);
+    const PetscInt row = number[i];
+    for (int32_t k = row_ptr[i]; k < row_ptr[i + 1] && !e; ++k) {
       // A block of zeros stays out: the factorisation's ordering follows the nonzeros, so that
       // an executor that stores more zero blocks than another still gets the same solution.
       const double* block = a.block(k);
@@ -94,7 +101,10 @@ bool PetscSolver::solve(const runtime::SystemMatrix& a, const SetPart& rows, con
   if (!e) {
     PetscScalar* p = nullptr;
     if (step(VecGetArray(vb, &p))) {
-      std::memcpy(p, b.data(), static_cast<size_t>(n) * sizeof(double));
+      for (int64_t r = 0; r < owned; ++r)
+        std::memcpy(p + r * bs,
+                    b.data() + static_cast<size_t>(rows.owned[static_cast<size_t>(r)]) * bs,
+                    static_cast<size_t>(bs) * sizeof(double));
       step(VecRestoreArray(vb, &p));
     }
   }
@@ -114,7 +124,9 @@ bool PetscSolver::solve(const runtime::SystemMatrix& a, const SetPart& rows, con
   if (!e && reason >= 0) {
     const PetscScalar* p = nullptr;
     if (step(VecGetArrayRead(vx, &p))) {
-      std::memcpy(x.data(), p, static_cast<size_t>(n) * sizeof(double));
+      for (int64_t r = 0; r < owned; ++r)
+        std::memcpy(x.data() + static_cast<size_t>(rows.owned[static_cast<size_t>(r)]) * bs,
+                    p + r * bs, static_cast<size_t>(bs) * sizeof(double));
       step(VecRestoreArrayRead(vx, &p));
     }
   }

@@ -1,14 +1,17 @@
 // The scene's seam of a distributed run over MPI (dist/mpi/scene_distribution.h).
 #include "dist/mpi/scene_distribution.h"
 
+#include <algorithm>
 #include <cstring>
 #include <map>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
 #include "dist/mpi/comm.h"
 #include "dist/overlap.h"
 #include "dist/set_parts.h"
+#include "dist/sum_terms.h"
 #ifdef SIMIT_HAVE_PETSC
 #include "dist/mpi/petsc_solver.h"
 #endif
@@ -30,17 +33,14 @@ class SceneDistribution final : public scene::Distributed {
 
   int rank() const override { return session_.rank(); }
   int ranks() const override { return session_.size(); }
-  int owned(const runtime::Set& set) const override {
+  const std::vector<int32_t>* owned(const runtime::Set& set) const override {
     auto it = parts_.find(&set);
-    return it == parts_.end() ? set.size() : it->second.layout.owned;
+    return it == parts_.end() ? nullptr : &it->second.layout.owned;
   }
   bool split(const runtime::Set& set) const override {
     return session_.size() > 1 && parts_.count(&set) > 0;
   }
-  double sum(double partial) const override {
-    ++traffic_.sums;
-    return session_.sum_in_rank_order(partial);
-  }
+  double blocked_sum(const runtime::Set& set, std::span<const double> sums) const override;
   void refresh(const runtime::Set& set, std::span<std::byte> values,
                size_t element_bytes) const override {
     auto it = parts_.find(&set);
@@ -135,16 +135,53 @@ std::vector<std::unique_ptr<runtime::Set>> SceneDistribution::localize(
   return std::move(mine.sets);
 }
 
+double SceneDistribution::blocked_sum(const runtime::Set& set, std::span<const double> sums) const {
+  auto it = parts_.find(&set);
+  if (it == parts_.end()) {  // every rank holds the set whole and owns every term
+    std::vector<int64_t> global(sums.size());
+    std::iota(global.begin(), global.end(), int64_t{0});
+    return combine_contributions(sum_contribution(global, sums, static_cast<int64_t>(sums.size())));
+  }
+  ++traffic_.sums;
+  const Part& part = it->second;
+  const size_t local = part.layout.global.size();
+  if (local > 0 && sums.size() % local != 0)
+    throw std::invalid_argument("a sum over " + set.describe() + " of " +
+                                std::to_string(sums.size()) + " terms, not so many per element");
+  // The terms are the whole set's in its order, m per element: term m * element + j.
+  const size_t m = local > 0 ? sums.size() / local : 0;
+  std::vector<int64_t> global;
+  std::vector<double> terms;
+  global.reserve(part.layout.owned.size() * m);
+  terms.reserve(global.capacity());
+  for (int32_t i : part.layout.owned)
+    for (size_t j = 0; j < m; ++j) {
+      global.push_back(static_cast<int64_t>(part.layout.global[static_cast<size_t>(i)]) *
+                           static_cast<int64_t>(m) +
+                       static_cast<int64_t>(j));
+      terms.push_back(sums[static_cast<size_t>(i) * m + j]);
+    }
+  const std::vector<double> mine = sum_contribution(
+      global, terms, static_cast<int64_t>(part.whole_size) * static_cast<int64_t>(m));
+  // Every rank combines the same contributions alike: the same bits everywhere.
+  return combine_contributions(session_.all_gather(mine));
+}
+
 void SceneDistribution::gather(const std::vector<runtime::Set*>& local,
                                const std::vector<runtime::Set*>& whole) const {
   for (size_t k = 0; k < local.size() && k < whole.size(); ++k) {
     const Part& part = parts_.at(local[k]);
-    const std::span<const int32_t> owned(part.layout.global.data(),
-                                         static_cast<size_t>(part.layout.owned));
+    std::vector<int32_t> owned;
+    owned.reserve(part.layout.owned.size());
+    for (int32_t i : part.layout.owned) owned.push_back(part.layout.global[static_cast<size_t>(i)]);
+    std::vector<std::byte> values;
     for (int f = 0; f < local[k]->field_count(); ++f) {
       const runtime::Field& from = local[k]->field(f);
       const size_t bytes = from.element_bytes();
-      const std::span<const std::byte> values(from.bytes(), owned.size() * bytes);
+      values.resize(owned.size() * bytes);
+      for (size_t n = 0; n < owned.size(); ++n)
+        std::memcpy(values.data() + n * bytes,
+                    from.bytes() + static_cast<size_t>(part.layout.owned[n]) * bytes, bytes);
       std::vector<std::byte> all = session_.gather_owned(owned, values, bytes, part.whole_size);
       if (session_.rank() != 0 || all.empty()) continue;
       std::memcpy(whole[k]->field(f).bytes(), all.data(), all.size());
@@ -162,9 +199,9 @@ std::string SceneDistribution::describe_parts(const std::vector<runtime::Set*>& 
       sent += static_cast<int64_t>(link.send.size());
       neighbours += 1;
     }
-    figures.push_back({session_.gather(part.layout.owned),
-                       session_.gather(set->size() - part.layout.owned), session_.gather(sent),
-                       session_.gather(neighbours)});
+    figures.push_back({session_.gather(static_cast<int64_t>(part.layout.owned.size())),
+                       session_.gather(static_cast<int64_t>(part.layout.ghosts.size())),
+                       session_.gather(sent), session_.gather(neighbours)});
   }
   if (session_.rank() != 0) return "";
   std::string text;

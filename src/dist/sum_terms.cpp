@@ -1,0 +1,80 @@
+// A distributed reduction's contributions and their blocked sum (dist/sum_terms.h).
+#include "dist/sum_terms.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "runtime/blocked_sum.h"
+
+namespace simit::dist {
+
+using runtime::kSumChunk;
+
+std::vector<double> sum_contribution(std::span<const int64_t> global, std::span<const double> terms,
+                                     int64_t whole) {
+  if (global.size() != terms.size())
+    throw std::invalid_argument("a sum's contribution: " + std::to_string(global.size()) +
+                                " indices for " + std::to_string(terms.size()) + " terms");
+  const auto chunk = static_cast<int64_t>(kSumChunk);
+  std::vector<double> out;
+  std::vector<double> run;  // the current run of consecutive owned terms within one chunk
+  int64_t first = 0;
+  auto flush = [&] {
+    if (run.empty()) return;
+    const int64_t k = first / chunk;
+    const auto size = static_cast<size_t>(std::min(chunk, whole - k * chunk));
+    if (first == k * chunk && run.size() == size) {
+      out.push_back(static_cast<double>(k));
+      out.push_back(runtime::chunk_partial_of_sums(run.data(), run.size()));
+    } else {
+      for (size_t i = 0; i < run.size(); ++i) {
+        out.push_back(-1.0 - static_cast<double>(first + static_cast<int64_t>(i)));
+        out.push_back(run[i]);
+      }
+    }
+    run.clear();
+  };
+  for (size_t i = 0; i < global.size(); ++i) {
+    const int64_t g = global[i];
+    if (g < 0 || g >= whole || (i > 0 && g <= global[i - 1]))
+      throw std::invalid_argument("a sum's contribution: term " + std::to_string(g) +
+                                  " is out of order or outside the " + std::to_string(whole));
+    const int64_t next = first + static_cast<int64_t>(run.size());
+    if (!run.empty() && (g != next || g / chunk != first / chunk)) flush();
+    if (run.empty()) first = g;
+    run.push_back(terms[i]);
+  }
+  flush();
+  return out;
+}
+
+double combine_contributions(std::span<const double> all) {
+  if (all.size() % 2 != 0)
+    throw std::invalid_argument("a sum's contributions hold an odd number of doubles");
+  const auto chunk = static_cast<int64_t>(kSumChunk);
+  std::vector<std::pair<int64_t, double>> partials, shared;
+  for (size_t p = 0; p < all.size(); p += 2) {
+    if (all[p] >= 0)
+      partials.emplace_back(static_cast<int64_t>(all[p]), all[p + 1]);
+    else
+      shared.emplace_back(static_cast<int64_t>(-1.0 - all[p]), all[p + 1]);
+  }
+  const auto by_index = [](const auto& a, const auto& b) { return a.first < b.first; };
+  std::sort(shared.begin(), shared.end(), by_index);
+  std::vector<double> terms;
+  for (size_t a = 0; a < shared.size();) {
+    const int64_t k = shared[a].first / chunk;
+    terms.clear();
+    for (; a < shared.size() && shared[a].first / chunk == k; ++a)
+      terms.push_back(shared[a].second);
+    partials.emplace_back(k, runtime::chunk_partial_of_sums(terms.data(), terms.size()));
+  }
+  std::sort(partials.begin(), partials.end(), by_index);
+  double total = 0.0;
+  for (const auto& [k, partial] : partials) total = total + partial;
+  return total;
+}
+
+}  // namespace simit::dist
