@@ -1,7 +1,7 @@
 // A fake CUDA driver table for the GPU executor's tests (gpu_executor_test.cpp,
 // gpu_residency_test.cpp): device memory is host memory, every copy and memory set is counted,
 // and each launch is recorded and handed to the test's `on_launch` (map, gather and device
-// program step kernels).
+// program step kernels); its stream table captures launches into graphs and replays them.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -55,6 +55,13 @@ struct Fake {
   std::vector<std::string> modules;  // every module loaded, in order
   std::vector<Launch> launches;
   std::function<void(const Launch&)> on_launch;
+  // Streams and graphs (fake_streams): a launch into a capturing stream is recorded, not run;
+  // a graph launch runs its recorded launches in order.
+  bool capturing = false;
+  std::vector<Launch> capture;
+  std::vector<std::vector<Launch>> graphs;  // by handle - 1
+  int streams_created = 0, streams_destroyed = 0, graphs_destroyed = 0, execs_destroyed = 0;
+  int graph_launches = 0;
 };
 inline Fake* fake = nullptr;
 
@@ -187,11 +194,73 @@ inline DriverTable fake_table() {
       l.end = param<int32_t>(params, 4);
       l.failure = param<CUdeviceptr>(params, 5);
     }
+    if (fake->capturing) {
+      fake->capture.push_back(l);
+      return CUDA_SUCCESS;
+    }
     fake->launches.push_back(l);
     if (fake->on_launch) fake->on_launch(l);
     return CUDA_SUCCESS;
   };
   return t;
+}
+
+// The stream table of the fake: one stream at a time, graphs captured from it.
+inline StreamTable fake_streams() {
+  StreamTable s;
+  static int stream;
+  s.cuStreamCreate = [](CUstream* out, unsigned) {
+    ++fake->streams_created;
+    *out = reinterpret_cast<CUstream>(&stream);
+    return CUDA_SUCCESS;
+  };
+  s.cuStreamDestroy = [](CUstream) {
+    ++fake->streams_destroyed;
+    return CUDA_SUCCESS;
+  };
+  s.cuStreamSynchronize = [](CUstream) { return CUDA_SUCCESS; };
+  s.cuEventCreate = [](CUevent*, unsigned) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuEventDestroy = [](CUevent) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuEventRecord = [](CUevent, CUstream) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuEventSynchronize = [](CUevent) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuEventElapsedTime = [](float*, CUevent, CUevent) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuStreamBeginCapture = [](CUstream, CUstreamCaptureMode) {
+    if (fake->capturing) return CUDA_ERROR_INVALID_VALUE;
+    fake->capturing = true;
+    fake->capture.clear();
+    return CUDA_SUCCESS;
+  };
+  s.cuStreamEndCapture = [](CUstream, CUgraph* graph) {
+    if (!fake->capturing) return CUDA_ERROR_INVALID_VALUE;
+    fake->capturing = false;
+    fake->graphs.push_back(fake->capture);
+    *graph = reinterpret_cast<CUgraph>(fake->graphs.size());
+    return CUDA_SUCCESS;
+  };
+  s.cuGraphInstantiateWithFlags = [](CUgraphExec* exec, CUgraph graph, unsigned long long) {
+    *exec = reinterpret_cast<CUgraphExec>(graph);
+    return CUDA_SUCCESS;
+  };
+  s.cuGraphLaunch = [](CUgraphExec exec, CUstream) {
+    ++fake->graph_launches;
+    for (const Launch& l : fake->graphs.at(reinterpret_cast<size_t>(exec) - 1)) {
+      fake->launches.push_back(l);
+      if (fake->on_launch) fake->on_launch(l);
+    }
+    return CUDA_SUCCESS;
+  };
+  s.cuGraphExecDestroy = [](CUgraphExec) {
+    ++fake->execs_destroyed;
+    return CUDA_SUCCESS;
+  };
+  s.cuGraphDestroy = [](CUgraph) {
+    ++fake->graphs_destroyed;
+    return CUDA_SUCCESS;
+  };
+  s.cuMemcpyDtoD = [](CUdeviceptr, CUdeviceptr, std::size_t) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuMemAllocHost = [](void**, std::size_t) { return CUDA_ERROR_INVALID_VALUE; };
+  s.cuMemFreeHost = [](void*) { return CUDA_ERROR_INVALID_VALUE; };
+  return s;
 }
 
 class GpuExecutorFake : public ::testing::Test {

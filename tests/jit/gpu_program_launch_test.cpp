@@ -2,7 +2,8 @@
 // the step kernels of the PTX target loaded by name and launched with the context and their
 // units, the loop's iterations in batches of 1, 2, 4, ... ended by the stop word (which the
 // thread that ends an iteration sets when the next condition fails), the scalars
-// in and out through the context, an interrupt taken between two batches. The fake's launches
+// in and out through the context, an interrupt taken between two batches, and the batches as
+// CUDA graphs. The fake's launches
 // run the CPU target's step functions of the same trace on the fake's (host) memory.
 #include <gtest/gtest.h>
 
@@ -192,6 +193,46 @@ TEST_F(GpuExecutorFake, AnInterruptStopsADeviceProgramBetweenTwoBatches) {
   EXPECT_EQ(r.scalars[1], 55.0 / 4);
   EXPECT_EQ(r.x, (std::vector<double>{0.5, 1, 1.5, 2, 2.5}));
   EXPECT_EQ(state.launches.size(), 1u + 3u);
+}
+
+// With the stream table, each batch is one graph launch: captured the first time a batch
+// size comes (its steps recorded from the stream, not run), launched after; a second call
+// with the same sizes reuses the graphs; the executor's end destroys them and the stream.
+TEST_F(GpuExecutorFake, LoopBatchesRunAsCudaGraphsCapturedOnce) {
+  const Compiled c = compile_both();
+  ASSERT_TRUE(c.cpu && c.gpu);
+  state.on_launch = [&](const Launch& l) {
+    c.cpu->run_step(l.step, at<int64_t>(l.context), 0, l.units);
+  };
+  const StreamTable streams = fake_streams();
+  {
+    auto exec = make_gpu_executor_over(fake_table(), &streams);
+    EXPECT_EQ(state.streams_created, 1);
+    const Outcome r = run(*exec, *c.gpu, 0);
+    EXPECT_EQ(r.rc, 0);
+    EXPECT_EQ(r.scalars[0], 3.0);
+    EXPECT_EQ(r.scalars[1], 55.0 * (1.0 / 4 + 1.0 / 16 + 1.0 / 64));
+    EXPECT_EQ(r.x, (std::vector<double>{0.125, 0.25, 0.375, 0.5, 0.625}));
+    // Batches of 1 and 2 iterations: two graphs of 3 and 6 step launches, each launched once;
+    // the steps ran as without graphs (the condition first, then steps 1 2 3 three times).
+    ASSERT_EQ(state.graphs.size(), 2u);
+    EXPECT_EQ(state.graphs[0].size(), 3u);
+    EXPECT_EQ(state.graphs[1].size(), 6u);
+    EXPECT_EQ(state.graph_launches, 2);
+    ASSERT_EQ(state.launches.size(), 1u + 3u * 3u);
+    for (size_t i = 1; i < state.launches.size(); ++i)
+      EXPECT_EQ(state.launches[i].step, int(1 + (i - 1) % 3));
+    EXPECT_EQ(state.graphs_destroyed, 2);  // each graph once it is instantiated
+    // Again, the same sizes: no capture, two graph launches.
+    const Outcome again = run(*exec, *c.gpu, 0);
+    EXPECT_EQ(again.x, r.x);
+    EXPECT_EQ(state.graphs.size(), 2u);
+    EXPECT_EQ(state.graph_launches, 4);
+    EXPECT_EQ(gpu_traffic(*exec).graphs_captured, 2);
+    EXPECT_EQ(gpu_traffic(*exec).graph_launches, 4);
+  }
+  EXPECT_EQ(state.execs_destroyed, 2);
+  EXPECT_EQ(state.streams_destroyed, 1);
 }
 
 // The emulated executor runs the CPU's steps directly, to the same results.

@@ -410,7 +410,7 @@ CUfunction Device::function(CUmodule module, const std::string& name) {
 }
 
 void Device::launch(CUfunction function, Dim3 grid, Dim3 block, std::span<const KernelArg> args,
-                    unsigned int shared_bytes) {
+                    unsigned int shared_bytes, CUstream stream) {
   require_open("launch");
   // kernelParams: one pointer per parameter, to a value of the parameter's type; the driver
   // copies the values before cuLaunchKernel returns, so `args` need not outlive the launch.
@@ -418,7 +418,7 @@ void Device::launch(CUfunction function, Dim3 grid, Dim3 block, std::span<const 
   params.reserve(args.size());
   for (const KernelArg& a : args) params.push_back(const_cast<void*>(a.address()));
   check(driver_.cuLaunchKernel(function, grid.x, grid.y, grid.z, block.x, block.y, block.z,
-                               shared_bytes, nullptr, params.empty() ? nullptr : params.data(),
+                               shared_bytes, stream, params.empty() ? nullptr : params.data(),
                                nullptr),
         "cuLaunchKernel");
 }

@@ -327,9 +327,10 @@ class Device {
   CUmodule load_module(const std::string& ptx);
   void unload_module(CUmodule module);
   CUfunction function(CUmodule module, const std::string& name);
-  // Launches on the legacy default stream; returns without waiting (see synchronize).
+  // Launches on `stream` (the legacy default stream when null); returns without waiting (see
+  // synchronize).
   void launch(CUfunction function, Dim3 grid, Dim3 block, std::span<const KernelArg> args,
-              unsigned int shared_bytes = 0);
+              unsigned int shared_bytes = 0, CUstream stream = nullptr);
   void synchronize();
 
   // Throws CudaError when `result` is not CUDA_SUCCESS; `what` (may be empty) says what the

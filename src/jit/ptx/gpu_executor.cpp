@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
 #include "jit/deferred_plan.h"
 #include "jit/device_program.h"
+#include "jit/ptx/batch_graphs.h"
 #include "jit/ptx/cuda_driver.h"
 #include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/host_driver.h"
@@ -33,10 +35,15 @@ constexpr int kMostIterationsAtOnce = 32;
 
 class GpuExecutor final : public Executor {
  public:
-  GpuExecutor(std::unique_ptr<cuda::Device> device, bool emulated)
-      : emulated_(emulated), device_(std::move(device)) {}
+  // With `streams`, a device program's loop batches run as CUDA graphs (jit/ptx/batch_graphs.h).
+  GpuExecutor(std::unique_ptr<cuda::Device> device, bool emulated,
+              const std::optional<cuda::StreamTable>& streams)
+      : emulated_(emulated), device_(std::move(device)) {
+    if (streams && !emulated_) graphs_ = std::make_unique<BatchGraphs>(*device_, *streams);
+  }
   ~GpuExecutor() override {
     try {
+      graphs_.reset();
       for (auto& [host, m] : mirrors_) device_->free(m.array);
       for (auto& [plan, u] : uploads_) free_index(u);
       device_->free(pointers_);
@@ -227,9 +234,22 @@ class GpuExecutor final : public Executor {
 
     const std::vector<const DeviceStep*> steps = p.all();
     const size_t loop_first = p.before.size(), after_first = loop_first + p.loop.size();
-    auto run = [&](size_t from, size_t to) {
+    auto run = [&](size_t from, size_t to, cuda::CUstream stream = nullptr) {
       for (size_t i = from; i < to; ++i)
-        launch_step(kernel, static_cast<int32_t>(i), *steps[i], p, sizes);
+        launch_step(kernel, static_cast<int32_t>(i), *steps[i], p, sizes, stream);
+    };
+    // A batch of iterations: one graph launch where graphs are on (captured the first time
+    // this program, batch, context and sizes meet), else its steps one by one.
+    auto run_batch = [&](int batch) {
+      if (!graphs_) {
+        for (int it = 0; it < batch; ++it) run(loop_first, after_first);
+        return;
+      }
+      graphs_->launch(GraphKey{&kernel, batch, context_.device, sizes}, [&] {
+        for (int it = 0; it < batch; ++it) run(loop_first, after_first, graphs_->stream());
+      });
+      traffic_.graphs_captured = graphs_->captured();
+      traffic_.graph_launches = graphs_->launched();
     };
     auto read_context = [&] {
       if (!emulated_) device_->synchronize();
@@ -241,7 +261,7 @@ class GpuExecutor final : public Executor {
     run(0, loop_first);
     if (p.has_loop) {
       for (int batch = 1;; batch = std::min(batch * 2, kMostIterationsAtOnce)) {
-        for (int it = 0; it < batch; ++it) run(loop_first, after_first);
+        run_batch(batch);
         read_context();
         if (context_host_[kCtxError] != 0 || context_host_[kCtxStop] != 0) break;
         if (args.interrupt &&
@@ -531,7 +551,8 @@ class GpuExecutor final : public Executor {
   // emulated, the CPU's step function over all of them (the context's device address is a
   // host address there).
   void launch_step(const Kernel& kernel, int32_t index, const DeviceStep& step,
-                   const DeviceProgram& p, const std::vector<int64_t>& sizes) {
+                   const DeviceProgram& p, const std::vector<int64_t>& sizes,
+                   cuda::CUstream stream) {
     const int64_t units = p.units(step, sizes);
     if (units <= 0) return;
     ++traffic_.launches;
@@ -544,10 +565,12 @@ class GpuExecutor final : public Executor {
                                       cuda::KernelArg::of(units)};
     const auto blocks = static_cast<unsigned>((units + kBlock - 1) / kBlock);
     device_->launch(fn, cuda::Dim3{blocks},
-                    cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock}, params);
+                    cuda::Dim3{units < kBlock ? static_cast<unsigned>(units) : kBlock}, params, 0,
+                    stream);
   }
 
   std::unique_ptr<cuda::Device> device_;
+  std::unique_ptr<BatchGraphs> graphs_;  // null: batches launched step by step
   std::map<const void*, Mirror> mirrors_;
   // A device program's pointer table, sizes, context and sum scratch (and their host copies).
   std::vector<cuda::CUdeviceptr> system_pointers_host_;
@@ -566,13 +589,14 @@ class GpuExecutor final : public Executor {
   long call_ = 0;
 };
 
-std::unique_ptr<Executor> open(const cuda::DriverTable& table, bool emulated) {
+std::unique_ptr<Executor> open(const cuda::DriverTable& table, bool emulated,
+                               const std::optional<cuda::StreamTable>& streams = std::nullopt) {
   if (!table.cuMemsetD8 || !table.cuMemsetD32 || !table.cuMemsetD2D32)
     throw std::invalid_argument(
         "a GPU executor needs the driver's cuMemsetD8, cuMemsetD32 and cuMemsetD2D32");
   auto device = std::make_unique<cuda::Device>(table);
   device->open(0);
-  return std::make_unique<GpuExecutor>(std::move(device), emulated);
+  return std::make_unique<GpuExecutor>(std::move(device), emulated, streams);
 }
 
 }  // namespace
@@ -580,16 +604,22 @@ std::unique_ptr<Executor> open(const cuda::DriverTable& table, bool emulated) {
 std::unique_ptr<Executor> make_gpu_executor(std::string& why) {
   std::optional<cuda::DriverTable> table = cuda::load_driver(why);
   if (!table) return nullptr;
+  // The stream and graph entries (CUDA 11.4 on): without them the batches go step by step.
+  std::string streams_why;
+  std::optional<cuda::StreamTable> streams;
+  if (auto get = cuda::open_driver_library("libcuda.so.1", streams_why))
+    streams = cuda::resolve_streams(*get, streams_why);
   try {
-    return open(*table, false);
+    return open(*table, false, streams);
   } catch (const std::exception& e) {
     why = e.what();
     return nullptr;
   }
 }
 
-std::unique_ptr<Executor> make_gpu_executor_over(const cuda::DriverTable& table) {
-  return open(table, false);
+std::unique_ptr<Executor> make_gpu_executor_over(const cuda::DriverTable& table,
+                                                 const cuda::StreamTable* streams) {
+  return open(table, false, streams ? std::optional<cuda::StreamTable>(*streams) : std::nullopt);
 }
 
 std::unique_ptr<Executor> make_emulated_gpu_executor() {

@@ -40,7 +40,8 @@
 
 namespace simit::jit::cuda {
 struct DriverTable;
-}
+struct StreamTable;
+}  // namespace simit::jit::cuda
 
 namespace simit::jit::ptx {
 
@@ -52,9 +53,11 @@ std::unique_ptr<Executor> make_gpu_executor(std::string& why);
 std::unique_ptr<Executor> make_emulated_gpu_executor();
 
 // The executor over `table` (a test's fake driver), with kernels of the GPU target: the
-// launch path, argument marshalling and copies, tested without a GPU. Throws CudaError when
-// the device does not open.
-std::unique_ptr<Executor> make_gpu_executor_over(const cuda::DriverTable& table);
+// launch path, argument marshalling and copies, tested without a GPU; with `streams`, a device
+// program's loop batches run as CUDA graphs captured from a stream. Throws CudaError when the
+// device does not open.
+std::unique_ptr<Executor> make_gpu_executor_over(const cuda::DriverTable& table,
+                                                 const cuda::StreamTable* streams = nullptr);
 
 // Whether `executor` is one of the above (its kernels must come from the GPU target unless
 // it is emulated), and whether it is emulated.
@@ -82,6 +85,9 @@ struct GpuTraffic {
   // Device programs (solver loops): calls, and the host's waits for a batch of iterations.
   long system_runs = 0;
   long system_batches = 0;
+  // Their batches as CUDA graphs: captured (once per program, batch and sizes), launched.
+  long graphs_captured = 0;
+  long graph_launches = 0;
 };
 GpuTraffic gpu_traffic(const Executor& executor);
 
