@@ -54,27 +54,43 @@ double combine_contributions(std::span<const double> all) {
   if (all.size() % 2 != 0)
     throw std::invalid_argument("a sum's contributions hold an odd number of doubles");
   const auto chunk = static_cast<int64_t>(kSumChunk);
-  std::vector<std::pair<int64_t, double>> partials, shared;
+  // Each pair's chunk; the last one fixes how many there are.
+  auto chunk_of = [&](double key) {
+    const auto index = static_cast<int64_t>(key >= 0 ? key : -1.0 - key);
+    if (index < 0) throw std::invalid_argument("a sum's contribution names a negative index");
+    return key >= 0 ? index : index / chunk;
+  };
+  int64_t chunks = 0;
+  for (size_t p = 0; p < all.size(); p += 2) chunks = std::max(chunks, chunk_of(all[p]) + 1);
+  // Each chunk's partial in its place (no sort: this runs on every rank for every reduction,
+  // and its cost grows with the whole set, not the rank's part); the shared chunks' terms
+  // apart.
+  std::vector<double> partials(static_cast<size_t>(chunks), 0.0);
+  std::vector<uint8_t> given(partials.size(), 0);
+  std::vector<std::pair<int64_t, double>> shared;
   for (size_t p = 0; p < all.size(); p += 2) {
-    if (all[p] >= 0)
-      partials.emplace_back(static_cast<int64_t>(all[p]), all[p + 1]);
-    else
+    if (all[p] >= 0) {
+      const auto k = static_cast<size_t>(chunk_of(all[p]));
+      partials[k] = all[p + 1];
+      given[k] = 1;
+    } else {
       shared.emplace_back(static_cast<int64_t>(-1.0 - all[p]), all[p + 1]);
+    }
   }
-  const auto by_index = [](const auto& a, const auto& b) { return a.first < b.first; };
-  std::sort(shared.begin(), shared.end(), by_index);
+  std::sort(shared.begin(), shared.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<double> terms;
   for (size_t a = 0; a < shared.size();) {
     const int64_t k = shared[a].first / chunk;
     terms.clear();
     for (; a < shared.size() && shared[a].first / chunk == k; ++a)
       terms.push_back(shared[a].second);
-    partials.emplace_back(k, runtime::chunk_partial_of_sums(terms.data(), terms.size()));
+    partials[static_cast<size_t>(k)] = runtime::chunk_partial_of_sums(terms.data(), terms.size());
+    given[static_cast<size_t>(k)] = 1;
   }
-  std::sort(partials.begin(), partials.end(), by_index);
-  double total = 0.0;
-  for (const auto& [k, partial] : partials) total = total + partial;
-  return total;
+  if (std::find(given.begin(), given.end(), 0) != given.end())
+    throw std::invalid_argument("a sum's contributions miss a chunk");
+  return runtime::combine_partials(partials.data(), partials.size());
 }
 
 }  // namespace simit::dist

@@ -21,9 +21,11 @@ std::vector<double> sum_contribution(std::span<const int64_t> global, std::span<
                                      int64_t whole);
 
 // The blocked sum from every rank's contribution, concatenated in any order: each shared
-// chunk's partial from its terms in index order, then +0.0 + P_0 + P_1 + ... in chunk order.
-// The bits of runtime::blocked_dot over the whole set when the contributions cover every term
-// once. Throws std::invalid_argument on an odd length.
+// chunk's partial from its terms in index order, then +0.0 + P_0 + P_1 + ... in chunk order
+// (the chunks up to the last one named). The bits of runtime::blocked_dot over the whole set
+// when the contributions cover every term once. Time linear in the chunks and the shared
+// terms' sort. Throws std::invalid_argument on an odd length, a negative index, or a chunk
+// below the last one that no contribution gives.
 double combine_contributions(std::span<const double> all);
 
 }  // namespace simit::dist

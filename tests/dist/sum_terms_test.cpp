@@ -118,6 +118,8 @@ TEST(SumTerms, BadInputIsAnError) {
   EXPECT_THROW(sum_contribution(outside, two, 3), std::invalid_argument);
   EXPECT_THROW(sum_contribution(std::vector<int64_t>{0}, two, 3), std::invalid_argument);
   EXPECT_THROW(combine_contributions(std::vector<double>{1.0}), std::invalid_argument);
+  // Chunk 1's partial without chunk 0's.
+  EXPECT_THROW(combine_contributions(std::vector<double>{1.0, 5.0}), std::invalid_argument);
 }
 
 }  // namespace
