@@ -28,8 +28,9 @@ std::vector<int32_t> partition_vertices(const runtime::VertexGraph& graph, int p
     throw PartitionError("the vertex graph has too many edges for METIS's 32-bit indices");
   std::vector<idx_t> xadj(graph.offsets.begin(), graph.offsets.end());
   std::vector<idx_t> adjncy(graph.neighbours.begin(), graph.neighbours.end());
-  // With elements: two weights per vertex, 1 and the elements whose lowest vertex it is (the
-  // ones its part will own), and METIS balances both.
+  // A vertex weighs its size (1, or what `sizes` says: the vertices a chunk stands for); with
+  // elements, also the elements whose lowest vertex it is (the ones its part will own), and
+  // METIS balances both weights.
   if (!sizes.empty() && sizes.size() != static_cast<size_t>(n))
     throw PartitionError(std::to_string(sizes.size()) + " vertex sizes for " + std::to_string(n) +
                          " vertices");
