@@ -17,36 +17,31 @@ std::vector<double> sum_contribution(std::span<const int64_t> global, std::span<
   if (global.size() != terms.size())
     throw std::invalid_argument("a sum's contribution: " + std::to_string(global.size()) +
                                 " indices for " + std::to_string(terms.size()) + " terms");
+  const size_t n = global.size();
+  for (size_t t = 0; t < n; ++t)
+    if (global[t] < 0 || global[t] >= whole || (t > 0 && global[t] <= global[t - 1]))
+      throw std::invalid_argument("a sum's contribution: term " + std::to_string(global[t]) +
+                                  " is out of order or outside the " + std::to_string(whole));
   const auto chunk = static_cast<int64_t>(kSumChunk);
   std::vector<double> out;
-  std::vector<double> run;  // the current run of consecutive owned terms within one chunk
-  int64_t first = 0;
-  auto flush = [&] {
-    if (run.empty()) return;
-    const int64_t k = first / chunk;
+  for (size_t i = 0; i < n;) {
+    const int64_t g = global[i], k = g / chunk;
     const auto size = static_cast<size_t>(std::min(chunk, whole - k * chunk));
-    if (first == k * chunk && run.size() == size) {
+    // A whole chunk: its first term here and its last size - 1 places on (the indices ascend,
+    // so every one between is there too). Its partial straight from the terms, uncopied.
+    if (g == k * chunk && i + size <= n &&
+        global[i + size - 1] == g + static_cast<int64_t>(size) - 1) {
       out.push_back(static_cast<double>(k));
-      out.push_back(runtime::chunk_partial_of_sums(run.data(), run.size()));
-    } else {
-      for (size_t i = 0; i < run.size(); ++i) {
-        out.push_back(-1.0 - static_cast<double>(first + static_cast<int64_t>(i)));
-        out.push_back(run[i]);
-      }
+      out.push_back(runtime::chunk_partial_of_sums(terms.data() + i, size));
+      i += size;
+      continue;
     }
-    run.clear();
-  };
-  for (size_t i = 0; i < global.size(); ++i) {
-    const int64_t g = global[i];
-    if (g < 0 || g >= whole || (i > 0 && g <= global[i - 1]))
-      throw std::invalid_argument("a sum's contribution: term " + std::to_string(g) +
-                                  " is out of order or outside the " + std::to_string(whole));
-    const int64_t next = first + static_cast<int64_t>(run.size());
-    if (!run.empty() && (g != next || g / chunk != first / chunk)) flush();
-    if (run.empty()) first = g;
-    run.push_back(terms[i]);
+    // A chunk other ranks share: this rank's terms of it, one by one.
+    for (; i < n && global[i] / chunk == k; ++i) {
+      out.push_back(-1.0 - static_cast<double>(global[i]));
+      out.push_back(terms[i]);
+    }
   }
-  flush();
   return out;
 }
 
