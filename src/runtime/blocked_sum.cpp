@@ -43,10 +43,13 @@ std::complex<double> chunk_partial(const std::complex<double>* x, const std::com
 
 double chunk_partial_of_sums(const double* sums, size_t count) {
   double lanes[kSumLanes] = {};
-  for (size_t e = 0; e < count && e < kSumChunk; ++e) {
-    double& lane = lanes[e % kSumLanes];
-    lane = lane + sums[e];
-  }
+  const size_t n = std::min(count, kSumChunk);
+  // Whole rounds of the lanes first, each lane's additions independent of the others' (so the
+  // compiler can use vector additions; the order within a lane is unchanged), then the rest.
+  size_t e = 0;
+  for (; e + kSumLanes <= n; e += kSumLanes)
+    for (size_t l = 0; l < kSumLanes; ++l) lanes[l] = lanes[l] + sums[e + l];
+  for (size_t l = 0; e + l < n; ++l) lanes[l] = lanes[l] + sums[e + l];
   return fold_lanes(lanes);
 }
 
