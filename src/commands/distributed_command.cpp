@@ -68,7 +68,9 @@ int run_distributed_scene(scene::SceneOptions options, std::ostream& out, std::o
   const int status = opened->run(where, err);
   if (status != 0) {
     // The others may be waiting for this rank in a collective step: end them all, after the
-    // error (already on `err`) and whatever was written completely.
+    // error (already on `err`), the rank that met it, and whatever was written completely.
+    err << "simit: rank " << rank << " of " << ranks->ranks()
+        << " stopped the run; every rank ends with it\n";
     err.flush();
     where.flush();
     ranks->abort(status);
