@@ -5,8 +5,8 @@ Usage: run_compare.py SIMIT SCENE WORK (--same-bits | --tolerance T --iterations
                       [--stats NAME,...] [--frames N] [--jit] -- MPIRUN ARGS...
 
 Checks: two 2-rank runs write identical bytes (final positions, every .vtu frame, the stats
-without their timing columns), and so does a 2-rank run with --executor jit (maps compiled)
-when --jit says this simit has the JIT;
+without their timing columns), and so does a 2-rank run with --executor jit --threads 2 (maps
+compiled, on two threads a rank) when --jit says this simit has the JIT;
 the final positions of one process and of two ranks differ by at most T (relative to the
 largest coordinate), and so do the stats named by --stats (relative to their largest value);
 each frame's CG iterations differ by at most K. With --same-bits, one process and two ranks
@@ -124,7 +124,7 @@ def main():
         if name != "one":
             command = mpirun + [args.simit, "run", "--distributed"] + command[2:]
         if name == "two_jit":
-            command += ["--executor", "jit", "--jit-cache", "off"]
+            command += ["--executor", "jit", "--threads", "2", "--jit-cache", "off"]
         out[name] = run(command)
     failures = []
     # Two 2-rank runs, and one with compiled maps: the same bytes.
@@ -135,7 +135,7 @@ def main():
     failures += check_pieces(os.path.join(args.work, "one"), a)
     others = [("two_b", "two 2-rank runs")]
     if args.jit:
-        others.append(("two_jit", "2-rank runs with and without the JIT"))
+        others.append(("two_jit", "2-rank runs with and without the JIT (2 threads a rank)"))
     else:
         print("no run with --executor jit: this simit has no JIT")
     for other, what in others:
