@@ -39,11 +39,9 @@ int run_partition(const PartitionOptions& options, std::ostream& out, std::ostre
     if (!mesh.edges.empty()) lists.push_back(list_of(mesh.edges));
     const auto vertices = static_cast<int32_t>(mesh.points.size());
     // The scene's renumbering first: the chunks the parts own are runs of its numbers.
-    std::vector<int32_t> order;
-    if (options.reorder == "rcm")
-      order = runtime::reverse_cuthill_mckee(runtime::vertex_graph(vertices, lists));
-    else if (options.reorder == "hilbert")
-      order = runtime::hilbert_order(mesh.points);
+    const std::vector<int32_t> order =
+        options.reorder == "off" ? std::vector<int32_t>()
+                                 : runtime::locality_order(mesh, options.reorder == "hilbert");
     std::vector<std::vector<int32_t>> renumbered;
     renumbered.reserve(lists.size());
     if (!order.empty()) {

@@ -74,25 +74,7 @@ const MeshOrder& MeshCache::order(const std::string& path, Reorder how) {
   const runtime::Mesh& m = meshes_.at(path);
   const int32_t n = static_cast<int32_t>(m.points.size());
   MeshOrder o;
-  // Points alone have no neighbours to bring together: they keep the file's order.
-  if (how != Reorder::Off && !(m.tets.empty() && m.triangles.empty() && m.edges.empty())) {
-    if (how == Reorder::Hilbert) {
-      o.vertex_order = runtime::hilbert_order(m.points);
-    } else {
-      static_assert(sizeof(runtime::Tet) == 4 * sizeof(int32_t) &&
-                    sizeof(runtime::Edge) == 2 * sizeof(int32_t));
-      auto flat = [](const auto& list) {
-        return std::span<const int32_t>(list.empty() ? nullptr : list.front().data(),
-                                        list.size() * (list.empty() ? 0 : list.front().size()));
-      };
-      const runtime::ElementList lists[] = {
-          {flat(m.tets), 4}, {flat(m.triangles), 3}, {flat(m.edges), 2}};
-      o.vertex_order = runtime::reverse_cuthill_mckee(runtime::vertex_graph(n, lists));
-    }
-    bool identity = true;
-    for (int32_t i = 0; i < n && identity; ++i) identity = o.vertex_order[i] == i;
-    if (identity) o.vertex_order.clear();
-  }
+  if (how != Reorder::Off) o.vertex_order = runtime::locality_order(m, how == Reorder::Hilbert);
   if (!o.identity()) {
     o.vertex_position = runtime::invert_permutation(o.vertex_order);
     o.renumbered.points.resize(m.points.size());

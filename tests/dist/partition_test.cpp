@@ -111,12 +111,11 @@ TEST(Partition, TheBunnysPartsAddUpAndTheCutIsTheTetsCrossingPairs) {
 TEST(Partition, PartsInChunksOwnWholeChunks) {
   const runtime::Mesh mesh = runtime::read_mesh(SIMIT_SOURCE_DIR "/examples/data/bunny.1.ele");
   const auto n = static_cast<int32_t>(mesh.points.size());
+  const std::vector<int32_t> position =
+      runtime::invert_permutation(runtime::locality_order(mesh, false));
   std::vector<int32_t> tets;
-  for (const auto& t : mesh.tets) tets.insert(tets.end(), t.begin(), t.end());
-  const std::vector<ElementList> original = {{tets, 4}};
-  const std::vector<int32_t> position = runtime::invert_permutation(
-      runtime::reverse_cuthill_mckee(runtime::vertex_graph(n, original)));
-  for (int32_t& v : tets) v = position[static_cast<size_t>(v)];
+  for (const auto& t : mesh.tets)
+    for (int32_t v : t) tets.push_back(position[static_cast<size_t>(v)]);
   const std::vector<ElementList> lists = {{tets, 4}};
   const runtime::VertexGraph g = runtime::vertex_graph(n, lists);
   const int32_t chunk = 256;
@@ -135,7 +134,9 @@ TEST(Partition, PartsInChunksOwnWholeChunks) {
     EXPECT_LT(s.vertex_imbalance(), 1.0 + 1.5 * chunk * parts / static_cast<double>(n));
     // With ~5 chunks a part, a partitioner's cut; at 7 parts of 15 chunks a part is two slabs
     // of the RCM order, and a third of the edges cross (docs/distributed.md, "Partition").
-    if (parts <= 3) EXPECT_LT(s.cut_edges, s.graph_edges / 4);
+    if (parts <= 3) {
+      EXPECT_LT(s.cut_edges, s.graph_edges / 4);
+    }
     EXPECT_EQ(partition_in_chunks(n, lists, parts, chunk), owner);
   }
   // No elements: runs of consecutive chunks, in order.

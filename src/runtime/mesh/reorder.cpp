@@ -297,4 +297,25 @@ std::vector<int32_t> renumber_elements(const ElementList& list, std::span<const 
   return out;
 }
 
+std::vector<int32_t> locality_order(const Mesh& m, bool hilbert) {
+  if (m.tets.empty() && m.triangles.empty() && m.edges.empty()) return {};
+  const auto n = static_cast<int32_t>(m.points.size());
+  std::vector<int32_t> order;
+  if (hilbert) {
+    order = hilbert_order(m.points);
+  } else {
+    static_assert(sizeof(Tet) == 4 * sizeof(int32_t) && sizeof(Edge) == 2 * sizeof(int32_t));
+    auto flat = [](const auto& list) {
+      return std::span<const int32_t>(list.empty() ? nullptr : list.front().data(),
+                                      list.size() * (list.empty() ? 0 : list.front().size()));
+    };
+    const ElementList lists[] = {{flat(m.tets), 4}, {flat(m.triangles), 3}, {flat(m.edges), 2}};
+    order = reverse_cuthill_mckee(vertex_graph(n, lists));
+  }
+  bool identity = true;
+  for (int32_t i = 0; i < n && identity; ++i) identity = order[static_cast<size_t>(i)] == i;
+  if (identity) order.clear();
+  return order;
+}
+
 }  // namespace simit::runtime

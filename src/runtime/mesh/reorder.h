@@ -45,6 +45,12 @@ std::vector<int32_t> hilbert_order(std::span<const Point> points);
 // The inverse permutation. Throws MeshError when `order` is not a permutation of 0..n-1.
 std::vector<int32_t> invert_permutation(std::span<const int32_t> order);
 
+// The order a scene renumbers `m`'s vertices in for locality: reverse Cuthill-McKee over the
+// graph of its tets, triangles and edges, or the Hilbert curve through its points (`hilbert`).
+// Empty where the mesh keeps its own order: a mesh of points alone (no neighbours to bring
+// together), or an order that is the identity.
+std::vector<int32_t> locality_order(const Mesh& m, bool hilbert);
+
 // max |position[u] - position[v]| over the graph's edges (0 for none): the bandwidth of the
 // adjacency matrix with the vertices renumbered by `position` (old -> new).
 int64_t bandwidth(const VertexGraph& graph, std::span<const int32_t> position);
