@@ -1,5 +1,6 @@
 // The interpreter's core: construction, entry calls, variables and types at run time.
 #include "interp/interpreter.h"
+
 #include "interp/set_binding.h"
 
 #include <cmath>
@@ -7,6 +8,7 @@
 #include "interp/frame.h"
 #include "interp/operators.h"
 #include "runtime/fault.h"
+#include "runtime/residency.h"
 
 namespace simit::interp {
 
@@ -64,8 +66,15 @@ std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Valu
     std::vector<Value> results;
     for (const ast::Param& r : func.results)
       results.push_back(std::move(callee.slots[r.var->slot]));
+    bring_arrays_home(base_depth, true);
     return results;
   } catch (...) {
+    // What the call wrote before it failed is the host's to see too.
+    try {
+      bring_arrays_home(base_depth, false);
+    } catch (const std::exception&) {
+      // The call's own error is the one to report.
+    }
     // Leave the interpreter usable for the next call.
     depth_ = base_depth;
     arg_stack_.resize(arg_base);
@@ -74,6 +83,19 @@ std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Valu
     hoist_base_ = 0;
     throw;
   }
+}
+
+// The host that called reads what the call left through pointers of its own (a scene's
+// stepper, the API's and Python's views), which bring nothing back: every array whose newest
+// contents an executor keeps in its memory comes home now (runtime/residency.h). After a
+// call that returned, its frames' locals go first: nothing reads them again, and arrays that
+// only they held are dropped rather than copied.
+void Interpreter::bring_arrays_home(int base_depth, bool release_locals) {
+  if (!runtime::residency::any_elsewhere()) return;
+  if (release_locals)
+    for (size_t d = static_cast<size_t>(base_depth) + 1; d < frames_.size(); ++d)
+      for (Value& v : frames_[d]->slots) v = Value();
+  runtime::residency::bring_back_all();
 }
 
 namespace {

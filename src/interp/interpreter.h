@@ -147,6 +147,7 @@ class Interpreter final : public ExecState {
   Frame& run_call(const frontend::ast::Call& c);
   // The frame above the current one, made ready for a call of `f`: slots sized, each
   // variable referring to its own slot (calls and maps then bind the parameters).
+  void bring_arrays_home(int base_depth, bool release_locals);
   Frame& next_frame(const frontend::ast::FuncDecl& f, const frontend::SourceSpan& call_site,
                     MapContext* map);
   Frame& enter(const frontend::ast::FuncDecl& f, size_t arg_base, size_t inout_base,

@@ -113,6 +113,8 @@ struct TraceController::Pending {
 };
 
 double thread_cpu_ms();
+// "812 bytes", "41.5 KB", "18.4 MB".
+std::string bytes_text(long long bytes);
 
 // The lengths a system trace's sizes name, as the interpreter's values hold them now (-1
 // where a value is missing or of another kind).

@@ -15,6 +15,7 @@
 #include "jit/controller_state.h"
 #include "jit/matrix_sum.h"
 #include "jit/pruned_matrix.h"
+#include "jit/ptx/gpu_executor.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
 #include "runtime/system_ops.h"
@@ -23,6 +24,18 @@ namespace simit::jit {
 
 namespace ast = frontend::ast;
 using interp::Value;
+
+std::string bytes_text(long long bytes) {
+  std::ostringstream os;
+  os.precision(1);
+  if (bytes < 10 * 1024)
+    os << bytes << " bytes";
+  else if (bytes < 10 * 1024 * 1024)
+    os << std::fixed << static_cast<double>(bytes) / 1024.0 << " KB";
+  else
+    os << std::fixed << static_cast<double>(bytes) / (1024.0 * 1024.0) << " MB";
+  return os.str();
+}
 
 double thread_cpu_ms() {
   timespec t{};
@@ -143,6 +156,15 @@ void TraceController::print_stats(std::ostream& os) const {
                   s.compile_ms, s.calls, s.run_ms, s.cpu_ms, s.ir_nodes);
     os << line << s.status << "\n      key: " << s.key << s.note << "\n";
   }
+  if (!device_executor_) return;
+  // Residency over the whole run (runtime/residency.h): what stayed on the device, and what
+  // the host touched and had brought back.
+  const ptx::GpuTraffic t = ptx::gpu_traffic(*device_executor_);
+  os << "gpu residency: " << t.kept_on_device << " writes left on the device ("
+     << bytes_text(t.bytes_kept) << "), " << t.uploads_resident << " uploads skipped for them, "
+     << t.brought_back << " brought back when the host read them, " << t.dropped
+     << " dropped unread; " << bytes_text(t.bytes_to_device) << " copied in, "
+     << bytes_text(t.bytes_to_host) << " copied back\n";
 }
 
 }  // namespace simit::jit

@@ -185,6 +185,10 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   }
   std::vector<void*> arrays(b.arrays.size(), nullptr);
   std::vector<size_t> bytes(b.arrays.size(), 0);  // for an executor that copies them
+  // Runtime arrays the device may keep what it wrote in until the host touches them
+  // (runtime/residency.h): taken on the device's side without bringing them back.
+  const bool resident = e->on_device;
+  std::vector<uint8_t> runtime_array(b.arrays.size(), 0);
   for (int pass = 0; pass < 2; ++pass)
     for (size_t i = 0; i < b.arrays.size(); ++i) {
       if (t.arrays[i].written != (pass == 0)) continue;
@@ -217,9 +221,14 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
             bytes[i] = s.size() * sizeof(float);
             break;
           }
-          arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
-                                          : const_cast<double*>(v.tensor().floats());
+          if (resident)
+            arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().raw_mutable_floats())
+                                            : const_cast<double*>(v.tensor().raw_floats());
+          else
+            arrays[i] = t.arrays[i].written ? static_cast<void*>(v.tensor().mutable_floats())
+                                            : const_cast<double*>(v.tensor().floats());
           bytes[i] = v.tensor().size() * sizeof(double);
+          runtime_array[i] = v.tensor().shared_buffer() ? 1 : 0;
           break;
         case Part::RowPtr: {
           const std::vector<int32_t>& r = t.matrices_in_place ? v.matrix()->pattern().row_ptr()
@@ -237,8 +246,10 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
         }
         case Part::Values:
           if (t.matrices_in_place) {
-            arrays[i] = const_cast<double*>(std::as_const(*v.matrix()).values());
+            arrays[i] = const_cast<double*>(resident ? std::as_const(*v.matrix()).raw_values()
+                                                     : std::as_const(*v.matrix()).values());
             bytes[i] = v.matrix()->value_count() * sizeof(double);
+            runtime_array[i] = 1;
           } else if (t.arrays[i].single) {
             arrays[i] = e->pruned[b.arrays[i].var].values32.data();
             bytes[i] = e->pruned[b.arrays[i].var].values32.size() * sizeof(float);
@@ -250,12 +261,16 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
         case Part::Field: {
           runtime::Field& f = bound_field(b.arrays[i], in);
           // A write counts in the field's write version (and unshares its array).
-          if (f.type().single)
+          if (resident)
+            arrays[i] = t.arrays[i].written ? static_cast<void*>(f.raw_bytes())
+                                            : const_cast<std::byte*>(std::as_const(f).raw_bytes());
+          else if (f.type().single)
             arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<float>())
                                             : const_cast<float*>(std::as_const(f).data<float>());
           else
             arrays[i] = t.arrays[i].written ? static_cast<void*>(f.data<double>())
                                             : const_cast<double*>(std::as_const(f).data<double>());
+          runtime_array[i] = 1;
           bytes[i] = in.variable(*b.arrays[i].var).binding()->set->size() * f.element_bytes();
           break;
         }
@@ -276,6 +291,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   args.scalar_count = scalars.size();
   args.array_bytes = bytes.data();
   args.array_written = array_written.get();
+  args.array_resident = runtime_array.data();
   const int32_t rc = (e->on_device ? *device_executor_ : *executor_).run_system(*e->kernel, args);
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;

@@ -62,21 +62,9 @@ bool find_positions(const ArraySlot& a, const interp::SiteCall& call, std::vecto
   return true;
 }
 
-// "812 bytes", "41.5 KB", "18.4 MB".
-std::string bytes_text(long long bytes) {
-  std::ostringstream os;
-  os.precision(1);
-  if (bytes < 10 * 1024)
-    os << bytes << " bytes";
-  else if (bytes < 10 * 1024 * 1024)
-    os << std::fixed << static_cast<double>(bytes) / 1024.0 << " KB";
-  else
-    os << std::fixed << static_cast<double>(bytes) / (1024.0 * 1024.0) << " MB";
-  return os.str();
-}
-
 // --jit-stats for a site on the GPU: what its last call copied to the device, found there
-// already, zeroed there and set to -0.0 there (in place of what an earlier call noted).
+// already, zeroed there, set to -0.0 there and left there as the newest copy (in place of what an
+// earlier call noted).
 void note_traffic(std::string& note, const ptx::GpuTraffic& before, const ptx::GpuTraffic& after) {
   static const std::string kHead = "; last call to the device: ";
   if (const size_t at = note.find(kHead); at != std::string::npos) {
@@ -86,7 +74,8 @@ void note_traffic(std::string& note, const ptx::GpuTraffic& before, const ptx::G
   note += kHead + bytes_text(after.bytes_to_device - before.bytes_to_device) + " copied, " +
           bytes_text(after.bytes_skipped - before.bytes_skipped) + " there already, " +
           bytes_text(after.bytes_zeroed - before.bytes_zeroed) + " zeroed, " +
-          bytes_text(after.bytes_filled - before.bytes_filled) + " set to -0.0";
+          bytes_text(after.bytes_filled - before.bytes_filled) + " set to -0.0, " +
+          bytes_text(after.bytes_kept - before.bytes_kept) + " left there";
 }
 
 }  // namespace
@@ -186,6 +175,10 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
   const bool resident = e.on_device;
   std::vector<uint64_t> version_in(t.arrays.size(), 0), version_out(t.arrays.size(), 0);
   std::vector<ArrayFill> fill(t.arrays.size(), ArrayFill::Copy);
+  // Runtime arrays (fields, vectors, results, matrices): the device may keep what it wrote
+  // until the host touches them (runtime/residency.h), and they are taken here without
+  // bringing back a newer copy the device holds; on the host they are brought back.
+  std::vector<uint8_t> runtime_array(t.arrays.size(), 0);
   auto field_slot_stamp = [&](const ArraySlot& a) {
     return field_stamp(runtime::member_set(call.target, a.member), a.index);
   };
@@ -203,14 +196,20 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         case ArraySlot::Kind::Field: {
           auto& set = const_cast<runtime::Set&>(runtime::member_set(call.target, a.member));
           runtime::Field& f = set.field(a.index);
-          arrays[i] = a.written ? static_cast<void*>(f.bytes())
-                                : const_cast<std::byte*>(std::as_const(f).bytes());
+          if (resident)
+            arrays[i] = a.written ? static_cast<void*>(f.raw_bytes())
+                                  : const_cast<std::byte*>(std::as_const(f).raw_bytes());
+          else
+            arrays[i] = a.written ? static_cast<void*>(f.bytes())
+                                  : const_cast<std::byte*>(std::as_const(f).bytes());
+          runtime_array[i] = 1;
           bytes[i] = f.element_bytes() * static_cast<size_t>(set.size());
           break;
         }
         case ArraySlot::Kind::Vector: {
           const runtime::Tensor& v = call.partial_args[a.index].tensor();
-          arrays[i] = const_cast<double*>(v.floats());
+          arrays[i] = const_cast<double*>(resident ? v.raw_floats() : v.floats());
+          runtime_array[i] = v.shared_buffer() ? 1 : 0;  // inline storage moves with its value
           bytes[i] = static_cast<size_t>(v.size()) * sizeof(double);
           break;
         }
@@ -218,11 +217,13 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
           Value& r = call.results[a.index];
           if (r.kind() == Value::Kind::Matrix) {
             runtime::SystemMatrix& m = *r.matrix();
-            arrays[i] = m.values();
+            arrays[i] = resident ? m.raw_values() : m.values();
+            runtime_array[i] = 1;
             bytes[i] = static_cast<size_t>(m.pattern().nnz()) *
                        static_cast<size_t>(m.block_size()) * sizeof(double);
           } else if (r.is_tensor()) {
-            arrays[i] = r.tensor().mutable_floats();
+            arrays[i] = resident ? r.tensor().raw_mutable_floats() : r.tensor().mutable_floats();
+            runtime_array[i] = r.tensor().shared_buffer() ? 1 : 0;
             bytes[i] = static_cast<size_t>(r.tensor().size()) * sizeof(double);
           } else {
             return false;
@@ -273,7 +274,9 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
         case ArraySlot::Kind::Matrix: {
           const Value& m = call.partial_args[a.index];
           if (m.kind() != Value::Kind::Matrix || !m.matrix()) return false;
-          arrays[i] = const_cast<double*>(m.matrix()->values());
+          arrays[i] =
+              const_cast<double*>(resident ? m.matrix()->raw_values() : m.matrix()->values());
+          runtime_array[i] = 1;
           bytes[i] = static_cast<size_t>(m.matrix()->pattern().nnz()) *
                      static_cast<size_t>(m.matrix()->block_size()) * sizeof(double);
           break;
@@ -300,6 +303,7 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     args.array_version_out = version_out.data();
     args.array_fill = fill.data();
     args.endpoints_version = endpoints_stamp(call.target);
+    args.array_resident = runtime_array.data();
   }
   const ptx::GpuTraffic before = resident ? ptx::gpu_traffic(executor) : ptx::GpuTraffic{};
   interp::Trap& trap = call.interpreter.trap();
@@ -334,9 +338,9 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     for (size_t i = 0; i < call.results.size(); ++i) {
       Value& r = call.results[i];
       if (r.kind() == Value::Kind::Matrix && r.matrix())
-        values[i] = r.matrix()->values();
+        values[i] = resident ? r.matrix()->raw_values() : r.matrix()->values();
       else if (r.is_tensor() && r.tensor().kind() == runtime::ComponentKind::Float)
-        values[i] = r.tensor().mutable_floats();
+        values[i] = resident ? r.tensor().raw_mutable_floats() : r.tensor().mutable_floats();
     }
     executor.finish_deferred(*e.plan, values);
   }

@@ -50,6 +50,10 @@ struct MapArgs {
   const uint64_t* array_version_out = nullptr;
   const ArrayFill* array_fill = nullptr;
   uint64_t endpoints_version = 0;
+  // Per array, whether it is a runtime array whose accessors bring a newer copy back
+  // (runtime/residency.h): such an executor may leave what the kernel wrote there in its own
+  // memory until the host touches the array. Null: every written array is copied back.
+  const uint8_t* array_resident = nullptr;
 };
 
 // The elements [begin, end) of a map's target set.
@@ -75,6 +79,8 @@ struct SystemArgs {
   size_t array_count = 0, size_count = 0, scalar_count = 0;
   const size_t* array_bytes = nullptr;
   const bool* array_written = nullptr;
+  // As MapArgs::array_resident.
+  const uint8_t* array_resident = nullptr;
 };
 
 // A system kernel's return when its loop stopped for the interrupt flag (the scalars written

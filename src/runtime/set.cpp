@@ -73,12 +73,13 @@ void Field::reallocate(size_t capacity) {
   std::shared_ptr<std::byte[]> fresh;
   if (capacity) {
     try {
-      fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity]);
+      fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity], residency::FreeHostArray{});
     } catch (const std::bad_alloc&) {
       throw Fault("out of memory while allocating " + std::to_string(capacity) +
                   " bytes for field '" + name_ + "'");
     }
     const size_t keep = std::min(bytes_, capacity);
+    if (keep) residency::before_host_access(buffer_.get());
     if (keep) std::memcpy(fresh.get(), buffer_.get(), keep);
     std::memset(fresh.get() + keep, 0, capacity - keep);
   }
@@ -89,6 +90,11 @@ void Field::reallocate(size_t capacity) {
 }
 
 std::byte* Field::mutable_bytes() {
+  residency::before_host_access(buffer_.get());
+  return raw_bytes();
+}
+
+std::byte* Field::raw_bytes() {
   ++write_version_;
   if (buffer_.use_count() > 1) reallocate(bytes_);
   return buffer_.get();
@@ -357,7 +363,7 @@ Tensor Set::field_tensor(int field_number) const {
   Tensor out(t.kind, shape);
   if (!t.single) {  // pinned: a copy, so that later writes to the field stay in place
     const size_t bytes = out.size() * t.component_bytes();
-    if (bytes) std::memcpy(out.mutable_ints(), f.buffer().get(), bytes);
+    if (bytes) std::memcpy(out.mutable_ints(), f.bytes(), bytes);
     return out;
   }
   const size_t n = out.size();

@@ -45,8 +45,17 @@ class Field {
   const FieldType& type() const { return type_; }
   size_t components() const { return type_.components(); }
   size_t element_bytes() const { return components() * type_.component_bytes(); }
+  // The array; an array whose newest contents are in an executor's memory is brought back
+  // first (runtime/residency.h), as by every accessor below but the raw ones.
   std::byte* bytes() { return mutable_bytes(); }  // unshares first
-  const std::byte* bytes() const { return buffer_.get(); }
+  const std::byte* bytes() const {
+    residency::before_host_access(buffer_.get());
+    return buffer_.get();
+  }
+  // bytes() for an executor copying the array into its own memory, where a newer copy of it
+  // may be: not brought back (the mutable form still counts a write and unshares).
+  std::byte* raw_bytes();
+  const std::byte* raw_bytes() const { return buffer_.get(); }
 
   // Typed view of the whole array; T must be the storage type of the components
   // (int32_t, double, float, bool, std::complex<double>, std::complex<float>).
@@ -59,6 +68,7 @@ class Field {
   template <class T>
   const T* data() const {
     check_storage(storage_tag<T>());
+    residency::before_host_access(buffer_.get());
     return reinterpret_cast<const T*>(buffer_.get());
   }
   // The components of one element (no bounds check: use Set::get for checked access).

@@ -351,6 +351,7 @@ SystemMatrix::SystemMatrix(Unset, PatternPtr pattern, int block_rows, int block_
 }
 
 void SystemMatrix::set_zero() {
+  residency::settle(values_.data());  // every value written here: nothing to bring back
   std::fill(values_.begin(), values_.end(), 0.0);
   std::fill(ints_.begin(), ints_.end(), 0);
   std::fill(complexes_.begin(), complexes_.end(), Complex());

@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "runtime/residency.h"
 #include "runtime/set.h"
 #include "runtime/tensor.h"
 
@@ -200,6 +201,28 @@ struct UninitialisedAllocator : std::allocator<T> {
   void construct(U* p, Args&&... args) {
     ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
+  // An array whose newer contents are in an executor's memory drops them as it goes
+  // (runtime/residency.h).
+  void deallocate(T* p, std::size_t n) noexcept {
+    residency::before_free(p);
+    std::allocator<T>::deallocate(p, n);
+  }
+};
+
+// A matrix's values: copying them brings a newer copy in an executor's memory back first
+// (runtime/residency.h); moving them keeps the array where it is.
+struct MatrixValues : std::vector<double, UninitialisedAllocator<double>> {
+  using Base = std::vector<double, UninitialisedAllocator<double>>;
+  MatrixValues() = default;
+  MatrixValues(const MatrixValues& o) : Base((residency::before_host_access(o.data()), o)) {}
+  MatrixValues(MatrixValues&&) noexcept = default;
+  MatrixValues& operator=(const MatrixValues& o) {
+    residency::before_host_access(o.data());
+    residency::before_host_access(data());
+    Base::operator=(o);
+    return *this;
+  }
+  MatrixValues& operator=(MatrixValues&&) noexcept = default;
 };
 
 class SystemMatrix {
@@ -224,9 +247,19 @@ class SystemMatrix {
   int64_t scalar_rows() const { return static_cast<int64_t>(rows()) * block_rows_; }
   int64_t scalar_cols() const { return static_cast<int64_t>(cols()) * block_cols_; }
 
-  // The components of a Float matrix (null for the other kinds).
-  double* values() { return values_.data(); }
-  const double* values() const { return values_.data(); }
+  // The components of a Float matrix (null for the other kinds). Values whose newest
+  // contents are in an executor's memory are brought back first (runtime/residency.h), by
+  // block() too; raw_values() does not, for an executor copying them into that memory.
+  double* values() {
+    residency::before_host_access(values_.data());
+    return values_.data();
+  }
+  const double* values() const {
+    residency::before_host_access(values_.data());
+    return values_.data();
+  }
+  double* raw_values() { return values_.data(); }
+  const double* raw_values() const { return values_.data(); }
   // The components of an Int or Bool matrix (null for the other kinds).
   int32_t* ints() { return ints_.data(); }
   const int32_t* ints() const { return ints_.data(); }
@@ -240,10 +273,10 @@ class SystemMatrix {
   const T* data() const;
   size_t value_count() const { return values_.size() + ints_.size() + complexes_.size(); }
   double* block(int32_t position) {
-    return values_.data() + static_cast<size_t>(position) * block_size();
+    return values() + static_cast<size_t>(position) * block_size();
   }
   const double* block(int32_t position) const {
-    return values_.data() + static_cast<size_t>(position) * block_size();
+    return values() + static_cast<size_t>(position) * block_size();
   }
   void set_zero();
 
@@ -264,7 +297,7 @@ class SystemMatrix {
   PatternPtr pattern_;
   int block_rows_ = 1, block_cols_ = 1;
   ComponentKind kind_ = ComponentKind::Float;
-  std::vector<double, UninitialisedAllocator<double>> values_;
+  MatrixValues values_;
   std::vector<int32_t> ints_;
   std::vector<Complex> complexes_;
 };

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/residency.h"
 #include "runtime/shape.h"
 
 namespace simit::runtime {
@@ -34,6 +35,8 @@ inline size_t component_bytes(ComponentKind k) {
 using Complex = std::complex<double>;
 
 // Raw bytes: inline up to kInlineBytes, otherwise a shared heap block cloned before writes.
+// A heap block whose newest contents are in an executor's memory is brought back before the
+// host reads or writes it (runtime/residency.h); raw_data() and raw_mutable_data() do not.
 class Storage {
  public:
   static constexpr size_t kInlineBytes = 128;
@@ -55,13 +58,26 @@ class Storage {
   void reset_uninit(size_t bytes) {
     bytes_ = bytes;
     if (bytes > kInlineBytes)
-      heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes]);
+      heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes], residency::FreeHostArray{});
     else if (heap_)
       heap_.reset();
   }
-  const std::byte* data() const { return heap_ ? heap_.get() : inline_; }
+  const std::byte* data() const {
+    if (!heap_) return inline_;
+    residency::before_host_access(heap_.get());
+    return heap_.get();
+  }
   std::byte* mutable_data() {  // unshares heap storage first
-    return heap_ ? mutable_heap() : inline_;
+    if (!heap_) return inline_;
+    residency::before_host_access(heap_.get());
+    return mutable_heap();
+  }
+  // For an executor copying the bytes into its own memory, which holds the newest.
+  const std::byte* raw_data() const { return heap_ ? heap_.get() : inline_; }
+  std::byte* raw_mutable_data() {  // unshares heap storage first (bringing it back to copy)
+    if (!heap_) return inline_;
+    if (heap_.use_count() > 1) residency::before_host_access(heap_.get());
+    return mutable_heap();
   }
   // The shared heap block (null when the bytes are inline).
   const std::shared_ptr<std::byte[]>& heap() const { return heap_; }
@@ -96,6 +112,10 @@ class Tensor {
   const std::string* strings() const { return strings_ ? strings_->data() : nullptr; }
   int32_t* mutable_ints() { return reinterpret_cast<int32_t*>(storage_.mutable_data()); }
   double* mutable_floats() { return reinterpret_cast<double*>(storage_.mutable_data()); }
+  // floats() and mutable_floats() for an executor copying them into its own memory, where a
+  // newer copy of them may be (runtime/residency.h): not brought back.
+  const double* raw_floats() const { return reinterpret_cast<const double*>(storage_.raw_data()); }
+  double* raw_mutable_floats() { return reinterpret_cast<double*>(storage_.raw_mutable_data()); }
   bool* mutable_bools() { return reinterpret_cast<bool*>(storage_.mutable_data()); }
   Complex* mutable_complexes() { return reinterpret_cast<Complex*>(storage_.mutable_data()); }
   std::string* mutable_strings();

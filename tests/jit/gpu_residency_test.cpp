@@ -2,17 +2,21 @@
 // (gpu_fake_driver.h): an array is copied to the device only when its host copy changed since
 // the device last had it (by the stamps of jit/array_stamps.h, bound as the trace controller
 // binds them), a result is zeroed on the device, a written field comes back after each call
-// and is not copied in again until the host changes it.
+// and is not copied in again until the host changes it; a field marked a runtime array
+// (MapArgs::array_resident) stays on the device until the host touches it
+// (runtime/residency.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "gpu_fake_driver.h"
 #include "jit/array_stamps.h"
 #include "jit/ptx/gpu_executor.h"
+#include "runtime/residency.h"
 #include "runtime/set.h"
 
 namespace simit::jit::ptx {
@@ -51,6 +55,10 @@ struct Scene {
   std::vector<uint64_t> in = std::vector<uint64_t>(Slots), out = std::vector<uint64_t>(Slots);
   std::vector<ArrayFill> fill = {ArrayFill::Copy, ArrayFill::Copy, ArrayFill::Copy,
                                  ArrayFill::Zero, ArrayFill::Copy, ArrayFill::Copy};
+  // Whether the fields are bound as runtime arrays the device may keep (the raw accessors,
+  // MapArgs::array_resident), as the controller binds them for the GPU.
+  bool lazy = false;
+  std::vector<uint8_t> resident = {1, 1, 1, 0, 0, 0};
 
   MapArgs bind() {
     in[X] = field_stamp(verts, 0);
@@ -58,9 +66,15 @@ struct Scene {
     in[Y] = field_stamp(verts, 1);
     in[R] = in[Vec] = 0;
     in[Table] = stamp(StampKind::Pattern, {77});
-    arrays[Y] = verts.field(1).bytes();  // for writing: counts as a write
-    arrays[X] = const_cast<std::byte*>(std::as_const(verts).field(0).bytes());
-    arrays[K] = const_cast<std::byte*>(std::as_const(edges).field(0).bytes());
+    if (lazy) {
+      arrays[Y] = verts.field(1).raw_bytes();  // for writing: counts as a write
+      arrays[X] = const_cast<std::byte*>(std::as_const(verts).field(0).raw_bytes());
+      arrays[K] = const_cast<std::byte*>(std::as_const(edges).field(0).raw_bytes());
+    } else {
+      arrays[Y] = verts.field(1).bytes();  // for writing: counts as a write
+      arrays[X] = const_cast<std::byte*>(std::as_const(verts).field(0).bytes());
+      arrays[K] = const_cast<std::byte*>(std::as_const(edges).field(0).bytes());
+    }
     arrays[R] = r.data();
     arrays[Table] = table.data();
     arrays[Vec] = vec.data();
@@ -80,6 +94,7 @@ struct Scene {
     args.array_version_out = out.data();
     args.array_fill = fill.data();
     args.endpoints_version = endpoints_stamp(edges);
+    if (lazy) args.array_resident = resident.data();
     return args;
   }
 };
@@ -243,6 +258,76 @@ TEST_F(GpuResidency, WithoutStampsEveryArrayIsCopiedEveryCall) {
             kX + kK + kY + kR + kTable + kVec + kEnds + kScalars);
   EXPECT_EQ(t1.uploads_skipped, t0.uploads_skipped);
   EXPECT_EQ(t1.bytes_zeroed, t0.bytes_zeroed);
+}
+
+TEST_F(GpuResidency, AWrittenFieldStaysOnTheDeviceUntilTheHostTouchesIt) {
+  namespace residency = runtime::residency;
+  auto executor = make_gpu_executor_over(fake_table());
+  Scene s;
+  s.lazy = true;
+  // y stays on the device; only the result (not a runtime array here) comes back.
+  Call c = call(*executor, s);
+  EXPECT_EQ(c.traffic.bytes_to_host, kR);
+  EXPECT_EQ(c.to_host, kR + kLaunchOut);
+  EXPECT_EQ(residency::count(), 1);
+  EXPECT_EQ(gpu_traffic(*executor).kept_on_device, 1);
+  const auto y_raw = [&s] {
+    return reinterpret_cast<const double*>(std::as_const(s.verts).field(1).raw_bytes());
+  };
+  EXPECT_EQ(y_raw()[0], 0.0);  // the host's copy is still the old one
+
+  // Second call: y is not copied in, the device's copy being the newest.
+  c = call(*executor, s);
+  EXPECT_EQ(c.traffic.bytes_to_device, kVec + kScalars);
+  EXPECT_EQ(c.to_host, kR + kLaunchOut);
+  for (double y : seen.y) EXPECT_EQ(y, 1.0);
+  EXPECT_EQ(gpu_traffic(*executor).uploads_resident, 1);
+
+  // The host reads y: brought back once, with the device's values.
+  Fake before = state;
+  EXPECT_EQ(*std::as_const(s.verts).field(1).at<double>(2), 2.0);
+  EXPECT_EQ(*std::as_const(s.verts).field(1).at<double>(4), 2.0);
+  EXPECT_EQ(state.to_host - before.to_host, kY);
+  EXPECT_EQ(gpu_traffic(*executor).brought_back, 1);
+  EXPECT_EQ(residency::count(), 0);
+
+  // Read, not written: the device's copy is the host's, and is not copied in (its stamp).
+  c = call(*executor, s);
+  EXPECT_EQ(c.traffic.bytes_to_device, kVec + kScalars);
+  for (double y : seen.y) EXPECT_EQ(y, 2.0);
+
+  // The host writes one value of y: brought back first, so that the others are the device's;
+  // then copied in whole.
+  *s.verts.field(1).at<double>(0) = 50.0;
+  EXPECT_EQ(*std::as_const(s.verts).field(1).at<double>(1), 3.0);
+  c = call(*executor, s);
+  EXPECT_EQ(c.traffic.bytes_to_device, kY + kVec + kScalars);
+  EXPECT_EQ(seen.y[0], 50.0);
+  EXPECT_EQ(seen.y[1], 3.0);
+
+  // The executor goes: what only the device held comes home.
+  before = state;
+  executor.reset();
+  EXPECT_EQ(residency::count(), 0);
+  EXPECT_EQ(state.to_host - before.to_host, kY);
+  EXPECT_EQ(y_raw()[0], 51.0);
+  EXPECT_EQ(y_raw()[1], 4.0);
+  EXPECT_EQ(state.frees, state.allocations);
+}
+
+TEST_F(GpuResidency, AFieldFreedWhileOnTheDeviceIsDroppedNotCopiedBack) {
+  namespace residency = runtime::residency;
+  auto executor = make_gpu_executor_over(fake_table());
+  auto s = std::make_unique<Scene>();
+  s->lazy = true;
+  call(*executor, *s);
+  EXPECT_EQ(residency::count(), 1);
+  const Fake before = state;
+  s.reset();
+  EXPECT_EQ(residency::count(), 0);
+  EXPECT_EQ(state.to_host, before.to_host);
+  EXPECT_EQ(gpu_traffic(*executor).dropped, 1);
+  EXPECT_EQ(gpu_traffic(*executor).brought_back, 0);
 }
 
 TEST_F(GpuResidency, ADriverTableWithoutMemorySetsIsRefused) {

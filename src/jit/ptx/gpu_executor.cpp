@@ -17,6 +17,7 @@
 #include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/host_driver.h"
 #include "jit/ptx/ptx_target.h"
+#include "runtime/residency.h"
 
 namespace simit::jit::ptx {
 
@@ -33,7 +34,9 @@ constexpr long kKeepCalls = 64;
 // at most 31 iterations' steps that find the stop word set and return at once).
 constexpr int kMostIterationsAtOnce = 32;
 
-class GpuExecutor final : public Executor {
+namespace residency = runtime::residency;
+
+class GpuExecutor final : public Executor, public residency::Holder {
  public:
   // With `streams`, a device program's loop batches run as CUDA graphs (jit/ptx/batch_graphs.h).
   GpuExecutor(std::unique_ptr<cuda::Device> device, bool emulated,
@@ -43,6 +46,8 @@ class GpuExecutor final : public Executor {
   }
   ~GpuExecutor() override {
     try {
+      // What only the device holds goes home: the host's arrays outlive the executor.
+      residency::bring_back_all_of(*this);
       graphs_.reset();
       for (auto& [host, m] : mirrors_) device_->free(m.array);
       for (auto& [plan, u] : uploads_) free_index(u);
@@ -121,11 +126,12 @@ class GpuExecutor final : public Executor {
     const bool later = writes == MapWrites::Deferred && code == 0;
     for (size_t i = 0; i < args.array_count; ++i)
       if (args.array_written[i] && arrays[i]) {
+        const bool resident = args.array_resident && args.array_resident[i];
         arrays[i]->device_dirty = true;
         if (later)
-          pending_.push_back(args.arrays[i]);
+          pending_.push_back({args.arrays[i], resident});
         else
-          copy_back(*arrays[i]);
+          leave_or_copy_back(args.arrays[i], *arrays[i], resident);
       }
     // The host's copies as they are now (a deferred map's once finish_deferred has copied
     // back what it wrote): what the device holds too.
@@ -181,7 +187,7 @@ class GpuExecutor final : public Executor {
       ++traffic_.gather_launches;
     }
     if (launched) device_->synchronize();
-    for (const void* host : pending_) {
+    for (const auto& [host, resident] : pending_) {
       auto it = mirrors_.find(host);
       if (it == mirrors_.end()) continue;
       const bool scratch = std::any_of(gathers.begin(), gathers.end(),
@@ -189,7 +195,7 @@ class GpuExecutor final : public Executor {
       if (scratch)
         it->second.array.device_dirty = false;  // the next call sets it to -0.0 again
       else
-        copy_back(it->second.array);
+        leave_or_copy_back(host, it->second.array, resident);
     }
     pending_.clear();
   }
@@ -276,16 +282,34 @@ class GpuExecutor final : public Executor {
     for (int i = 0; i < p.scalars && static_cast<size_t>(i) < args.scalar_count; ++i)
       args.scalars[i] = get_local(p.local_types[static_cast<size_t>(i)],
                                   &context_host_[static_cast<size_t>(kContextHead + i)]);
-    // Every array the program wrote back out (after an error statement too: the host's
-    // kernel leaves what it wrote, and the caller puts back what it saved).
+    // Every array the program wrote is the device's newest (after an error statement too:
+    // the host's kernel leaves what it wrote, and the caller puts back what it saved).
     for (size_t i = 0; i < args.array_count; ++i)
       if (args.array_written[i] && arrays[i]) {
         arrays[i]->device_dirty = true;
-        copy_back(*arrays[i]);
+        leave_or_copy_back(args.arrays[i], *arrays[i],
+                           args.array_resident && args.array_resident[i]);
       }
     evict();
     if (context_host_[kCtxError] != 0) return static_cast<int32_t>(context_host_[kCtxError]);
     return interrupted ? kSystemInterrupted : 0;
+  }
+
+  // residency::Holder: the host touches an array whose newest contents are here.
+  void bring_back(void* host) override {
+    auto it = mirrors_.find(host);
+    if (it == mirrors_.end() || !it->second.array.device_dirty) return;
+    device_->make_current();
+    copy_back(it->second.array);
+    ++traffic_.brought_back;
+  }
+  // The host array is freed, or about to be set anew: the device's contents are nobody's.
+  void released(const void* host) noexcept override {
+    auto it = mirrors_.find(host);
+    if (it == mirrors_.end()) return;
+    it->second.array.device_dirty = false;
+    it->second.version = 0;
+    ++traffic_.dropped;
   }
 
   GpuTraffic traffic_;
@@ -312,11 +336,25 @@ class GpuExecutor final : public Executor {
     traffic_.bytes_to_host += static_cast<long long>(array.bytes);
   }
 
-  // The arrays of a deferred run whose finish_deferred did not come: copied back whole (the
-  // host then holds what the launch left, as after any other run).
+  // An array a kernel wrote (its device copy marked newer): a runtime array stays on the
+  // device until the host touches it (runtime/residency.h); any other (the controller's own
+  // tables and marks, which it reads straight after) is copied back now.
+  void leave_or_copy_back(const void* host, cuda::DeviceArray& array, bool resident) {
+    if (!resident) {
+      copy_back(array);
+      return;
+    }
+    residency::mark_elsewhere(const_cast<void*>(host), *this);
+    ++traffic_.kept_on_device;
+    traffic_.bytes_kept += static_cast<long long>(array.bytes);
+  }
+
+  // The arrays of a deferred run whose finish_deferred did not come: what the launch left is
+  // the device's newest, as after any other run.
   void copy_back_pending() {
-    for (const void* host : pending_)
-      if (auto it = mirrors_.find(host); it != mirrors_.end()) copy_back(it->second.array);
+    for (const auto& [host, resident] : pending_)
+      if (auto it = mirrors_.find(host); it != mirrors_.end())
+        leave_or_copy_back(host, it->second.array, resident);
     pending_.clear();
   }
 
@@ -379,6 +417,7 @@ class GpuExecutor final : public Executor {
                                ArrayFill how = ArrayFill::Copy) {
     if (!host || bytes == 0) return nullptr;
     Mirror& m = mirrors_[host];
+    if (m.array.device_dirty && m.array.bytes != bytes) residency::before_host_access(host);
     if (m.array.bytes != bytes || m.array.device == 0) {
       device_->free(m.array);
       m.array = device_->alloc(host, bytes);
@@ -389,6 +428,16 @@ class GpuExecutor final : public Executor {
     m.used = call_;
     if (m.refreshed == call_) return &m.array;
     m.refreshed = call_;
+    if (m.array.device_dirty) {
+      // The device's copy is newer than the host's, which nobody touched since (that would
+      // have brought it back): it stays. A result the host set anew drops it.
+      if (how == ArrayFill::Copy) {
+        ++traffic_.uploads_resident;
+        traffic_.bytes_skipped += static_cast<long long>(bytes);
+        return &m.array;
+      }
+      residency::settle(host);
+    }
     m.array.device_dirty = false;
     if (how == ArrayFill::Zero) {
       m.array.host_dirty = false;
@@ -419,6 +468,7 @@ class GpuExecutor final : public Executor {
   void evict() {
     for (auto it = mirrors_.begin(); it != mirrors_.end();) {
       if (call_ - it->second.used > kKeepCalls) {
+        if (it->second.array.device_dirty) residency::before_host_access(it->first);
         device_->free(it->second.array);
         it = mirrors_.erase(it);
       } else {
@@ -580,7 +630,9 @@ class GpuExecutor final : public Executor {
   // Per plan (by address; its build id tells a rebuilt or new plan there), its gather index.
   std::map<const DeferredPlan*, IndexUpload> uploads_;
   // Host arrays a deferred run wrote, copied back by finish_deferred.
-  std::vector<const void*> pending_;
+  // Host arrays a deferred run wrote, and whether each is a runtime array (left on the
+  // device by finish_deferred) or copied back by it.
+  std::vector<std::pair<const void*, bool>> pending_;
   cuda::CUfunction gather_ = nullptr;
   std::string arch_, ptx_version_;  // of the map kernels ("": not seen yet)
   std::vector<cuda::CUdeviceptr> pointers_host_;

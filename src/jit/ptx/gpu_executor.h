@@ -88,6 +88,15 @@ struct GpuTraffic {
   // Their batches as CUDA graphs: captured (once per program, batch and sizes), launched.
   long graphs_captured = 0;
   long graph_launches = 0;
+  // Residency (runtime/residency.h): arrays a kernel wrote left on the device as the newest
+  // copy (and their bytes); uploads skipped because the device held the newest; arrays
+  // copied back because the host touched them; arrays freed or set anew by the host while
+  // the device held their newest (never copied back).
+  long kept_on_device = 0;
+  long long bytes_kept = 0;
+  long uploads_resident = 0;
+  long brought_back = 0;
+  long dropped = 0;
 };
 GpuTraffic gpu_traffic(const Executor& executor);
 
