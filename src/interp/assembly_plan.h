@@ -96,6 +96,10 @@ class SiteHook {
   virtual void statement_done(const frontend::ast::Stmt& stmt, ExecState& in) {
     (void)stmt, (void)in;
   }
+  // A call returns to its host, which is about to get every array an executor holds newer
+  // back (runtime/residency.h): the matrices the hook keeps only to reuse their storage
+  // (zeroed before any reuse) are dropped there instead.
+  virtual void drop_reusable() {}
 };
 
 }  // namespace simit::interp

@@ -92,9 +92,15 @@ std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Valu
 // only they held are dropped rather than copied.
 void Interpreter::bring_arrays_home(int base_depth, bool release_locals) {
   if (!runtime::residency::any_elsewhere()) return;
-  if (release_locals)
+  if (release_locals) {
     for (size_t d = static_cast<size_t>(base_depth) + 1; d < frames_.size(); ++d)
       for (Value& v : frames_[d]->slots) v = Value();
+    // A site's last matrix that nothing else holds is kept only to be zeroed and reused.
+    for (auto& [site, plan] : plans_)
+      for (AssemblyPlan::Result& r : plan.results)
+        if (r.last && r.last.use_count() == 1) runtime::residency::settle(r.last->raw_values());
+    if (options_.sites) options_.sites->drop_reusable();
+  }
   runtime::residency::bring_back_all();
 }
 

@@ -141,6 +141,12 @@ Lowered TraceController::lower_system_for_device(LoopEntry& e) {
   if (!device_executor_) return none;
   const SystemTrace traced = *e.traced.trace;
   e.traced.trace->device = true;
+  // The loop's products read each matrix where it is, as the interpreter does, rather than a
+  // copy without its zero blocks made on the host every call: the matrix may be on the
+  // device already (its map and the fused sum left it there, runtime/residency.h), and the
+  // copy would bring it back and send it again. Under --float32 the copy stays (binary32:
+  // half the bytes, and its vectors' binary32 marks rest on it).
+  if (!options_.float32) e.traced.trace->matrices_in_place = true;
   Lowered l = lower(*e.traced.trace, device_target_ ? *device_target_ : *target_, lower_options());
   if (!l.kernel) {
     *e.traced.trace = traced;

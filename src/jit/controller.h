@@ -91,6 +91,8 @@ class TraceController : public interp::SiteHook {
                         interp::ExecState& in) override;
   void site_done(interp::SiteCall& call) override;
   void statement_done(const frontend::ast::Stmt& stmt, interp::ExecState& in) override;
+  // The specialised results' last matrices that nothing else holds: dropped on the GPU.
+  void drop_reusable() override;
 
   std::vector<TraceStats> stats() const;
   // A table of stats(), one line per trace.

@@ -11,6 +11,10 @@
 
 #include "jit/target.h"
 
+namespace simit::runtime {
+class SystemMatrix;
+}
+
 namespace simit::jit {
 
 class DeferredPlan;
@@ -63,6 +67,14 @@ class Executor {
   // on the host, its tasks through for_each; an executor whose memory is elsewhere adds them
   // there.
   virtual void finish_deferred(const DeferredPlan& plan, const std::vector<double*>& values);
+  // `b = alpha a + beta b` in b's storage, with runtime::add_into's bits (a fused matrix sum,
+  // jit/matrix_sum.h), where this executor's memory holds b's newest values: true when it
+  // ran there; false leaves it to the host (here, always).
+  virtual bool add_into(const runtime::SystemMatrix& a, double alpha, runtime::SystemMatrix& b,
+                        double beta, bool float32) {
+    (void)a, (void)alpha, (void)b, (void)beta, (void)float32;
+    return false;
+  }
 };
 
 // Whether the elements of a map kernel write apart (fields and results at their own index

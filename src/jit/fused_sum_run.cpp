@@ -64,12 +64,17 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   }
   const auto start = std::chrono::steady_clock::now();
   const double cpu = thread_cpu_ms();
-  if (!runtime::add_into(
-          *m, 1.0, *k, beta,
-          [this](int64_t tasks, const std::function<void(int64_t)>& task) {
-            executor_->for_each(tasks, task);
-          },
-          options_.float32)) {
+  // On the GPU where its map left K (the device's copy newest), else on the host.
+  const bool on_device =
+      device_executor_ && device_executor_->add_into(*m, 1.0, *k, beta, options_.float32);
+  if (on_device) {
+    s.stats.note = options_.gpu_emulated ? "; on the GPU (emulated)" : "; on the GPU";
+  } else if (!runtime::add_into(
+                 *m, 1.0, *k, beta,
+                 [this](int64_t tasks, const std::function<void(int64_t)>& task) {
+                   executor_->for_each(tasks, task);
+                 },
+                 options_.float32)) {
     s.stats.status =
         "interpreted: " + sum.base->name + " has blocks outside the pattern of " + sum.scaled->name;
     return false;

@@ -162,9 +162,10 @@ void TraceController::print_stats(std::ostream& os) const {
   const ptx::GpuTraffic t = ptx::gpu_traffic(*device_executor_);
   os << "gpu residency: " << t.kept_on_device << " writes left on the device ("
      << bytes_text(t.bytes_kept) << "), " << t.uploads_resident << " uploads skipped for them, "
-     << t.brought_back << " brought back when the host read them, " << t.dropped
-     << " dropped unread; " << bytes_text(t.bytes_to_device) << " copied in, "
-     << bytes_text(t.bytes_to_host) << " copied back\n";
+     << t.brought_back << " brought back when the host read them ("
+     << bytes_text(t.bytes_brought_back) << "), " << t.dropped << " dropped unread; "
+     << bytes_text(t.bytes_to_device) << " copied in, " << bytes_text(t.bytes_to_host)
+     << " copied back\n";
 }
 
 }  // namespace simit::jit

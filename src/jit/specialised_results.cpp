@@ -14,6 +14,7 @@
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
+#include "runtime/residency.h"
 #include "runtime/system_ops.h"
 
 namespace simit::jit {
@@ -37,8 +38,10 @@ std::vector<const int32_t*> TraceController::prepare_results(
     const runtime::PatternPtr& pattern = special ? s.pattern->pattern : r.pattern;
     if (special || !call.results[i].matrix()) {
       if (s.last && s.last.use_count() == 1 && s.last->shared_pattern() == pattern) {
-        // Zeroed on the executor's threads (the stiffness of dragon160k is 13.7 MB).
-        double* v = s.last->values();
+        // Zeroed on the executor's threads (the stiffness of dragon160k is 13.7 MB); every
+        // value set anew, so a newer copy on the GPU is dropped, not brought back first.
+        runtime::residency::settle(s.last->raw_values());
+        double* v = s.last->raw_values();
         const int64_t n = static_cast<int64_t>(s.last->value_count());
         constexpr int64_t kPerTask = int64_t{1} << 17;
         executor_->for_each((n + kPerTask - 1) / kPerTask, [v, n](int64_t t) {
@@ -144,6 +147,13 @@ void TraceController::specialise_results(Entry& e, interp::SiteCall& call) {
     r.hook_allocates = true;
     r.last.reset();  // the full matrix lives on only while the program holds this call's result
   }
+}
+
+void TraceController::drop_reusable() {
+  for (auto& [site, state] : sites_)
+    for (auto& [key, e] : state->kernels)
+      for (Entry::Special& s : e->special)
+        if (s.last && s.last.use_count() == 1) runtime::residency::settle(s.last->raw_values());
 }
 
 }  // namespace simit::jit

@@ -52,10 +52,16 @@ void freeing(const void* host) noexcept {
 }  // namespace detail
 
 void mark_elsewhere(void* host, Holder& holder) {
-  std::lock_guard<std::mutex> lock(table_lock());
-  auto [it, fresh] = table().emplace(host, &holder);
-  it->second = &holder;
-  if (fresh) detail::elsewhere_count.fetch_add(1, std::memory_order_release);
+  Holder* before = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(table_lock());
+    auto [it, fresh] = table().emplace(host, &holder);
+    if (fresh) detail::elsewhere_count.fetch_add(1, std::memory_order_release);
+    if (it->second != &holder) before = it->second;
+    it->second = &holder;
+  }
+  // Another holder's copy, older now, must not pass for the newest there any more.
+  if (before) before->released(host);
 }
 
 bool is_elsewhere(const void* host, const Holder& holder) {

@@ -36,9 +36,7 @@ void freeing(const void* host) noexcept;
 }  // namespace detail
 
 // Whether any array's newest contents are elsewhere.
-inline bool any_elsewhere() {
-  return detail::elsewhere_count.load(std::memory_order_acquire) != 0;
-}
+inline bool any_elsewhere() { return detail::elsewhere_count.load(std::memory_order_acquire) != 0; }
 
 // Before the host reads or writes the array starting at `host`: brought back if elsewhere.
 inline void before_host_access(const void* host) {

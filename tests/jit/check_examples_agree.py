@@ -10,7 +10,9 @@ With SHUFFLE_SEED the JIT runs its maps through the test-only shuffled executor 
 few elements in a shuffled order: jit/executor.h), which must give the same bits. The JIT
 runs on N threads (default 1), which must give the same bits too. With --executor gpu the
 compiled maps run through the GPU executor (over host memory where SIMIT_TEST_GPU_EMULATION
-is set), and some must have been compiled for the GPU. --float32 runs both in float32.
+is set), some must have been compiled for the GPU, and some of what they wrote must have
+stayed on the device ("gpu residency: N writes left on the device"). --float32 runs both in
+float32.
 """
 import csv
 import os
@@ -72,6 +74,12 @@ def main():
     compiled = b_out.count(" compiled\n") + on_gpu
     if backend == "gpu" and on_gpu == 0:
         sys.exit("no site was compiled for the GPU")
+    if backend == "gpu":
+        # Residency: what the kernels wrote stayed on the device for the next kernel.
+        line = next((l for l in b_out.splitlines() if l.startswith("gpu residency: ")), "")
+        kept = int(line.split()[2]) if line else 0
+        if kept == 0:
+            sys.exit(f"no write was left on the device: {line or 'no gpu residency line'}")
     print(b_out[b_out.find("jit traces:"):])
     if compiled == 0:
         sys.exit("the JIT compiled no site")

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "jit/ptx/cuda_driver.h"
+#include "jit/ptx/fused_sum_kernel.h"
 #include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/ptx_target.h"
 
@@ -21,9 +22,10 @@ namespace simit::jit::ptx::fake_gpu {
 
 using namespace simit::jit::cuda;
 
-// A driver whose device memory is host memory and whose launches call `on_launch`. Its two
-// functions: the map kernel's entry and the gather kernel's, told apart by their handles.
-inline int map_function = 0, gather_function = 0;
+// A driver whose device memory is host memory and whose launches call `on_launch`. Its
+// functions: the map kernel's entry, the gather kernel's and the fused-sum kernel's, told
+// apart by their handles.
+inline int map_function = 0, gather_function = 0, fused_sum_function = 0;
 // A device program's step kernels (ptx::kStepEntry's names), by step index.
 inline int step_functions[64];
 struct Launch {
@@ -34,6 +36,9 @@ struct Launch {
   int32_t begin = 0, end = 0;
   // The gather kernel's.
   GatherArgs g;
+  // The fused-sum kernel's.
+  bool fused_sum = false;
+  FusedSumArgs sum;
   // A device program's step kernel: its index (-1: not one), the context and the units.
   int step = -1;
   CUdeviceptr context = 0;
@@ -125,6 +130,10 @@ inline DriverTable fake_table() {
       *f = reinterpret_cast<CUfunction>(&step_functions[std::stoi(n.substr(step.size()))]);
       return CUDA_SUCCESS;
     }
+    if (n == kFusedSumEntry) {
+      *f = reinterpret_cast<CUfunction>(&fused_sum_function);
+      return CUDA_SUCCESS;
+    }
     if (n != kMapEntry && n != kGatherEntry) return CUDA_ERROR_NOT_FOUND;
     *f = reinterpret_cast<CUfunction>(n == kMapEntry ? &map_function : &gather_function);
     return CUDA_SUCCESS;
@@ -173,11 +182,22 @@ inline DriverTable fake_table() {
     l.grid = gx;
     l.block = bx;
     l.gather = f == reinterpret_cast<CUfunction>(&gather_function);
+    l.fused_sum = f == reinterpret_cast<CUfunction>(&fused_sum_function);
     const auto* fn = reinterpret_cast<const int*>(f);
     if (fn >= step_functions && fn < step_functions + 64) {
       l.step = static_cast<int>(fn - step_functions);
       l.context = param<CUdeviceptr>(params, 0);
       l.units = param<int64_t>(params, 1);
+    } else if (l.fused_sum) {
+      l.sum.b = reinterpret_cast<double*>(param<CUdeviceptr>(params, 0));
+      l.sum.a = reinterpret_cast<const double*>(param<CUdeviceptr>(params, 1));
+      l.sum.from = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 2));
+      l.sum.alpha = param<double>(params, 3);
+      l.sum.beta = param<double>(params, 4);
+      l.sum.blocks = param<uint32_t>(params, 5);
+      l.sum.components = param<uint32_t>(params, 6);
+      l.sum.zero_plus = param<uint32_t>(params, 7);
+      l.sum.float32 = param<uint32_t>(params, 8);
     } else if (l.gather) {
       l.g.values = reinterpret_cast<double*>(param<CUdeviceptr>(params, 0));
       l.g.deferred = reinterpret_cast<const double*>(param<CUdeviceptr>(params, 1));

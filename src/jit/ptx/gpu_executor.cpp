@@ -10,10 +10,12 @@
 #include <stdexcept>
 #include <vector>
 
+#include "jit/array_stamps.h"
 #include "jit/deferred_plan.h"
 #include "jit/device_program.h"
 #include "jit/ptx/batch_graphs.h"
 #include "jit/ptx/cuda_driver.h"
+#include "jit/ptx/fused_sum_kernel.h"
 #include "jit/ptx/gather_kernel.h"
 #include "jit/ptx/host_driver.h"
 #include "jit/ptx/ptx_target.h"
@@ -51,6 +53,7 @@ class GpuExecutor final : public Executor, public residency::Holder {
       graphs_.reset();
       for (auto& [host, m] : mirrors_) device_->free(m.array);
       for (auto& [plan, u] : uploads_) free_index(u);
+      for (auto& [key, t] : sum_tables_) device_->free(t.from);
       device_->free(pointers_);
       device_->free(failure_);
       for (cuda::DeviceArray* a : {&system_pointers_, &sizes_, &context_, &lanes_, &partials_})
@@ -295,6 +298,60 @@ class GpuExecutor final : public Executor, public residency::Holder {
     return interrupted ? kSystemInterrupted : 0;
   }
 
+  // The fused matrix sum on the device, where b's newest values are (its map assembled it
+  // there): one thread per block of b (the fused-sum kernel, jit/ptx/fused_sum_kernel.h),
+  // a's values copied in unless they are there too, b left there as the newest.
+  bool add_into(const runtime::SystemMatrix& a, double alpha, runtime::SystemMatrix& b, double beta,
+                bool float32) override {
+    if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
+        a.block_cols() != b.block_cols() || b.value_count() == 0 || a.value_count() == 0)
+      return false;
+    double* host_b = b.raw_values();
+    if (!residency::is_elsewhere(host_b, *this)) return false;
+    ++call_;
+    const SumTable* table = sum_table(a, b);
+    if (!table) return false;
+    device_->make_current();
+    copy_back_pending();
+    cuda::DeviceArray* to = to_device(host_b, b.value_count() * sizeof(double), 0);
+    cuda::DeviceArray* from =
+        to_device(const_cast<double*>(a.raw_values()), a.value_count() * sizeof(double), 0);
+    holder(host_b).version = 0;
+    FusedSumArgs f;
+    f.alpha = alpha;
+    f.beta = beta;
+    f.blocks = static_cast<uint32_t>(b.pattern().nnz());
+    f.components = static_cast<uint32_t>(b.block_size());
+    f.zero_plus = a.shared_pattern() == b.shared_pattern() ? 0 : 1;
+    f.float32 = float32 ? 1 : 0;
+    if (emulated_) {
+      // Host memory under the host driver: the device addresses are host addresses.
+      f.b = reinterpret_cast<double*>(to->device);
+      f.a = reinterpret_cast<const double*>(from->device);
+      f.from = reinterpret_cast<const int32_t*>(table->from.device);
+      fused_sum_on_host(f, 0, f.blocks);
+    } else {
+      const cuda::KernelArg params[] = {cuda::KernelArg::of(to->device),
+                                        cuda::KernelArg::of(from->device),
+                                        cuda::KernelArg::of(table->from.device),
+                                        cuda::KernelArg::of(f.alpha),
+                                        cuda::KernelArg::of(f.beta),
+                                        cuda::KernelArg::of(f.blocks),
+                                        cuda::KernelArg::of(f.components),
+                                        cuda::KernelArg::of(f.zero_plus),
+                                        cuda::KernelArg::of(f.float32)};
+      device_->launch(fused_sum_function(), cuda::Dim3{(f.blocks + kBlock - 1) / kBlock},
+                      cuda::Dim3{kBlock}, params);
+      device_->synchronize();
+    }
+    ++traffic_.launches;
+    ++traffic_.fused_sums;
+    to->device_dirty = true;
+    leave_or_copy_back(host_b, *to, true);
+    evict();
+    return true;
+  }
+
   // residency::Holder: the host touches an array whose newest contents are here.
   void bring_back(void* host) override {
     auto it = mirrors_.find(host);
@@ -302,6 +359,7 @@ class GpuExecutor final : public Executor, public residency::Holder {
     device_->make_current();
     copy_back(it->second.array);
     ++traffic_.brought_back;
+    traffic_.bytes_brought_back += static_cast<long long>(it->second.array.bytes);
   }
   // The host array is freed, or about to be set anew: the device's contents are nobody's.
   void released(const void* host) noexcept override {
@@ -417,7 +475,9 @@ class GpuExecutor final : public Executor, public residency::Holder {
                                ArrayFill how = ArrayFill::Copy) {
     if (!host || bytes == 0) return nullptr;
     Mirror& m = mirrors_[host];
-    if (m.array.device_dirty && m.array.bytes != bytes) residency::before_host_access(host);
+    // Newer elsewhere than here (another executor's memory: two engines over one set) comes
+    // home first; newer here in a mirror of another size (a set that grew) too.
+    if (!m.array.device_dirty || m.array.bytes != bytes) residency::before_host_access(host);
     if (m.array.bytes != bytes || m.array.device == 0) {
       device_->free(m.array);
       m.array = device_->alloc(host, bytes);
@@ -465,12 +525,52 @@ class GpuExecutor final : public Executor, public residency::Holder {
 
   Mirror& holder(const void* host) { return mirrors_.at(host); }
 
+  // Per pair of patterns (by their numbers, jit/array_stamps.h), the fused sum's source block
+  // of each block of b on the device, built and uploaded once.
+  struct SumTable {
+    cuda::DeviceArray from;
+    std::vector<int32_t> host;
+    long used = 0;
+  };
+  const SumTable* sum_table(const runtime::SystemMatrix& a, const runtime::SystemMatrix& b) {
+    const auto key =
+        std::make_pair(pattern_number(a.shared_pattern()), pattern_number(b.shared_pattern()));
+    auto it = sum_tables_.find(key);
+    if (it == sum_tables_.end()) {
+      SumTable t;
+      if (!fused_sum_sources(a.pattern(), b.pattern(), t.host)) return nullptr;
+      t.from = device_->alloc(t.host.data(), t.host.size() * sizeof(int32_t));
+      ++traffic_.allocations;
+      device_->to_device(t.from);
+      traffic_.bytes_to_device += static_cast<long long>(t.from.bytes);
+      it = sum_tables_.emplace(key, std::move(t)).first;
+    }
+    it->second.used = call_;
+    return &it->second;
+  }
+
+  cuda::CUfunction fused_sum_function() {
+    if (!fused_sum_) {
+      cuda::CUmodule module = device_->load_module(fused_sum_ptx(arch_, ptx_version_));
+      fused_sum_ = device_->function(module, kFusedSumEntry);
+    }
+    return fused_sum_;
+  }
+
   void evict() {
     for (auto it = mirrors_.begin(); it != mirrors_.end();) {
       if (call_ - it->second.used > kKeepCalls) {
         if (it->second.array.device_dirty) residency::before_host_access(it->first);
         device_->free(it->second.array);
         it = mirrors_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    for (auto it = sum_tables_.begin(); it != sum_tables_.end();) {
+      if (call_ - it->second.used > kKeepCalls) {
+        device_->free(it->second.from);
+        it = sum_tables_.erase(it);
       } else {
         ++it;
       }
@@ -633,7 +733,8 @@ class GpuExecutor final : public Executor, public residency::Holder {
   // Host arrays a deferred run wrote, and whether each is a runtime array (left on the
   // device by finish_deferred) or copied back by it.
   std::vector<std::pair<const void*, bool>> pending_;
-  cuda::CUfunction gather_ = nullptr;
+  cuda::CUfunction gather_ = nullptr, fused_sum_ = nullptr;
+  std::map<std::pair<uint64_t, uint64_t>, SumTable> sum_tables_;
   std::string arch_, ptx_version_;  // of the map kernels ("": not seen yet)
   std::vector<cuda::CUdeviceptr> pointers_host_;
   cuda::DeviceArray pointers_, failure_;

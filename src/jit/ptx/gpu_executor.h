@@ -17,13 +17,20 @@
 // from the mirror's (or is 0, unknown: vectors, matrices, the scalars); a result the host
 // zeroed is zeroed on the device (cuMemsetD32) rather than copied, and a split run's deferred
 // blocks, which the host holds at -0.0, are set to -0.0 there (Device::fill_negative_zero),
-// never copied. Each
-// array the kernel writes is copied back after the launch, and its mirror takes the stamp
-// the host's copy has then (the host copy stays the one the rest of the program reads); a
-// deferred map's written arrays are copied back after the gather, all but the deferred
-// blocks, which never leave the device. Copying back only when the host reads an array is
-// not done: every host read (fields, tensors, the interpreter, output, the API's views)
-// would need a hook that first brings the device's copy back.
+// never copied.
+//
+// What a kernel writes into a runtime array (a field, a vector, a result, a matrix's values:
+// MapArgs::array_resident) stays on the device as the newest copy (runtime/residency.h): the
+// next kernel that reads it finds it there, and the host gets it back only when it touches the
+// array (every accessor of tensors, fields and matrices asks first), when a call returns to
+// its host (the interpreter brings everything back then, for the hosts that read through
+// pointers of their own), or when this executor goes. An array the host frees or sets anew
+// meanwhile is dropped, never copied into. Any other array a kernel writes (the controller's
+// marks) is copied back after the launch; a deferred map's written arrays are left or copied
+// once the gather has run, all but the deferred blocks, which never leave the device. A
+// fused matrix sum whose K the device holds runs there too (add_into: the fused-sum kernel,
+// jit/ptx/fused_sum_kernel.h), so that K, M and the sum never cross to the host on their way
+// to a solver loop on the device.
 //
 // Emulated: a driver table over host memory (jit/ptx/host_driver.h) stands in for the GPU,
 // and the kernels are the CPU target's, called on the copies in that "device" memory (the
@@ -96,7 +103,10 @@ struct GpuTraffic {
   long long bytes_kept = 0;
   long uploads_resident = 0;
   long brought_back = 0;
+  long long bytes_brought_back = 0;
   long dropped = 0;
+  // Fused matrix sums run on the device (jit/ptx/fused_sum_kernel.h).
+  long fused_sums = 0;
 };
 GpuTraffic gpu_traffic(const Executor& executor);
 
