@@ -2,10 +2,7 @@
 // table of source blocks.
 #include "jit/ptx/fused_sum_kernel.h"
 
-#include <sstream>
-
 #include "jit/ptx/gather_kernel.h"
-#include "jit/ptx/ptx_target.h"
 #include "runtime/system_matrix.h"
 
 namespace simit::jit::ptx {
@@ -106,13 +103,8 @@ double to_binary32(double v) { return static_cast<double>(static_cast<float>(v))
 }  // namespace
 
 std::string fused_sum_ptx(const std::string& arch, const std::string& version) {
-  std::ostringstream out;
-  out << "//\n// The fused-sum kernel (simit: jit/ptx/fused_sum_kernel.h)\n//\n\n"
-      << ".version " << (version.empty() ? kDefaultPtxVersion : version) << "\n"
-      << ".target " << (arch.empty() ? kDefaultGpuArch : arch) << "\n"
-      << ".address_size 64\n\n"
-      << kBody;
-  return out.str();
+  return hand_written_module("The fused-sum kernel (simit: jit/ptx/fused_sum_kernel.h)", arch,
+                             version, kBody);
 }
 
 void fused_sum_on_host(const FusedSumArgs& a, uint32_t first, uint32_t end) {

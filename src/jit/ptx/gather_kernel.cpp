@@ -100,14 +100,21 @@ $L__done:
 
 }  // namespace
 
-std::string gather_ptx(const std::string& arch, const std::string& version) {
+std::string hand_written_module(const std::string& what, const std::string& arch,
+                                const std::string& version, const char* body) {
   std::ostringstream out;
-  out << "//\n// The gather kernel of a deferred assembly (simit: jit/ptx/gather_kernel.h)\n//\n\n"
+  out << "//\n// " << what << "\n//\n\n"
       << ".version " << (version.empty() ? kDefaultPtxVersion : version) << "\n"
       << ".target " << (arch.empty() ? kDefaultGpuArch : arch) << "\n"
       << ".address_size 64\n\n"
-      << kBody;
+      << body;
   return out.str();
+}
+
+std::string gather_ptx(const std::string& arch, const std::string& version) {
+  return hand_written_module(
+      "The gather kernel of a deferred assembly (simit: jit/ptx/gather_kernel.h)", arch, version,
+      kBody);
 }
 
 void gather_on_host(const GatherArgs& a, uint32_t first, uint32_t end) {

@@ -33,6 +33,11 @@ struct GatherArgs {
 // arguments take the defaults (kDefaultPtxVersion, ptx::kDefaultGpuArch).
 std::string gather_ptx(const std::string& arch = "", const std::string& version = "");
 
+// A module of hand-written PTX (the gather kernel's, the fused-sum kernel's): a comment
+// naming `what`, the directives for `arch` and `version` (defaults as above), then `body`.
+std::string hand_written_module(const std::string& what, const std::string& arch,
+                                const std::string& version, const char* body);
+
 // Threads [first, end) of the gather kernel over `a`, on the calling thread.
 void gather_on_host(const GatherArgs& a, uint32_t first, uint32_t end);
 
