@@ -1,6 +1,5 @@
 // The interpreter's core: construction, entry calls, variables and types at run time.
 #include "interp/interpreter.h"
-
 #include "interp/set_binding.h"
 
 #include <cmath>

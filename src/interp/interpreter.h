@@ -145,9 +145,12 @@ class Interpreter final : public ExecState {
   static bool is_local(const frontend::ast::Variable& v);
   std::vector<Value> eval_multi(const frontend::ast::Expr& e);
   Frame& run_call(const frontend::ast::Call& c);
+  // At the end of an entry call: the arrays an executor keeps newer come home
+  // (runtime/residency.h), the call's locals and reusable matrices first dropped when it
+  // returned.
+  void bring_arrays_home(int base_depth, bool release_locals);
   // The frame above the current one, made ready for a call of `f`: slots sized, each
   // variable referring to its own slot (calls and maps then bind the parameters).
-  void bring_arrays_home(int base_depth, bool release_locals);
   Frame& next_frame(const frontend::ast::FuncDecl& f, const frontend::SourceSpan& call_site,
                     MapContext* map);
   Frame& enter(const frontend::ast::FuncDecl& f, size_t arg_base, size_t inout_base,
