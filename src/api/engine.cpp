@@ -47,6 +47,7 @@ std::unique_ptr<interp::Interpreter> Engine::make_executor() const {
   o.hook = options_.hook;
   o.sites = options_.sites;
   o.distribution = options_.distribution;
+  o.host_uses_accessors = options_.host_uses_accessors;
   return std::make_unique<interp::Interpreter>(compiled_->program(), o);
 }
 

@@ -54,6 +54,9 @@ struct EngineOptions {
   interp::SiteHook* sites = nullptr;
   // A distributed run's seam (interp/distribution.h); null in one process.
   const interp::Distribution* distribution = nullptr;
+  // The host reads what a call leaves only through the runtime's accessors, so arrays a GPU
+  // keeps newer may stay there across calls (interp::Options::host_uses_accessors).
+  bool host_uses_accessors = false;
   // Where the JIT's dumps (ExecutorChoice::dump_loop_ir, dump_llvm) print; null: nowhere.
   std::ostream* dump = nullptr;
   // Tests of the JIT's check only: flips the lowest bit of a compiled map's first result value

@@ -90,7 +90,7 @@ std::vector<Value> Interpreter::call(const ast::FuncDecl& func, std::vector<Valu
 // call that returned, its frames' locals go first: nothing reads them again, and arrays that
 // only they held are dropped rather than copied.
 void Interpreter::bring_arrays_home(int base_depth, bool release_locals) {
-  if (!runtime::residency::any_elsewhere()) return;
+  if (options_.host_uses_accessors || !runtime::residency::any_elsewhere()) return;
   if (release_locals) {
     for (size_t d = static_cast<size_t>(base_depth) + 1; d < frames_.size(); ++d)
       for (Value& v : frames_[d]->slots) v = Value();

@@ -29,6 +29,11 @@ struct Options {
   // A distributed run's seam (interp/distribution.h): reductions over a set add the ranks'
   // owned parts and partial results refresh their ghosts; null in a run of one process.
   const Distribution* distribution = nullptr;
+  // Whether the host reads what a call leaves only through the runtime's accessors (a scene
+  // run writing its own output), which bring an array an executor keeps newer back when it is
+  // read: those arrays then stay there across calls. False brings them all home at the end of
+  // every entry call, for hosts that keep pointers of their own (runtime/residency.h).
+  bool host_uses_accessors = false;
 };
 
 }  // namespace simit::interp

@@ -14,6 +14,7 @@
 #include "api/compiled_program.h"
 #include "api/engine.h"
 #include "interp/runtime_error.h"
+#include "runtime/residency.h"
 #include "runtime/set.h"
 
 namespace simit::jit::ptx {
@@ -62,13 +63,14 @@ struct Outcome {
   double s = 0;
   std::string error;
   std::string stats;
+  long elsewhere = 0;  // arrays whose newest copy was on the device after the last call
 };
 
 // Between frames: the host's changes to the sets (frame: the frame just run).
 using Between = std::function<void(runtime::Set& verts, runtime::Set& edges, int frame)>;
 
 Outcome run_program(api::ExecutorKind kind, int n, double blow_up_at = -1,
-                    const Between& between = {}) {
+                    const Between& between = {}, bool host_uses_accessors = false) {
   auto compiled = api::CompiledProgram::from_source("gpu.sim", kProgram);
   EXPECT_TRUE(compiled->ok());
   runtime::Set v("verts");
@@ -91,6 +93,7 @@ Outcome run_program(api::ExecutorKind kind, int n, double blow_up_at = -1,
   o.executor.kind = kind;
   o.executor.threshold = 0;
   o.executor.threads = 1;
+  o.host_uses_accessors = host_uses_accessors;
   api::Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("verts"), v);
   engine.bind_set(*compiled->find_extern("edges"), e);
@@ -103,6 +106,7 @@ Outcome run_program(api::ExecutorKind kind, int n, double blow_up_at = -1,
   } catch (const interp::RuntimeError& err) {
     out.error = err.what();
   }
+  out.elsewhere = runtime::residency::count();
   std::ostringstream stats;
   engine.print_jit_stats(stats);
   out.stats = stats.str();
@@ -176,6 +180,33 @@ TEST_F(GpuEmulation, FieldsTheHostChangesBetweenCallsReachTheDevice) {
   EXPECT_GE(already, 16LL * edges) << there;
 }
 
+// Residency across calls (runtime/residency.h): by default every array the device holds
+// newer comes home when a call returns (a host may read through views of its own); a host
+// that reads only through the accessors (a scene run) leaves them there, across calls and
+// across its own writes between them, which bring them back first, and gets the same bits.
+TEST_F(GpuEmulation, AHostThatReadsThroughAccessorsLeavesTheDevicesArraysThereAcrossCalls) {
+  const Between change = [](runtime::Set& verts, runtime::Set&, int frame) {
+    if (frame == 1)
+      for (int i = 0; i < verts.size(); i += 2) verts.field(1).at<double>(i)[1] = -0.5 * i;
+  };
+  const int n = 60;
+  const Outcome interp = run_program(api::ExecutorKind::Interpreter, n, -1, change);
+  const Outcome home = run_program(api::ExecutorKind::Gpu, n, -1, change);
+  const Outcome stay = run_program(api::ExecutorKind::Gpu, n, -1, change, true);
+  ASSERT_EQ(home.error, "");
+  ASSERT_EQ(stay.error, "");
+  EXPECT_EQ(home.elsewhere, 0);
+  EXPECT_GE(stay.elsewhere, 2);  // verts.x and verts.y at least
+  for (const Outcome* o : {&home, &stay}) {
+    ASSERT_EQ(interp.fields.size(), o->fields.size());
+    EXPECT_EQ(
+        std::memcmp(interp.fields.data(), o->fields.data(), interp.fields.size() * sizeof(double)),
+        0);
+    EXPECT_EQ(std::memcmp(&interp.s, &o->s, sizeof o->s), 0);
+  }
+  EXPECT_EQ(runtime::residency::count(), 0);  // the engines went, and brought them home
+}
+
 TEST_F(GpuEmulation, AFailedCheckNamesTheElementAsTheInterpreterDoes) {
   const Outcome interp = run_program(api::ExecutorKind::Interpreter, 300, 123);
   const Outcome gpu = run_program(api::ExecutorKind::Gpu, 300, 123);
@@ -243,6 +274,7 @@ Outcome run_fan(api::ExecutorKind kind, int tets) {
   } catch (const interp::RuntimeError& err) {
     out.error = err.what();
   }
+  out.elsewhere = runtime::residency::count();
   std::ostringstream stats;
   engine.print_jit_stats(stats);
   out.stats = stats.str();
