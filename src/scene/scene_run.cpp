@@ -282,9 +282,9 @@ api::EngineOptions SceneRun::engine_options(std::ostream& out) const {
   eo.distribution = options_.distributed.get();
   // The run reads fields for its output and checks through their accessors; a stepper's host
   // holds views of them (pinned sets), which must be current whenever a call returns.
-  eo.host_uses_accessors =
-      std::none_of(sets_.sets.begin(), sets_.sets.end(),
-                   [](const auto& s) { return s->set && s->set->fields_pinned(); });
+  eo.host_uses_accessors = std::none_of(sets_.sets.begin(), sets_.sets.end(), [](const auto& s) {
+    return s->set && s->set->fields_pinned();
+  });
   return eo;
 }
 
