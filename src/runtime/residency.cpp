@@ -71,9 +71,7 @@ bool is_elsewhere(const void* host, const Holder& holder) {
   return it != table().end() && it->second == &holder;
 }
 
-void settle(const void* host) {
-  if (Holder* h = take(host)) h->released(host);
-}
+void settle(const void* host) { detail::freeing(host); }
 
 namespace {
 

@@ -16,6 +16,8 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
+#include <memory>
 
 namespace simit::runtime::residency {
 
@@ -71,5 +73,10 @@ struct FreeHostArray {
     delete[] p;
   }
 };
+
+// A runtime heap block of `bytes` uninitialised bytes, freed through FreeHostArray.
+inline std::shared_ptr<std::byte[]> new_host_array(std::size_t bytes) {
+  return std::shared_ptr<std::byte[]>(new std::byte[bytes], FreeHostArray{});
+}
 
 }  // namespace simit::runtime::residency

@@ -73,7 +73,7 @@ void Field::reallocate(size_t capacity) {
   std::shared_ptr<std::byte[]> fresh;
   if (capacity) {
     try {
-      fresh = std::shared_ptr<std::byte[]>(new std::byte[capacity], residency::FreeHostArray{});
+      fresh = residency::new_host_array(capacity);
     } catch (const std::bad_alloc&) {
       throw Fault("out of memory while allocating " + std::to_string(capacity) +
                   " bytes for field '" + name_ + "'");

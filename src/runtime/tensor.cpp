@@ -24,7 +24,7 @@ const char* component_name(ComponentKind k) {
 
 Storage::Storage(size_t bytes) : bytes_(bytes) {
   if (bytes > kInlineBytes) {
-    heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes], residency::FreeHostArray{});
+    heap_ = residency::new_host_array(bytes);
     std::memset(heap_.get(), 0, bytes);
   } else {
     std::memset(inline_, 0, bytes);
@@ -35,7 +35,7 @@ Storage::Storage(std::shared_ptr<std::byte[]> heap, size_t bytes) : bytes_(bytes
   if (heap) {
     heap_ = std::move(heap);
   } else if (bytes > kInlineBytes) {
-    heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes], residency::FreeHostArray{});
+    heap_ = residency::new_host_array(bytes);
     std::memset(heap_.get(), 0, bytes);
   } else {
     std::memset(inline_, 0, bytes);
@@ -67,7 +67,7 @@ Storage& Storage::operator=(Storage&& o) noexcept {
 
 std::byte* Storage::mutable_heap() {
   if (heap_.use_count() > 1) {
-    std::shared_ptr<std::byte[]> copy(new std::byte[bytes_], residency::FreeHostArray{});
+    std::shared_ptr<std::byte[]> copy = residency::new_host_array(bytes_);
     std::memcpy(copy.get(), heap_.get(), bytes_);
     heap_ = std::move(copy);
   }

@@ -58,7 +58,7 @@ class Storage {
   void reset_uninit(size_t bytes) {
     bytes_ = bytes;
     if (bytes > kInlineBytes)
-      heap_ = std::shared_ptr<std::byte[]>(new std::byte[bytes], residency::FreeHostArray{});
+      heap_ = residency::new_host_array(bytes);
     else if (heap_)
       heap_.reset();
   }
