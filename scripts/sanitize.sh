@@ -25,7 +25,7 @@ if [ "${1:-}" = --thread ]; then
   cmake --build "$build" -j2 --target jit_tests simit
   export TSAN_OPTIONS="${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}"
   if [ $# -eq 0 ]; then
-    set -- -R "ThreadPool|ThreadedExecutor|DeferAssembly|PrunedMatrix|Executor\.|lang_corpus_jit_threads3|jit_agrees_threads3_(fem|springs)"
+    set -- -R "ThreadPool|ParallelFor|ThreadedExecutor|DeferAssembly|PrunedMatrix|Executor\.|lang_corpus_jit_threads3|jit_agrees_threads3_(fem|springs)"
   fi
   ctest --test-dir "$build" --output-on-failure -j1 "$@"
   exit

@@ -1,7 +1,7 @@
 // The engine's worker threads (jit/thread_pool.h). A job is short (one map over a set, one
 // pass of a solver loop: a few microseconds to milliseconds), so handing one out is a store
-// and a claim is a compare-and-swap, without a lock; a worker spins a while on the job word
-// before it sleeps, and the caller spins until the last task returns.
+// per thread and a claim is a compare-and-swap, without a lock; a worker spins a while on the
+// job number before it sleeps, and the caller spins until the last task returns.
 #include "jit/thread_pool.h"
 
 #include <algorithm>
@@ -15,7 +15,7 @@ namespace simit::jit {
 
 namespace {
 
-// How long a worker polls the job word before it sleeps, and the caller polls for the last
+// How long a worker polls the job number before it sleeps, and the caller polls for the last
 // task before it yields: waking a sleeping thread takes tens of microseconds, as long as a
 // solver loop's pass, so a worker that slept between two passes would never take part.
 // (Measured in time: a pause instruction takes 3 to 140 cycles, by processor.)
@@ -30,12 +30,19 @@ void relax() {
 #endif
 }
 
-constexpr uint64_t kLeft = 0xffffffffu;  // the low half of the job word: tasks not yet claimed
+// A range's word: job (32 bits), front (16), end (16).
+constexpr uint64_t range_word(uint32_t job, uint64_t front, uint64_t end) {
+  return uint64_t{job} << 32 | front << 16 | end;
+}
+constexpr uint32_t job_of(uint64_t w) { return static_cast<uint32_t>(w >> 32); }
+constexpr uint64_t front_of(uint64_t w) { return (w >> 16) & 0xffff; }
+constexpr uint64_t end_of(uint64_t w) { return w & 0xffff; }
 
 }  // namespace
 
-ThreadPool::ThreadPool(int threads) {
-  for (int i = 1; i < threads; ++i) workers_.emplace_back([this] { work(); });
+ThreadPool::ThreadPool(int threads)
+    : ranges_(new Range[static_cast<size_t>(std::max(1, threads))]) {
+  for (int i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 
 ThreadPool::~ThreadPool() {
@@ -47,16 +54,28 @@ ThreadPool::~ThreadPool() {
   for (std::thread& t : workers_) t.join();
 }
 
-void ThreadPool::claim() {
-  uint64_t w = work_.load(std::memory_order_acquire);
-  while ((w & kLeft) != 0) {
-    if (!work_.compare_exchange_weak(w, w - 1, std::memory_order_acq_rel)) continue;
-    // The claim succeeded, so the job is still running and task_ and tasks_ are its own.
-    const auto i = tasks_ - static_cast<int64_t>(w & kLeft);
-    task_.call(task_.object, i);
-    finished_.fetch_add(1, std::memory_order_acq_rel);
-    w = work_.load(std::memory_order_acquire);
+bool ThreadPool::claim_one(Range& range, uint32_t job, bool front) {
+  uint64_t w = range.word.load(std::memory_order_acquire);
+  for (;;) {
+    if (job_of(w) != job || front_of(w) >= end_of(w)) return false;
+    const uint64_t taken = front ? range_word(job, front_of(w) + 1, end_of(w))
+                                 : range_word(job, front_of(w), end_of(w) - 1);
+    if (range.word.compare_exchange_weak(w, taken, std::memory_order_acq_rel)) break;
   }
+  // The claim succeeded, so the job is still running and task_ and first_ are its own.
+  const auto i = static_cast<int64_t>(front ? front_of(w) : end_of(w) - 1);
+  task_.call(task_.object, first_ + i);
+  finished_.fetch_add(1, std::memory_order_acq_rel);
+  return true;
+}
+
+void ThreadPool::claim(int self, uint32_t job) {
+  const int threads = this->threads();
+  while (claim_one(ranges_[static_cast<size_t>(self)], job, true)) {
+  }
+  for (int k = 1; k < threads; ++k)
+    while (claim_one(ranges_[static_cast<size_t>((self + k) % threads)], job, false)) {
+    }
 }
 
 void ThreadPool::run(int64_t tasks, Task task) {
@@ -66,18 +85,29 @@ void ThreadPool::run(int64_t tasks, Task task) {
     return;
   }
   task_ = task;
-  tasks_ = tasks;
+  for (int64_t first = 0; first < tasks; first += kMaxJobTasks)
+    run_job(first, std::min(kMaxJobTasks, tasks - first));
+}
+
+void ThreadPool::run_job(int64_t first, int64_t tasks) {
+  first_ = first;
   finished_.store(0, std::memory_order_relaxed);
-  const uint64_t job = (work_.load(std::memory_order_relaxed) >> 32) + 1;
-  work_.store((job << 32) | static_cast<uint64_t>(tasks), std::memory_order_seq_cst);
-  // A worker that counted itself asleep after this load tests the job word after the store
+  const uint32_t job = job_.load(std::memory_order_relaxed) + 1;
+  const int threads = this->threads();
+  for (int t = 0; t < threads; ++t)
+    ranges_[static_cast<size_t>(t)].word.store(
+        range_word(job, static_cast<uint64_t>(t * tasks / threads),
+                   static_cast<uint64_t>((t + 1) * tasks / threads)),
+        std::memory_order_release);
+  job_.store(job, std::memory_order_seq_cst);
+  // A worker that counted itself asleep after this load tests the job number after the store
   // above, and sees the job; one counted before it is woken (taking the lock first means it
   // is either waiting or about to test).
   if (sleepers_.load(std::memory_order_seq_cst) > 0) {
     { std::lock_guard lock(mutex_); }
     wake_.notify_all();
   }
-  claim();
+  claim(0, job);
   const auto until = std::chrono::steady_clock::now() + kSpinFor;
   for (int spins = 1; finished_.load(std::memory_order_acquire) != tasks; ++spins) {
     relax();
@@ -86,21 +116,24 @@ void ThreadPool::run(int64_t tasks, Task task) {
   }
 }
 
-void ThreadPool::work() {
+void ThreadPool::work(int self) {
+  uint32_t seen = 0;
   for (;;) {
-    claim();
+    uint32_t job = job_.load(std::memory_order_acquire);
+    if (job != seen) {
+      seen = job;
+      claim(self, job);
+    }
     const auto until = std::chrono::steady_clock::now() + kSpinFor;
-    for (int spins = 1; (work_.load(std::memory_order_acquire) & kLeft) == 0; ++spins) {
+    for (int spins = 1; job_.load(std::memory_order_acquire) == seen; ++spins) {
       if (stop_.load(std::memory_order_relaxed)) return;
       relax();
       if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until) break;
     }
-    if ((work_.load(std::memory_order_acquire) & kLeft) != 0) continue;
+    if (job_.load(std::memory_order_acquire) != seen) continue;
     std::unique_lock lock(mutex_);
     sleepers_.fetch_add(1, std::memory_order_seq_cst);
-    wake_.wait(lock, [this] {
-      return stop_.load() || (work_.load(std::memory_order_seq_cst) & kLeft) != 0;
-    });
+    wake_.wait(lock, [&] { return stop_.load() || job_.load(std::memory_order_seq_cst) != seen; });
     sleepers_.fetch_sub(1, std::memory_order_relaxed);
     if (stop_.load()) return;
   }
@@ -108,14 +141,36 @@ void ThreadPool::work() {
 
 }  // namespace simit::jit
 
-// A few ranges per thread, so that a thread that finishes early takes another.
 extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
-                                       const int64_t* context, int64_t units) {
+                                       const int64_t* context, int64_t units,
+                                       const int32_t* row_ptr, int64_t unit_rows, int64_t rows) {
   auto* p = static_cast<simit::jit::ThreadPool*>(pool);
   if (!p || p->threads() == 1 || units <= 1) {
     if (units > 0) op(context, 0, units);
     return;
   }
-  const int64_t tasks = std::min<int64_t>(units, int64_t{4} * p->threads());
-  p->run(tasks, [&](int64_t t) { op(context, t * units / tasks, (t + 1) * units / tasks); });
+  const int64_t tasks = std::min<int64_t>(units, p->threads());
+  // Task t's first unit. A product's: the first unit whose rows start at or after t / tasks
+  // of the rows plus blocks (a row costs its blocks and its own pass over them).
+  auto first_unit = [&](int64_t t) -> int64_t {
+    if (!row_ptr || t == 0 || t == tasks) return t * units / tasks;
+    const auto weight = [&](int64_t u) {
+      const int64_t r = std::min(u * unit_rows, rows);
+      return static_cast<int64_t>(row_ptr[r]) + r;
+    };
+    const int64_t goal = t * weight(units) / tasks;
+    int64_t lo = 0, hi = units;  // the least u with weight(u) >= goal lies in [lo, hi]
+    while (lo < hi) {
+      const int64_t mid = lo + (hi - lo) / 2;
+      if (weight(mid) >= goal)
+        hi = mid;
+      else
+        lo = mid + 1;
+    }
+    return lo;
+  };
+  p->run(tasks, [&](int64_t t) {
+    const int64_t first = first_unit(t), end = first_unit(t + 1);
+    if (first < end) op(context, first, end);
+  });
 }

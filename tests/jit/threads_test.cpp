@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <random>
 #include <vector>
 
@@ -33,6 +34,69 @@ TEST(ThreadPool, RunsEveryTaskOnceJobAfterJob) {
       }
     }
   }
+}
+
+TEST(ThreadPool, RunsEveryTaskOnceWhenThreadsTakeFromEachOthersRanges) {
+  // Tasks of uneven cost, so that threads finish their home ranges at different times and
+  // take tasks from the back of the others'; and a run of more tasks than one job holds.
+  std::mt19937 rng(7);
+  for (int threads : {2, 3, 7}) {
+    ThreadPool pool(threads);
+    for (int job = 0; job < 50; ++job) {
+      const int64_t tasks = std::uniform_int_distribution<int64_t>(2, 300)(rng);
+      std::vector<std::atomic<int>> runs(static_cast<size_t>(tasks));
+      pool.run(tasks, [&](int64_t i) {
+        volatile double x = 0;
+        for (int64_t k = 0; k < (i % 5 == 0 ? 20000 : 10); ++k) x = x + 1.0;
+        runs[static_cast<size_t>(i)].fetch_add(1);
+      });
+      for (int64_t i = 0; i < tasks; ++i) ASSERT_EQ(runs[static_cast<size_t>(i)].load(), 1) << i;
+    }
+  }
+  ThreadPool pool(3);
+  const int64_t many = 150000;  // three jobs of at most 65535 tasks
+  std::vector<std::atomic<int>> runs(static_cast<size_t>(many));
+  pool.run(many, [&](int64_t i) { runs[static_cast<size_t>(i)].fetch_add(1); });
+  for (int64_t i = 0; i < many; ++i) ASSERT_EQ(runs[static_cast<size_t>(i)].load(), 1) << i;
+}
+
+// The ranges simit_jit_parallel_for hands an outlined op: contiguous, covering every unit
+// once, one per thread; a product's shared out by rows plus blocks.
+std::vector<std::pair<int64_t, int64_t>> parallel_ranges(void* pool, int64_t units,
+                                                         const int32_t* row_ptr, int64_t unit_rows,
+                                                         int64_t rows) {
+  static std::mutex mutex;
+  static std::vector<std::pair<int64_t, int64_t>> seen;
+  seen.clear();
+  simit_jit_parallel_for(
+      pool,
+      [](const int64_t*, int64_t first, int64_t end) {
+        std::lock_guard lock(mutex);
+        seen.emplace_back(first, end);
+      },
+      nullptr, units, row_ptr, unit_rows, rows);
+  std::sort(seen.begin(), seen.end());
+  return seen;
+}
+
+TEST(ParallelFor, OneContiguousRangePerThreadAndAProductsByItsBlocks) {
+  using Ranges = std::vector<std::pair<int64_t, int64_t>>;
+  EXPECT_EQ(parallel_ranges(nullptr, 15, nullptr, 0, 0), (Ranges{{0, 15}}));
+  ThreadPool two(2), three(3);
+  EXPECT_EQ(parallel_ranges(&two, 15, nullptr, 0, 0), (Ranges{{0, 7}, {7, 15}}));
+  EXPECT_EQ(parallel_ranges(&three, 2, nullptr, 0, 0), (Ranges{{0, 1}, {1, 2}}));
+  EXPECT_EQ(parallel_ranges(&three, 1, nullptr, 0, 0), (Ranges{{0, 1}}));
+  // 10 units of 4 rows (the last of 2): the first 4 units' rows hold 20 blocks each, the
+  // rest 1. Rows plus blocks: 16 x 21 + 22 x 2 = 380, half of it 190: the first unit whose
+  // rows start at 190 or more is unit 3 (weight 12 x 21 = 252; unit 2: 168).
+  const int64_t rows = 38;
+  std::vector<int32_t> row_ptr(rows + 1, 0);
+  for (int64_t r = 0; r < rows; ++r) row_ptr[r + 1] = row_ptr[r] + (r < 16 ? 20 : 1);
+  EXPECT_EQ(parallel_ranges(&two, 10, row_ptr.data(), 4, rows), (Ranges{{0, 3}, {3, 10}}));
+  // Equal rows: the split of a pass.
+  std::fill(row_ptr.begin(), row_ptr.end(), 0);
+  for (int64_t r = 0; r < rows; ++r) row_ptr[r + 1] = row_ptr[r] + 3;
+  EXPECT_EQ(parallel_ranges(&two, 10, row_ptr.data(), 4, rows), (Ranges{{0, 5}, {5, 10}}));
 }
 
 TEST(ThreadedExecutor, CoversEveryElementOnceInItsChunks) {
