@@ -96,8 +96,8 @@ void add_executor_options(CLI::App& sub, ExecutorFlags& t, const std::string& ru
               "other system statements compiled to native code with LLVM; the rest "
               "interpreted) or gpu (as jit, with the compiled maps and solver loops run on an "
               "NVIDIA GPU through the CUDA driver: an array is copied there only when the host "
-              "changed it, what a map or loop writes comes back after each call, a loop's "
-              "scalars stay there while it iterates). "
+              "changed it, and what a map or loop writes stays there until the host reads it "
+              "(an output frame, the finite check, a print). "
               "--backend is another name of this option")
           ->type_name("interpreter|jit|gpu");
   t.threads = add_parsed(

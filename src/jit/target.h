@@ -153,8 +153,7 @@ struct HostCalls {
   // int32_t (int32_t fn, int32_t n, int32_t float32, const double* in, double* out)
   void* decompose = nullptr;
   // void (void* pool, void (*op)(const int64_t*, int64_t, int64_t), const int64_t* context,
-  // int64_t units, const int32_t* row_ptr, int64_t unit_rows, int64_t rows):
-  // simit_jit_parallel_for (jit/thread_pool.h)
+  // int64_t units): simit_jit_parallel_for (jit/thread_pool.h)
   void* parallel_for = nullptr;
 };
 

@@ -141,36 +141,26 @@ void ThreadPool::work(int self) {
 
 }  // namespace simit::jit
 
+// One range per thread, each its home task (jit/thread_pool.h), so that a thread computes the
+// same rows in every pass and finds them in its own cache: on a 2-core machine whose cores
+// take 500 ns to pass a cache line back and forth, the fem bunny's solve took 108 ms over 30
+// frames on four ranges a thread claimed in turn, 94 ms on one home range a thread.
 extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
-                                       const int64_t* context, int64_t units,
-                                       const int32_t* row_ptr, int64_t unit_rows, int64_t rows) {
+                                       const int64_t* context, int64_t units) {
   auto* p = static_cast<simit::jit::ThreadPool*>(pool);
   if (!p || p->threads() == 1 || units <= 1) {
     if (units > 0) op(context, 0, units);
     return;
   }
-  const int64_t tasks = std::min<int64_t>(units, p->threads());
-  // Task t's first unit. A product's: the first unit whose rows start at or after t / tasks
-  // of the rows plus blocks (a row costs its blocks and its own pass over them).
-  auto first_unit = [&](int64_t t) -> int64_t {
-    if (!row_ptr || t == 0 || t == tasks) return t * units / tasks;
-    const auto weight = [&](int64_t u) {
-      const int64_t r = std::min(u * unit_rows, rows);
-      return static_cast<int64_t>(row_ptr[r]) + r;
-    };
-    const int64_t goal = t * weight(units) / tasks;
-    int64_t lo = 0, hi = units;  // the least u with weight(u) >= goal lies in [lo, hi]
-    while (lo < hi) {
-      const int64_t mid = lo + (hi - lo) / 2;
-      if (weight(mid) >= goal)
-        hi = mid;
-      else
-        lo = mid + 1;
-    }
-    return lo;
-  };
-  p->run(tasks, [&](int64_t t) {
-    const int64_t first = first_unit(t), end = first_unit(t + 1);
-    if (first < end) op(context, first, end);
+  const int parts = static_cast<int>(std::min<int64_t>(units, p->threads()));
+  simit::jit::RangeSplit& split = p->split_of(reinterpret_cast<const void*>(op));
+  const std::vector<int64_t>& bounds = split.bounds(units, parts);
+  double* times = split.times();
+  p->run(parts, [&](int64_t t) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto k = static_cast<size_t>(t);
+    if (bounds[k] < bounds[k + 1]) op(context, bounds[k], bounds[k + 1]);
+    times[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   });
+  split.record();
 }

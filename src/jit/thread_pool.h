@@ -13,7 +13,10 @@
 #include <mutex>
 #include <thread>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
+
+#include "jit/range_split.h"
 
 namespace simit::jit {
 
@@ -30,6 +33,9 @@ class ThreadPool {
   // task has returned. Thread t (0: the caller) starts with tasks [t * tasks / threads,
   // (t + 1) * tasks / threads), in order. One job at a time: the pool is the engine's, and the
   // engine runs one statement at a time. `task` is called, never copied (no allocation per job).
+  // The ranges of a solver loop's pass, named by its outlined function, learnt from its
+  // earlier calls on this pool (jit/range_split.h). Only the thread that runs jobs calls it.
+  RangeSplit& split_of(const void* pass) { return splits_[pass]; }
   template <class F>
   void run(int64_t tasks, F&& task) {
     using T = std::remove_reference_t<F>;
@@ -62,6 +68,7 @@ class ThreadPool {
 
   std::vector<std::thread> workers_;
   std::unique_ptr<Range[]> ranges_;
+  std::unordered_map<const void*, RangeSplit> splits_;
   // The job: its task and the number of its first task (a run of more than kMaxJobTasks
   // tasks is several jobs), written before the ranges and `job_` publish it.
   Task task_{};
@@ -79,12 +86,7 @@ class ThreadPool {
 
 // What a compiled solver loop calls to run an outlined pass over `units` units on `pool` (a
 // ThreadPool, or null: on the calling thread): op(context, first, end) for contiguous ranges
-// of units that cover [0, units) once (jit/llvm/emit_parallel.cpp). One range per thread,
-// its home share, so that each thread computes the same rows in every pass and finds them in
-// its own cache (on a 2-core machine whose cores take 500 ns to pass a cache line back and
-// forth, the fem bunny's solve took 108 ms on four ranges a thread and 94 on one). A
-// product's units are `unit_rows` block rows each of a matrix of `rows` block rows whose row
-// starts are `row_ptr` (null for a pass): its ranges hold equal shares of rows plus blocks.
+// of units that cover [0, units) once (jit/llvm/emit_parallel.cpp): one range per thread, its
+// bounds learnt from the pass's earlier calls (jit/range_split.h).
 extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
-                                       const int64_t* context, int64_t units,
-                                       const int32_t* row_ptr, int64_t unit_rows, int64_t rows);
+                                       const int64_t* context, int64_t units);

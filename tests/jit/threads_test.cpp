@@ -14,6 +14,7 @@
 #include "jit/defer_assembly.h"
 #include "jit/deferred_plan.h"
 #include "jit/executor.h"
+#include "jit/range_split.h"
 #include "jit/thread_pool.h"
 #include "recording_kernel.h"
 #include "runtime/set.h"
@@ -60,43 +61,74 @@ TEST(ThreadPool, RunsEveryTaskOnceWhenThreadsTakeFromEachOthersRanges) {
   for (int64_t i = 0; i < many; ++i) ASSERT_EQ(runs[static_cast<size_t>(i)].load(), 1) << i;
 }
 
-// The ranges simit_jit_parallel_for hands an outlined op: contiguous, covering every unit
-// once, one per thread; a product's shared out by rows plus blocks.
-std::vector<std::pair<int64_t, int64_t>> parallel_ranges(void* pool, int64_t units,
-                                                         const int32_t* row_ptr, int64_t unit_rows,
-                                                         int64_t rows) {
+TEST(ParallelFor, RunsOneContiguousRangePerThreadCoveringEveryUnitOnce) {
   static std::mutex mutex;
   static std::vector<std::pair<int64_t, int64_t>> seen;
-  seen.clear();
-  simit_jit_parallel_for(
-      pool,
-      [](const int64_t*, int64_t first, int64_t end) {
-        std::lock_guard lock(mutex);
-        seen.emplace_back(first, end);
-      },
-      nullptr, units, row_ptr, unit_rows, rows);
-  std::sort(seen.begin(), seen.end());
-  return seen;
+  auto op = [](const int64_t*, int64_t first, int64_t end) {
+    // Units 0-4 cost far more than the rest, so the learnt bounds move.
+    volatile double x = 0;
+    for (int64_t u = first; u < end; ++u)
+      for (int k = 0; k < (u < 5 ? 20000 : 100); ++k) x = x + 1.0;
+    std::lock_guard lock(mutex);
+    seen.emplace_back(first, end);
+  };
+  for (int threads : {1, 2, 3, 7}) {
+    ThreadPool pool(threads);
+    for (int64_t units : {1, 2, 15, 40}) {
+      for (int call = 0; call < 20; ++call) {
+        seen.clear();
+        simit_jit_parallel_for(&pool, op, nullptr, units);
+        std::sort(seen.begin(), seen.end());
+        ASSERT_FALSE(seen.empty());
+        EXPECT_LE(static_cast<int64_t>(seen.size()), std::min<int64_t>(threads, units));
+        EXPECT_EQ(seen.front().first, 0);
+        EXPECT_EQ(seen.back().second, units);
+        for (size_t i = 0; i < seen.size(); ++i) {
+          EXPECT_LT(seen[i].first, seen[i].second);
+          if (i > 0) {
+            EXPECT_EQ(seen[i].first, seen[i - 1].second) << threads << " " << units;
+          }
+        }
+      }
+    }
+  }
 }
 
-TEST(ParallelFor, OneContiguousRangePerThreadAndAProductsByItsBlocks) {
-  using Ranges = std::vector<std::pair<int64_t, int64_t>>;
-  EXPECT_EQ(parallel_ranges(nullptr, 15, nullptr, 0, 0), (Ranges{{0, 15}}));
-  ThreadPool two(2), three(3);
-  EXPECT_EQ(parallel_ranges(&two, 15, nullptr, 0, 0), (Ranges{{0, 7}, {7, 15}}));
-  EXPECT_EQ(parallel_ranges(&three, 2, nullptr, 0, 0), (Ranges{{0, 1}, {1, 2}}));
-  EXPECT_EQ(parallel_ranges(&three, 1, nullptr, 0, 0), (Ranges{{0, 1}}));
-  // 10 units of 4 rows (the last of 2): the first 4 units' rows hold 20 blocks each, the
-  // rest 1. Rows plus blocks: 16 x 21 + 22 x 2 = 380, half of it 190: the first unit whose
-  // rows start at 190 or more is unit 3 (weight 12 x 21 = 252; unit 2: 168).
-  const int64_t rows = 38;
-  std::vector<int32_t> row_ptr(rows + 1, 0);
-  for (int64_t r = 0; r < rows; ++r) row_ptr[r + 1] = row_ptr[r] + (r < 16 ? 20 : 1);
-  EXPECT_EQ(parallel_ranges(&two, 10, row_ptr.data(), 4, rows), (Ranges{{0, 3}, {3, 10}}));
-  // Equal rows: the split of a pass.
-  std::fill(row_ptr.begin(), row_ptr.end(), 0);
-  for (int64_t r = 0; r < rows; ++r) row_ptr[r + 1] = row_ptr[r] + 3;
-  EXPECT_EQ(parallel_ranges(&two, 10, row_ptr.data(), 4, rows), (Ranges{{0, 5}, {5, 10}}));
+TEST(RangeSplit, StartsEvenAndMovesTheBoundsTowardsEqualTimes) {
+  RangeSplit split;
+  EXPECT_EQ(split.bounds(15, 2), (std::vector<int64_t>{0, 7, 15}));
+  EXPECT_EQ(split.bounds(2, 2), (std::vector<int64_t>{0, 1, 2}));
+  EXPECT_EQ(split.bounds(12, 3), (std::vector<int64_t>{0, 4, 8, 12}));
+  // Units 0-3 cost 3 each and 4-11 cost 1 (total 20): range 0 (4 units) took 12, range 1
+  // (4 units) 4 and range 2 4. Then each unit costs its own, and a bound falls where the
+  // costs before it come nearest a third of 20 (6.67: 6, after units 0 and 1) and two thirds
+  // (13.33: 13, after units 0 to 4).
+  double* t = split.times();
+  t[0] = 12, t[1] = 4, t[2] = 4;
+  split.record();
+  EXPECT_EQ(split.bounds(12, 3), (std::vector<int64_t>{0, 2, 5, 12}));
+  // The same times again, now of ranges of 2, 3 and 7 units: a unit's cost moves a quarter
+  // of the way to its range's time per unit, and the bounds follow.
+  for (int call = 0; call < 40; ++call) {
+    const std::vector<int64_t> b = split.bounds(12, 3);
+    double* times = split.times();
+    for (int k = 0; k < 3; ++k) {
+      times[k] = 0;
+      for (int64_t u = b[k]; u < b[k + 1]; ++u) times[k] += u < 4 ? 3.0 : 1.0;
+    }
+    split.record();
+  }
+  EXPECT_EQ(split.bounds(12, 3), (std::vector<int64_t>{0, 2, 5, 12}));
+  // New units: equal shares again.
+  EXPECT_EQ(split.bounds(10, 2), (std::vector<int64_t>{0, 5, 10}));
+  // Ranges that took no time leave every unit a cost: still ascending bounds over all.
+  double* z = split.times();
+  z[0] = 0, z[1] = 0;
+  split.record();
+  EXPECT_EQ(split.bounds(10, 2), (std::vector<int64_t>{0, 5, 10}));
+  // More parts than units: empty ranges at the end.
+  EXPECT_EQ(split.bounds(2, 4).front(), 0);
+  EXPECT_EQ(split.bounds(2, 4).back(), 2);
 }
 
 TEST(ThreadedExecutor, CoversEveryElementOnceInItsChunks) {

@@ -150,20 +150,11 @@ void SystemEmitter::parallel_op(const VectorOp& op, const std::vector<Value*>& s
     b_.CreateStore(b_.CreateLoad(type(local_types_[i]), locals_[i]),
                    b_.CreateConstInBoundsGEP1_64(i64, context_, kContextHead + i));
   Value* units = units_of(op, sizes);
-  // A product's rows, by which its units are shared out.
-  const bool product = op.kind == VectorOp::Kind::SpMV;
-  llvm::Type* ptr = b_.getPtrTy();
-  Value* row_ptr = product ? arrays_[static_cast<size_t>(op.row_ptr)]
-                           : llvm::ConstantPointerNull::get(llvm::PointerType::get(ctx_, 0));
-  Value* unit_rows = b_.getInt64(product ? static_cast<int64_t>(runtime::kSumChunk) : 0);
-  Value* rows = product ? sizes[static_cast<size_t>(op.rows)] : b_.getInt64(0);
   // void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
-  //                             const int64_t* context, int64_t units,
-  //                             const int32_t* row_ptr, int64_t unit_rows, int64_t rows)
-  // (jit/thread_pool.h)
-  auto* ft = llvm::FunctionType::get(b_.getVoidTy(), {ptr, ptr, ptr, i64, ptr, i64, i64}, false);
-  b_.CreateCall(hooks_.runtime_call(b_, "simit_jit_parallel_for", ft),
-                {pool_, f, context_, units, row_ptr, unit_rows, rows});
+  //                             const int64_t* context, int64_t units) (jit/thread_pool.h)
+  llvm::Type* ptr = b_.getPtrTy();
+  auto* ft = llvm::FunctionType::get(b_.getVoidTy(), {ptr, ptr, ptr, i64}, false);
+  b_.CreateCall(hooks_.runtime_call(b_, "simit_jit_parallel_for", ft), {pool_, f, context_, units});
   if (op.sums.empty()) return;
   const auto n = static_cast<int64_t>(op.sums.size());
   loop(b_.getInt64(0), units, [&](Value* c) {
