@@ -31,9 +31,11 @@ struct SceneError : std::runtime_error {
 // ms the least of 7 runs' medians on a shared 2-core machine, so +-15%):
 //   vertex graph bandwidth: bunny 3587 / 713 / 2998, dragon40k 10977 / 467 / 8277,
 //     dragon160k 30183 / 888 / 23202, cloth 32x32 33 / 32 / 885;
-//   deferred blocks at --threads 2 (tets): fem bunny 42609 / 12711 / 8572, dragon40k
-//     132709 / 9089 / 17603, dragon160k 565651 / 48806 / 59705; springs bunny (edges)
-//     24710 / 12417 / 8074;
+//   deferred blocks at --threads 2 (tets), then four chunks a thread: fem bunny 42609 /
+//     12711 / 8572, dragon40k 132709 / 9089 / 17603, dragon160k 565651 / 48806 / 59705;
+//     springs bunny (edges) 24710 / 12417 / 8074; and now, one chunk a thread (chunks of at
+//     most 16,384 tets, so dragon160k's are the same): fem bunny 25152 / 1712 / 3030,
+//     dragon40k 91388 / 4171 / 8505, springs bunny 14794 / 1739 / 3201;
 //   frame ms at --threads 1 and 2: fem bunny 14.3 / 11.4 / 12.1 and 22.3 / 19.4 / 21.7,
 //     dragon40k 57.7 / 42.0 / 37.3 and 66.4 / 48.3 / 57.8, dragon160k 308 / 224 / 253 and
 //     365 / 226 / 280; springs bunny 8.7 / 8.4 / 9.4 and 15.0 / 13.9 / 12.7; cloth 32x32
