@@ -18,8 +18,9 @@
 #                                       interpreter's; 300 random programs under the GPU
 #                                       executor against the interpreter (jit_tests,
 #                                       SIMIT_TEST_GPU=1); the benchmark with the GPU executor
-#                                       (bench/run_bench.py, then a thin bench/accuracy.py
-#                                       sweep). Writes bench/results/gpu_check.md (and a copy
+#                                       (bench/run_bench.py); the JIT's threads, fem
+#                                       dragon160k at 1, 2, 4, ... threads beside the OpenMP
+#                                       baseline; then a thin bench/accuracy.py sweep. Writes bench/results/gpu_check.md (and a copy
 #                                       into $OUT when that is set), rewritten after each step:
 #                                       a table of each step's outcome (passed, FAILED or
 #                                       skipped, and why), then what each measured. A failing
@@ -376,7 +377,7 @@ write_report() {
   if [ -n "${OUT:-}" ] && [ -d "$OUT" ]; then cp "$REPORT" "$OUT/"; fi
 }
 
-STEPS=7
+STEPS=8
 step() {
   log "[$1/$STEPS] $2"
   CURRENT="$2"
@@ -606,6 +607,67 @@ bench_unavailable() {
   fi
 }
 
+# The JIT's threads on this machine's cores (issue: every core): fem dragon160k under the JIT
+# and the OpenMP baseline at 1, 2, 4, ... threads up to the cores there are, one
+# bench/run_bench.py run per count, and each count's speed-up over one thread.
+run_thread_scaling() {
+  step 7 "the JIT's threads: fem dragon160k at 1, 2, 4, ... $(nproc) threads, jit and baseline"
+  echo "## Threads: fem dragon160k under the JIT and the OpenMP baseline" >>"$BODY"
+  echo >>"$BODY"
+  local why
+  why="$(bench_unavailable)"
+  [ -n "$why" ] || [ -e examples/data/dragon160k.node ] || why="no examples/data/dragon160k.node"
+  if [ -n "$why" ]; then
+    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
+    record "threads" skipped "$why"
+    return
+  fi
+  out_of_time "threads" 60 && return
+  local build t0 status n counts=() bad=() row jit base jit1="" base1=""
+  build="$(bench_build_folder)"
+  for n in 1 2 4 8 16 32 64; do [ "$n" -le "$(nproc)" ] && counts+=("$n"); done
+  [ "${counts[-1]}" = "$(nproc)" ] || counts+=("$(nproc)")
+  t0="$(now)"
+  {
+    echo "ms a frame (3 frames, the median of frames 2 and 3), speed-up over 1 thread in brackets."
+    echo
+    echo "| threads | jit ms | baseline ms | jit vs baseline |"
+    echo "| ---: | ---: | ---: | ---: |"
+  } >>"$BODY"
+  for n in "${counts[@]}"; do
+    out_of_time "threads, $n" 20 && break
+    status=0
+    limited python3 bench/run_bench.py --build "$build" --dragon160k --only fem/dragon160k \
+      --executors jit --threads "$n" --out "$WORK/threads.$n.md" >"$WORK/threads.$n.out" 2>&1 ||
+      status=$?
+    log "  $n threads: exit $status ($(elapsed "$t0"))"
+    # The ms/frame column (the sixth) of the jit and baseline rows.
+    jit="$(awk -F'|' '$4 ~ /^ *jit *$/ { gsub(/ /, "", $7); print $7 }' "$WORK/threads.$n.md" \
+      2>/dev/null || true)"
+    base="$(awk -F'|' '$4 ~ /^ *baseline *$/ { gsub(/ /, "", $7); print $7 }' \
+      "$WORK/threads.$n.md" 2>/dev/null || true)"
+    if [ "$status" != 0 ] || [ -z "$jit" ] || [ -z "$base" ]; then
+      bad+=("$n threads: exit $status$(timed_out_note "$status")")
+      echo "| $n | failed | failed | |" >>"$WORK/threads.rows"
+      continue
+    fi
+    [ -n "$jit1" ] || jit1="$jit"
+    [ -n "$base1" ] || base1="$base"
+    row="$(awk -v n="$n" -v j="$jit" -v b="$base" -v j1="$jit1" -v b1="$base1" 'BEGIN {
+      printf "| %d | %s (%.2fx) | %s (%.2fx) | %.2fx |", n, j, j1 / j, b, b1 / b, j / b }')"
+    echo "$row" >>"$WORK/threads.rows"
+  done
+  { cat "$WORK/threads.rows" 2>/dev/null || true; echo; } >>"$BODY"
+  if [ ${#bad[@]} = 0 ]; then
+    record "threads" passed "${#counts[@]} thread counts ($(elapsed "$t0"))"
+  else
+    record "threads" FAILED "$(
+      IFS=';'
+      echo "${bad[*]}"
+    )"
+  fi
+}
+
 # The benchmark (bench/run_bench.py) with the GPU executor: the small cases beside the
 # interpreter, whose positions are the reference of the error column, the large ones beside
 # the JIT only (the interpreter takes tens of seconds a frame there; the JIT's positions are
@@ -702,7 +764,7 @@ run_benchmark() {
 # float32.
 run_accuracy() {
   local frames="${SIMIT_GPU_CHECK_FRAMES:-4}"
-  step 7 "bench/accuracy.py, a thin sweep, jit and gpu"
+  step 8 "bench/accuracy.py, a thin sweep, jit and gpu"
   echo "## Speed against error (bench/accuracy.py --executor jit,gpu, $frames frames)" >>"$BODY"
   echo >>"$BODY"
   local why
@@ -832,6 +894,7 @@ cmd_run() {
   run_examples
   run_random_programs
   run_benchmark
+  run_thread_scaling
   run_accuracy
 
   write_report
