@@ -3,15 +3,10 @@
 #include "simit/executor.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
-#include <thread>
-
-#if defined(__linux__)
-#include <sched.h>
-#endif
-
 #include <cstdlib>
+
+#include "runtime/cpus.h"
 
 #ifdef SIMIT_HAS_JIT
 #include "jit/ptx/cuda_driver.h"
@@ -82,24 +77,7 @@ std::optional<std::string> parse_jit_cache(std::string_view text, std::string& e
   return std::nullopt;
 }
 
-int default_threads() {
-#if defined(__linux__)
-  // The mask is read into a set sized for `cpus` CPUs, grown while the kernel's is larger
-  // (EINVAL): a fixed cpu_set_t holds 1024 only.
-  for (int cpus = 1024; cpus <= (1 << 20); cpus *= 2) {
-    cpu_set_t* set = CPU_ALLOC(cpus);
-    if (!set) break;
-    const size_t size = CPU_ALLOC_SIZE(cpus);
-    const int got = sched_getaffinity(0, size, set);
-    const int why = errno;
-    const int n = got == 0 ? CPU_COUNT_S(size, set) : 0;
-    CPU_FREE(set);
-    if (got == 0 && n > 0) return std::min(n, kMaxThreads);
-    if (got == 0 || why != EINVAL) break;
-  }
-#endif
-  return std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, kMaxThreads);
-}
+int default_threads() { return std::min(runtime::usable_cpus(), kMaxThreads); }
 
 std::optional<int> parse_threads(std::string_view text, std::string& error) {
   if (text == "all") return default_threads();

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include "runtime/cpus.h"
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -40,8 +42,9 @@ constexpr uint64_t end_of(uint64_t w) { return w & 0xffff; }
 
 }  // namespace
 
-ThreadPool::ThreadPool(int threads)
-    : ranges_(new Range[static_cast<size_t>(std::max(1, threads))]) {
+ThreadPool::ThreadPool(int threads, int cpus)
+    : oversubscribed_(threads > (cpus > 0 ? cpus : runtime::usable_cpus())),
+      ranges_(new Range[static_cast<size_t>(std::max(1, threads))]) {
   for (int i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 
@@ -110,6 +113,10 @@ void ThreadPool::run_job(int64_t first, int64_t tasks) {
   claim(0, job);
   const auto until = std::chrono::steady_clock::now() + kSpinFor;
   for (int spins = 1; finished_.load(std::memory_order_acquire) != tasks; ++spins) {
+    if (oversubscribed_) {
+      std::this_thread::yield();  // a worker still running a task may need this core
+      continue;
+    }
     relax();
     if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until)
       std::this_thread::yield();
@@ -127,7 +134,10 @@ void ThreadPool::work(int self) {
     const auto until = std::chrono::steady_clock::now() + kSpinFor;
     for (int spins = 1; job_.load(std::memory_order_acquire) == seen; ++spins) {
       if (stop_.load(std::memory_order_relaxed)) return;
-      relax();
+      if (oversubscribed_)
+        std::this_thread::yield();
+      else
+        relax();
       if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until) break;
     }
     if (job_.load(std::memory_order_acquire) != seen) continue;

@@ -37,6 +37,20 @@ TEST(ThreadPool, RunsEveryTaskOnceJobAfterJob) {
   }
 }
 
+TEST(ThreadPool, RunsEveryTaskOnceWithMoreThreadsThanCpus) {
+  // The workers and the caller yield their cores between polls rather than spin.
+  for (int cpus : {1, 2}) {
+    ThreadPool pool(5, cpus);
+    for (int64_t tasks : {1, 3, 5, 40}) {
+      for (int job = 0; job < 30; ++job) {
+        std::vector<std::atomic<int>> runs(static_cast<size_t>(tasks));
+        pool.run(tasks, [&](int64_t i) { runs[static_cast<size_t>(i)].fetch_add(1); });
+        for (int64_t i = 0; i < tasks; ++i) ASSERT_EQ(runs[static_cast<size_t>(i)].load(), 1);
+      }
+    }
+  }
+}
+
 TEST(ThreadPool, RunsEveryTaskOnceWhenThreadsTakeFromEachOthersRanges) {
   // Tasks of uneven cost, so that threads finish their home ranges at different times and
   // take tasks from the back of the others'; and a run of more tasks than one job holds.
