@@ -334,6 +334,21 @@ record() {
   write_report
 }
 
+# record_problems STEP WHAT [PROBLEM...]: the step passed (WHAT) when no problem is given,
+# else it FAILED with the problems, separated by semicolons.
+record_problems() {
+  local name="$1" what="$2"
+  shift 2
+  if [ $# = 0 ]; then
+    record "$name" passed "$what"
+  else
+    record "$name" FAILED "$(
+      IFS=';'
+      echo "$*"
+    )"
+  fi
+}
+
 # A step that has less than MIN seconds of the budget left is skipped: true when skipped.
 out_of_time() {
   local left
@@ -658,14 +673,7 @@ run_thread_scaling() {
     echo "$row" >>"$WORK/threads.rows"
   done
   { cat "$WORK/threads.rows" 2>/dev/null || true; echo; } >>"$BODY"
-  if [ ${#bad[@]} = 0 ]; then
-    record "threads" passed "${#counts[@]} thread counts ($(elapsed "$t0"))"
-  else
-    record "threads" FAILED "$(
-      IFS=';'
-      echo "${bad[*]}"
-    )"
-  fi
+  record_problems "threads" "${#counts[@]} thread counts ($(elapsed "$t0"))" "${bad[@]}"
 }
 
 # The benchmark (bench/run_bench.py) with the GPU executor: the small cases beside the
@@ -749,14 +757,8 @@ run_benchmark() {
       bad+=("$part cases: no gpu rows")
     fi
   done
-  if [ ${#bad[@]} = 0 ]; then
-    record "benchmark" passed "fem, springs, cloth under gpu, the reference's bits ($(elapsed "$t0"))"
-  else
-    record "benchmark" FAILED "$(
-      IFS=';'
-      echo "${bad[*]}"
-    )"
-  fi
+  record_problems "benchmark" \
+    "fem, springs, cloth under gpu, the reference's bits ($(elapsed "$t0"))" "${bad[@]}"
 }
 
 # A thin sweep of bench/accuracy.py: the error of each point against a converged reference,
@@ -810,14 +812,8 @@ run_accuracy() {
     diff - <(cat "$WORK"/accuracy/accuracy_*_gpu.csv 2>/dev/null | grep -v '^#' |
       awk -F, '$1 != "example" { print $1, $3, $5, $6, $7, $8, $18, $19 }' | sort) || true)"
   [ -z "$differ" ] || bad+=("the GPU's errors differ from the JIT's")
-  if [ ${#bad[@]} = 0 ]; then
-    record "accuracy" passed "fem, springs, cloth: the GPU's errors are the JIT's ($(elapsed "$t0"))"
-  else
-    record "accuracy" FAILED "$(
-      IFS=';'
-      echo "${bad[*]}"
-    )"
-  fi
+  record_problems "accuracy" \
+    "fem, springs, cloth: the GPU's errors are the JIT's ($(elapsed "$t0"))" "${bad[@]}"
 }
 
 cmd_run() {
