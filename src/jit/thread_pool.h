@@ -30,13 +30,13 @@ class ThreadPool {
   ThreadPool& operator=(const ThreadPool&) = delete;
 
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
+  // The ranges of a solver loop's pass, named by its outlined function, learnt from its
+  // earlier calls on this pool (jit/range_split.h). Only the thread that runs jobs calls it.
+  RangeSplit& split_of(const void* pass) { return splits_[pass]; }
   // Runs task(i) for i in [0, tasks) on the pool and the calling thread; returns when every
   // task has returned. Thread t (0: the caller) starts with tasks [t * tasks / threads,
   // (t + 1) * tasks / threads), in order. One job at a time: the pool is the engine's, and the
   // engine runs one statement at a time. `task` is called, never copied (no allocation per job).
-  // The ranges of a solver loop's pass, named by its outlined function, learnt from its
-  // earlier calls on this pool (jit/range_split.h). Only the thread that runs jobs calls it.
-  RangeSplit& split_of(const void* pass) { return splits_[pass]; }
   template <class F>
   void run(int64_t tasks, F&& task) {
     using T = std::remove_reference_t<F>;
