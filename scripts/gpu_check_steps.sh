@@ -226,7 +226,20 @@ bench_unavailable() {
   fi
 }
 
-# The JIT's threads on this machine's cores (issue: every core): fem dragon160k under the JIT
+# Why a benchmark step with the GPU executor cannot run here ("" when it can).
+gpu_bench_unavailable() {
+  if [ -n "$GPU_WHY" ]; then echo "$GPU_WHY"; else bench_unavailable; fi
+}
+
+# skipped_because STEP WHY: when WHY is not empty, the step is not run: its section says why
+# and the summary has it skipped. True when skipped.
+skipped_because() {
+  [ -n "$2" ] || return 1
+  printf 'Not run: %s.\n\n' "$2" >>"$BODY"
+  record "$1" skipped "$2"
+}
+
+# The JIT's threads on this machine's cores: fem dragon160k under the JIT
 # and the OpenMP baseline at 1, 2, 4, ... threads up to the cores there are, one
 # bench/run_bench.py run per count, and each count's speed-up over one thread.
 run_thread_scaling() {
@@ -236,11 +249,7 @@ run_thread_scaling() {
   local why
   why="$(bench_unavailable)"
   [ -n "$why" ] || [ -e examples/data/dragon160k.node ] || why="no examples/data/dragon160k.node"
-  if [ -n "$why" ]; then
-    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
-    record "threads" skipped "$why"
-    return
-  fi
+  skipped_because "threads" "$why" && return
   out_of_time "threads" 60 && return
   local build t0 status n counts=() bad=() row jit base jit1="" base1=""
   build="$(bench_build_folder)"
@@ -294,14 +303,7 @@ run_benchmark() {
       "(--threads $threads), the interpreter on one."
   } >>"$BODY"
   echo >>"$BODY"
-  local why
-  why="$(bench_unavailable)"
-  [ -z "$GPU_WHY" ] || why="$GPU_WHY"
-  if [ -n "$why" ]; then
-    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
-    record "benchmark" skipped "$why"
-    return
-  fi
+  skipped_because "benchmark" "$(gpu_bench_unavailable)" && return
   out_of_time "benchmark" 60 && return
   # shellcheck disable=SC2054 # the commas are run_bench.py's lists
   local build big=(--cloth 64,256) t0 status part label bad=() only
@@ -373,14 +375,7 @@ run_accuracy() {
   step 8 "bench/accuracy.py, a thin sweep, jit and gpu"
   echo "## Speed against error (bench/accuracy.py --executor jit,gpu, $frames frames)" >>"$BODY"
   echo >>"$BODY"
-  local why
-  why="$(bench_unavailable)"
-  [ -z "$GPU_WHY" ] || why="$GPU_WHY"
-  if [ -n "$why" ]; then
-    printf 'Not run: %s.\n\n' "$why" >>"$BODY"
-    record "accuracy" skipped "$why"
-    return
-  fi
+  skipped_because "accuracy" "$(gpu_bench_unavailable)" && return
   out_of_time "accuracy" 45 && return
   local build t0 status example points bad=() differ
   build="$(bench_build_folder)"
