@@ -20,7 +20,8 @@
 #                                       SIMIT_TEST_GPU=1); the benchmark with the GPU executor
 #                                       (bench/run_bench.py); the JIT's threads, fem
 #                                       dragon160k at 1, 2, 4, ... threads beside the OpenMP
-#                                       baseline; then a thin bench/accuracy.py sweep. Writes bench/results/gpu_check.md (and a copy
+#                                       baseline; then a thin bench/accuracy.py sweep. Writes
+#                                       bench/results/gpu_check.md (and a copy
 #                                       into $OUT when that is set), rewritten after each step:
 #                                       a table of each step's outcome (passed, FAILED or
 #                                       skipped, and why), then what each measured. A failing
