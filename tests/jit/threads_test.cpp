@@ -78,7 +78,9 @@ TEST(ParallelFor, RunsOneContiguousRangePerThreadCoveringEveryUnitOnce) {
   static std::mutex mutex;
   static std::vector<std::pair<int64_t, int64_t>> seen;
   auto op = [](const int64_t*, int64_t first, int64_t end) {
-    // Units 0-4 cost far more than the rest, so the learnt bounds move.
+    // Units 0-4 cost far more than the rest, so that the learnt bounds move from call to call
+    // (RangeSplit's own test checks where to; here the ranges must cover every unit whatever
+    // the bounds).
     volatile double x = 0;
     for (int64_t u = first; u < end; ++u)
       for (int k = 0; k < (u < 5 ? 20000 : 100); ++k) x = x + 1.0;
