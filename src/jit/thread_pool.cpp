@@ -23,6 +23,10 @@ namespace {
 // (Measured in time: a pause instruction takes 3 to 140 cycles, by processor.)
 constexpr auto kSpinFor = std::chrono::microseconds(500);
 constexpr int kPausesPerClockRead = 64;
+// How long the caller waits for a worker to report its given range before it looks whether
+// the worker has taken it, and takes it itself if not (a worker asleep, or off its core). A
+// pass that keeps up takes a few microseconds more on one thread than on the other.
+constexpr auto kStealAfter = std::chrono::microseconds(10);
 
 void relax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -44,7 +48,10 @@ constexpr uint64_t end_of(uint64_t w) { return w & 0xffff; }
 
 ThreadPool::ThreadPool(int threads, int cpus)
     : oversubscribed_(threads > (cpus > 0 ? cpus : runtime::usable_cpus())),
-      ranges_(new Range[static_cast<size_t>(std::max(1, threads))]) {
+      ranges_(new Range[static_cast<size_t>(std::max(1, threads))]),
+      posts_(new Post[static_cast<size_t>(std::max(1, threads))]),
+      claims_(new Claim[static_cast<size_t>(std::max(1, threads))]),
+      reports_(new Report[static_cast<size_t>(std::max(1, threads))]) {
   for (int i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 
@@ -81,6 +88,36 @@ void ThreadPool::claim(int self, uint32_t job) {
     }
 }
 
+void ThreadPool::post(uint64_t word, int posts) {
+  for (int t = 1; t < posts; ++t)
+    posts_[static_cast<size_t>(t)].word.store(word, std::memory_order_release);
+}
+
+void ThreadPool::wake_sleepers() {
+  // A worker that counted itself asleep after this load tests its post after the posts'
+  // stores, and sees the job; one counted before it is woken (taking the lock first means it
+  // is either waiting or about to test).
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  if (sleepers_.load(std::memory_order_seq_cst) > 0) {
+    { std::lock_guard lock(mutex_); }
+    wake_.notify_all();
+  }
+}
+
+template <class Done>
+void ThreadPool::wait(Done done) {
+  const auto until = std::chrono::steady_clock::now() + kSpinFor;
+  for (int spins = 1; !done(); ++spins) {
+    if (oversubscribed_) {
+      std::this_thread::yield();  // a worker still running a task may need this core
+      continue;
+    }
+    relax();
+    if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until)
+      std::this_thread::yield();
+  }
+}
+
 void ThreadPool::run(int64_t tasks, Task task) {
   if (tasks <= 0) return;
   if (workers_.empty() || tasks == 1) {
@@ -95,44 +132,86 @@ void ThreadPool::run(int64_t tasks, Task task) {
 void ThreadPool::run_job(int64_t first, int64_t tasks) {
   first_ = first;
   finished_.store(0, std::memory_order_relaxed);
-  const uint32_t job = job_.load(std::memory_order_relaxed) + 1;
+  const uint64_t job = ++job_;
   const int threads = this->threads();
   for (int t = 0; t < threads; ++t)
     ranges_[static_cast<size_t>(t)].word.store(
-        range_word(job, static_cast<uint64_t>(t * tasks / threads),
+        range_word(static_cast<uint32_t>(job), static_cast<uint64_t>(t * tasks / threads),
                    static_cast<uint64_t>((t + 1) * tasks / threads)),
         std::memory_order_release);
-  job_.store(job, std::memory_order_seq_cst);
-  // A worker that counted itself asleep after this load tests the job number after the store
-  // above, and sees the job; one counted before it is woken (taking the lock first means it
-  // is either waiting or about to test).
-  if (sleepers_.load(std::memory_order_seq_cst) > 0) {
-    { std::lock_guard lock(mutex_); }
-    wake_.notify_all();
+  post(job << 1, threads);
+  wake_sleepers();
+  claim(0, static_cast<uint32_t>(job));
+  wait([&] { return finished_.load(std::memory_order_acquire) == tasks; });
+}
+
+bool ThreadPool::take_range(int self, uint64_t job) {
+  Claim& claim = claims_[static_cast<size_t>(self)];
+  uint64_t last = claim.job.load(std::memory_order_relaxed);
+  // The worker and the caller only ever set `job`: a failed exchange means the other took it.
+  if (last >= job || !claim.job.compare_exchange_strong(last, job, std::memory_order_acq_rel))
+    return false;
+  const Post& p = posts_[static_cast<size_t>(self)];
+  const auto start = std::chrono::steady_clock::now();
+  if (p.first < p.end) p.op(p.context, p.first, p.end);
+  reports_[static_cast<size_t>(self)].seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+void ThreadPool::run_ranges(RangeOp op, const int64_t* context, const int64_t* bounds, int parts,
+                            double* times) {
+  parts = std::clamp(parts, 1, threads());
+  const uint64_t job = ++job_;
+  for (int t = 1; t < parts; ++t) {
+    Post& p = posts_[static_cast<size_t>(t)];
+    p.op = op;
+    p.context = context;
+    p.first = bounds[t];
+    p.end = bounds[t + 1];
   }
-  claim(0, job);
-  const auto until = std::chrono::steady_clock::now() + kSpinFor;
-  for (int spins = 1; finished_.load(std::memory_order_acquire) != tasks; ++spins) {
-    if (oversubscribed_) {
-      std::this_thread::yield();  // a worker still running a task may need this core
-      continue;
-    }
-    relax();
-    if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until)
-      std::this_thread::yield();
+  post(job << 1 | 1, parts);
+  const auto start = std::chrono::steady_clock::now();
+  if (bounds[0] < bounds[1]) op(context, bounds[0], bounds[1]);
+  times[0] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // After the caller's own range: the fence waits for the posts' stores, which by now have
+  // long reached the workers.
+  wake_sleepers();
+  for (int t = 1; t < parts; ++t) {
+    Report& report = reports_[static_cast<size_t>(t)];
+    // Until kStealAfter has passed, the caller polls the report only, so that a worker that
+    // keeps up finds its claim word in its own cache.
+    // A pool with more threads than CPUs takes a late range at once: its worker may be
+    // waiting for this core.
+    const auto steal_at = std::chrono::steady_clock::now() + kStealAfter;
+    int polls = 0;
+    wait([&] {
+      if (report.job.load(std::memory_order_acquire) == job) return true;
+      if (!oversubscribed_ &&
+          (++polls % kPausesPerClockRead != 0 || std::chrono::steady_clock::now() < steal_at))
+        return false;
+      return take_range(t, job);
+    });
+    times[t] = report.seconds;
   }
 }
 
 void ThreadPool::work(int self) {
-  uint32_t seen = 0;
+  Post& mine = posts_[static_cast<size_t>(self)];
+  uint64_t seen = 0;
   for (;;) {
-    uint32_t job = job_.load(std::memory_order_acquire);
-    if (job != seen) {
-      seen = job;
-      claim(self, job);
+    const uint64_t word = mine.word.load(std::memory_order_acquire);
+    if (word != seen) {
+      seen = word;
+      if (word & 1) {
+        if (take_range(self, word >> 1))
+          reports_[static_cast<size_t>(self)].job.store(word >> 1, std::memory_order_release);
+      } else {
+        claim(self, static_cast<uint32_t>(word >> 1));
+      }
     }
     const auto until = std::chrono::steady_clock::now() + kSpinFor;
-    for (int spins = 1; job_.load(std::memory_order_acquire) == seen; ++spins) {
+    for (int spins = 1; mine.word.load(std::memory_order_acquire) == seen; ++spins) {
       if (stop_.load(std::memory_order_relaxed)) return;
       if (oversubscribed_)
         std::this_thread::yield();
@@ -140,10 +219,11 @@ void ThreadPool::work(int self) {
         relax();
       if (spins % kPausesPerClockRead == 0 && std::chrono::steady_clock::now() > until) break;
     }
-    if (job_.load(std::memory_order_acquire) != seen) continue;
+    if (mine.word.load(std::memory_order_acquire) != seen) continue;
     std::unique_lock lock(mutex_);
     sleepers_.fetch_add(1, std::memory_order_seq_cst);
-    wake_.wait(lock, [&] { return stop_.load() || job_.load(std::memory_order_seq_cst) != seen; });
+    wake_.wait(lock,
+               [&] { return stop_.load() || mine.word.load(std::memory_order_seq_cst) != seen; });
     sleepers_.fetch_sub(1, std::memory_order_relaxed);
     if (stop_.load()) return;
   }
@@ -151,10 +231,10 @@ void ThreadPool::work(int self) {
 
 }  // namespace simit::jit
 
-// One range per thread, each its home task (jit/thread_pool.h), so that a thread computes the
-// same rows in every pass and finds them in its own cache: on a 2-core machine whose cores
-// take 500 ns to pass a cache line back and forth, the fem bunny's solve took 108 ms over 30
-// frames on four ranges a thread claimed in turn, 94 ms on one home range a thread.
+// One range per thread (jit/thread_pool.h, run_ranges), so that a thread computes the same
+// rows in every pass and finds them in its own cache: on a 2-core machine whose cores take
+// 500 ns to pass a cache line back and forth, the fem bunny's solve took 108 ms over 30 frames
+// on four ranges a thread claimed in turn, 94 ms on one home range a thread.
 extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, int64_t, int64_t),
                                        const int64_t* context, int64_t units) {
   auto* p = static_cast<simit::jit::ThreadPool*>(pool);
@@ -165,12 +245,6 @@ extern "C" void simit_jit_parallel_for(void* pool, void (*op)(const int64_t*, in
   const int parts = static_cast<int>(std::min<int64_t>(units, p->threads()));
   simit::jit::RangeSplit& split = p->split_of(reinterpret_cast<const void*>(op));
   const std::vector<int64_t>& bounds = split.bounds(units, parts);
-  double* times = split.times();
-  p->run(parts, [&](int64_t t) {
-    const auto start = std::chrono::steady_clock::now();
-    const auto k = static_cast<size_t>(t);
-    if (bounds[k] < bounds[k + 1]) op(context, bounds[k], bounds[k + 1]);
-    times[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  });
+  p->run_ranges(op, context, bounds.data(), parts, split.times());
   split.record();
 }

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <mutex>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "jit/defer_assembly.h"
@@ -72,6 +74,49 @@ TEST(ThreadPool, RunsEveryTaskOnceWhenThreadsTakeFromEachOthersRanges) {
   std::vector<std::atomic<int>> runs(static_cast<size_t>(many));
   pool.run(many, [&](int64_t i) { runs[static_cast<size_t>(i)].fetch_add(1); });
   for (int64_t i = 0; i < many; ++i) ASSERT_EQ(runs[static_cast<size_t>(i)].load(), 1) << i;
+}
+
+TEST(ThreadPool, RunsEachGivenRangeOnceAndTheCallerTakesTheRangeOfAWorkerThatSleeps) {
+  static std::vector<std::atomic<int>> runs(64);
+  static std::vector<std::thread::id> by(64);
+  static std::atomic<int> unit_cost{0};
+  auto op = [](const int64_t*, int64_t first, int64_t end) {
+    volatile double x = 0;
+    for (int64_t u = first; u < end; ++u) {
+      for (int k = 0; k < unit_cost.load(); ++k) x = x + 1.0;
+      runs[static_cast<size_t>(u)].fetch_add(1);
+      by[static_cast<size_t>(u)] = std::this_thread::get_id();
+    }
+  };
+  const std::vector<int64_t> bounds = {0, 5, 5, 17, 40};  // range 1 empty
+  for (int cpus : {0, 1}) {  // 0: the machine's, 1: more threads than CPUs
+    ThreadPool pool(4, cpus);
+    for (int call = 0; call < 200; ++call) {
+      unit_cost.store(call % 3 == 0 ? 2000 : 10);
+      for (auto& r : runs) r.store(0);
+      std::vector<double> times(4, -1.0);
+      pool.run_ranges(op, nullptr, bounds.data(), 4, times.data());
+      for (int64_t u = 0; u < 64; ++u)
+        ASSERT_EQ(runs[static_cast<size_t>(u)].load(), u < 40 ? 1 : 0) << cpus << " " << u;
+      for (double t : times) EXPECT_GE(t, 0.0);
+    }
+  }
+  // A worker asleep (the pool idle for longer than its workers spin) takes tens of
+  // microseconds to wake: the caller, done with its own range, runs the others' itself.
+  ThreadPool pool(3);
+  const std::thread::id caller = std::this_thread::get_id();
+  const std::vector<int64_t> three = {0, 1, 2, 3};
+  unit_cost.store(0);
+  bool took = false;
+  for (int trial = 0; trial < 200 && !took; ++trial) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    for (auto& r : runs) r.store(0);
+    std::vector<double> times(3, -1.0);
+    pool.run_ranges(op, nullptr, three.data(), 3, times.data());
+    for (int64_t u = 0; u < 3; ++u) ASSERT_EQ(runs[static_cast<size_t>(u)].load(), 1);
+    took = by[1] == caller || by[2] == caller;
+  }
+  EXPECT_TRUE(took) << "the caller never ran a sleeping worker's range";
 }
 
 TEST(ParallelFor, RunsOneContiguousRangePerThreadCoveringEveryUnitOnce) {

@@ -85,13 +85,29 @@ void SystemEmitter::prepare_parallel(Value* arrays, Value* sizes_in,
   }
 }
 
+// A pass without sums runs in units of the components that a chunk of the loop's sums over
+// the same vectors covers (kSumChunk runs of their group; a product's rows when the loop has
+// no sums, kSumChunk rows of `block` components), so that thread t's range of every pass is
+// the same components and finds them in its own cache; kPassUnit when nothing says.
+int64_t SystemEmitter::pass_unit(const VectorOp& op) const {
+  const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
+  int64_t block = 0;
+  for (const auto* list : {&st_.before, &st_.body, &st_.after})
+    for (const VectorOp& other : *list) {
+      if (other.kind == VectorOp::Kind::Pass && !other.sums.empty() && other.length == op.length)
+        return chunk * other.group;
+      if (other.kind == VectorOp::Kind::SpMV && block == 0) block = other.block;
+    }
+  return block > 0 ? chunk * block : kPassUnit;
+}
+
 Value* SystemEmitter::units_of(const VectorOp& op, const std::vector<Value*>& sizes) {
   auto ceil_div = [&](Value* n, int64_t d) {
     return b_.CreateSDiv(b_.CreateAdd(n, b_.getInt64(d - 1)), b_.getInt64(d));
   };
   const auto chunk = static_cast<int64_t>(runtime::kSumChunk);
   if (op.kind == VectorOp::Kind::SpMV) return ceil_div(sizes[op.rows], chunk);
-  if (op.sums.empty()) return ceil_div(sizes[op.length], kPassUnit);
+  if (op.sums.empty()) return ceil_div(sizes[op.length], pass_unit(op));
   return ceil_div(b_.CreateSDiv(sizes[op.length], b_.getInt64(op.group)), chunk);
 }
 

@@ -42,7 +42,7 @@ void SystemEmitter::vector_op(const VectorOp& op, const std::vector<Value*>& siz
         });
       }
       {
-        const auto [lo, hi] = unit_range(sizes[op.length], kPassUnit);
+        const auto [lo, hi] = unit_range(sizes[op.length], pass_unit(op));
         return loop(b_.CreateTrunc(lo, b_.getInt32Ty()), b_.CreateTrunc(hi, b_.getInt32Ty()),
                     [&](Value* k) {
                       element_ = k;

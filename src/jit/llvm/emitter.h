@@ -214,11 +214,12 @@ class SystemEmitter : public Emitter {
   void store_component(int slot, Value* k, Value* v);
 
   // Parallel passes (emit_parallel.cpp). A unit is a chunk of runtime::kSumChunk elements for
-  // an op with sums or a product's rows, kPassUnit components for a pass without sums.
+  // an op with sums or a product's rows, pass_unit components for a pass without sums.
   void prepare_parallel(Value* arrays, Value* sizes_in, const std::vector<Value*>& sizes);
   void parallel_op(const VectorOp& op, const std::vector<Value*>& sizes);
   bool outlinable(const VectorOp& op) const;
   Value* units_of(const VectorOp& op, const std::vector<Value*>& sizes);
+  int64_t pass_unit(const VectorOp& op) const;
   llvm::Function* outline(const VectorOp& op);
   // [0, n) (i64s), or inside an outlined op the part of it its units cover (`unit` per unit).
   std::pair<Value*, Value*> unit_range(Value* n, int64_t unit);
@@ -241,7 +242,8 @@ class SystemEmitter : public Emitter {
 // index in the context's error word and leaves the step (emit_device_steps.cpp).
 std::unique_ptr<TargetHooks> device_step_hooks(TargetHooks& target);
 
-// Components of a pass without sums an outlined call runs per unit.
+// Components of a pass without sums an outlined call runs per unit, when no sum or product of
+// its loop gives one (SystemEmitter::pass_unit).
 inline constexpr int64_t kPassUnit = 1024;
 
 }  // namespace simit::jit::codegen
