@@ -146,10 +146,11 @@ TEST(Float32Solver, BinaryThirtyTwoArraysWhereEveryValueIsOne) {
   expect_same_bits(in, jit);
   expect_same_bits(in, checked);
   EXPECT_GT(in.results[1].as_int(), 3);
-  // Every value the loop stores is rounded: x, r, p, Ap and the matrix are binary32; b and x0,
+  // Every value the loop stores is rounded: x, r, Ap and the matrix are binary32; b and x0,
   // which it only reads, are the binary64 field `points.b` as it is (the interpreter does not
-  // round a read either) and 0.25 * b, as the caller made them.
-  for (const char* a : {"A.values f32", " x f32", " r f32", " p f32", " Ap f32", " b f64"})
+  // round a read either) and 0.25 * b, as the caller made them. p, which the loop's product
+  // multiplies, holds its binary32 values in binary64 storage (system_tracer.cpp).
+  for (const char* a : {"A.values f32", " x f32", " r f32", " p f64", " Ap f32", " b f64"})
     EXPECT_NE(jit.dump.find(a), std::string::npos) << a << "\n" << jit.dump;
   // Each component of the result is a binary32 value.
   const runtime::Tensor& x = jit.results[0].tensor();

@@ -171,9 +171,16 @@ Value* Emitter::expr(const Expr& e) {
     case ExprKind::Element: return element_;
     case ExprKind::Endpoint: return endpoints_[e.slot];
     case ExprKind::Load: return load(e, expr(*e.ops[0]));
-    case ExprKind::Local:
+    case ExprKind::Local: {
       if (!locals_[e.slot]) return ssa_[e.slot];
-      return b_.CreateLoad(type(e.ty), locals_[e.slot]);
+      Value* v = b_.CreateLoad(type(e.ty), locals_[e.slot]);
+      // Narrowed and widened again, exactly: in_binary32 then computes its operations in
+      // binary32 (a compiled loop's step length times a binary32 vector, without widening
+      // the vector).
+      if (e.ty == Ty::F64 && binary32_local(e.slot))
+        v = b_.CreateFPExt(b_.CreateFPTrunc(v, b_.getFloatTy()), b_.getDoubleTy());
+      return v;
+    }
     case ExprKind::Scratch: return b_.CreateLoad(b_.getDoubleTy(), scratch_at(e.slot, *e.ops[0]));
     default: {
       std::vector<Value*> args;

@@ -10,6 +10,7 @@
 #include "jit/target.h"
 #include "jit/tunables.h"
 #include "runtime/blocked_sum.h"
+#include "runtime/system_ops.h"
 
 namespace simit::jit::codegen {
 
@@ -229,6 +230,45 @@ void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
   });
 }
 
+// Under --float32 an operator's value is rounded to binary32, so a local that an op sets to
+// one (round32(...)), to a binary32 constant or to such a local holds a binary32 value until
+// it is set again; the ops after it in the same list read it as one. Within one op, the
+// locals it sets count as wide: the op decides them. A list starts with no local known: the
+// loop's body, for one, is entered from its previous iteration as well.
+bool SystemEmitter::holds_binary32(const Expr& e) const {
+  switch (e.kind) {
+    case ExprKind::Unary: return static_cast<UnOp>(e.op) == UnOp::Round32;
+    case ExprKind::Const: return e.ty == Ty::F64 && runtime::is_binary32(e.f);
+    case ExprKind::Local: return e.ty == Ty::F64 && binary32_local(e.slot);
+    default: return false;
+  }
+}
+
+void SystemEmitter::emit_ops(const std::vector<VectorOp>& ops, const std::vector<Value*>& sizes) {
+  binary32_locals_.assign(local_types_.size(), false);
+  std::function<void(const std::vector<Stmt>&)> forget = [&](const std::vector<Stmt>& body) {
+    for (const Stmt& s : body) {
+      if (s.kind == StmtKind::SetLocal) binary32_locals_[static_cast<size_t>(s.slot)] = false;
+      forget(s.body);
+      forget(s.orelse);
+    }
+  };
+  for (const VectorOp& op : ops) {
+    forget(op.body);
+    guarded_op(op, sizes);
+    if (op.kind != VectorOp::Kind::Scalar || op.guard >= 0) continue;
+    for (const Stmt& s : op.body) {
+      if (s.kind == StmtKind::SetLocal && local_types_[static_cast<size_t>(s.slot)] == Ty::F64) {
+        binary32_locals_[static_cast<size_t>(s.slot)] = holds_binary32(*s.value);
+      } else {
+        forget(s.body);
+        forget(s.orelse);
+      }
+    }
+  }
+  binary32_locals_.clear();
+}
+
 // An op in a branch of an `if` runs when its guard holds.
 void SystemEmitter::guarded_op(const VectorOp& op, const std::vector<Value*>& sizes) {
   if (op.guard < 0) return parallel_op(op, sizes);
@@ -290,7 +330,12 @@ Value* SystemEmitter::pass_lanes(const Expr& e, Value* first) {
   auto* vec = llvm::FixedVectorType::get(f64, kLanes);
   switch (e.kind) {
     case ExprKind::Const: return llvm::ConstantFP::get(vec, e.f);
-    case ExprKind::Local: return b_.CreateVectorSplat(kLanes, b_.CreateLoad(f64, locals_[e.slot]));
+    case ExprKind::Local: {
+      Value* v = b_.CreateLoad(f64, locals_[e.slot]);
+      if (!binary32_local(e.slot)) return b_.CreateVectorSplat(kLanes, v);
+      return b_.CreateFPExt(b_.CreateVectorSplat(kLanes, b_.CreateFPTrunc(v, b_.getFloatTy())),
+                            vec);
+    }
     case ExprKind::Load: {
       if (slots_[static_cast<size_t>(e.slot)].single) {  // binary32, widened exactly
         auto* vec32 = llvm::FixedVectorType::get(b_.getFloatTy(), kLanes);
@@ -422,7 +467,7 @@ void SystemEmitter::while_loop(const std::vector<Value*>& sizes, Value* scalars,
   b_.SetInsertPoint(test);
   b_.CreateCondBr(expr(*st_.condition), body, done);
   b_.SetInsertPoint(body);
-  for (const VectorOp& op : st_.body) guarded_op(op, sizes);
+  emit_ops(st_.body, sizes);
   b_.CreateBr(head);
   b_.SetInsertPoint(done);
 }
@@ -451,9 +496,9 @@ llvm::Function* SystemEmitter::run(const std::string& name) {
   }
   std::vector<Value*> sizes = load_sizes(sizes_in);
   prepare_parallel(arrays, sizes_in, sizes);
-  for (const VectorOp& op : st_.before) guarded_op(op, sizes);
+  emit_ops(st_.before, sizes);
   if (st_.condition) while_loop(sizes, scalars, interrupt);
-  for (const VectorOp& op : st_.after) guarded_op(op, sizes);
+  emit_ops(st_.after, sizes);
   write_scalars(scalars);
   b_.CreateRet(b_.getInt32(0));
   return fn_;

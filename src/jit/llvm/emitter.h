@@ -146,6 +146,13 @@ class Emitter {
   Value* element_wide_ = nullptr;  // element_ as an i64, where a pass computed it so
   Precomputed* pre_ = nullptr;
   llvm::MDNode *inputs_ = nullptr, *results_ = nullptr;
+  // The locals (stored in allocas) known to hold a binary32 value where the code being
+  // emitted reads them (SystemEmitter::emit_ops); empty: none.
+  std::vector<bool> binary32_locals_;
+  bool binary32_local(int slot) const {
+    return static_cast<size_t>(slot) < binary32_locals_.size() &&
+           binary32_locals_[static_cast<size_t>(slot)];
+  }
 };
 
 // A map or apply kernel: the trace's body once per element of the call's range.
@@ -193,6 +200,10 @@ class SystemEmitter : public Emitter {
                     const std::vector<Value*>& sizes);
   void combine_sums(const DeviceStep& s, const std::vector<Value*>& sizes);
   void guarded_op(const VectorOp& op, const std::vector<Value*>& sizes);
+  // The ops of one list (before, the loop's body, after) in order, noting which locals each
+  // leaves holding a binary32 value for the ops after it (binary32_locals_).
+  void emit_ops(const std::vector<VectorOp>& ops, const std::vector<Value*>& sizes);
+  bool holds_binary32(const Expr& e) const;
   // The op's body for the `group` components of one run starting at `first` (an i64); with
   // sums, each taken over the run alone and then added to lane `lane` (an i64) of its chunk.
   void run_of(const VectorOp& op, Value* first, int group, Value* lane);
