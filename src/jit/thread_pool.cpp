@@ -180,9 +180,8 @@ void ThreadPool::run_ranges(RangeOp op, const int64_t* context, const int64_t* b
   for (int t = 1; t < parts; ++t) {
     Report& report = reports_[static_cast<size_t>(t)];
     // Until kStealAfter has passed, the caller polls the report only, so that a worker that
-    // keeps up finds its claim word in its own cache.
-    // A pool with more threads than CPUs takes a late range at once: its worker may be
-    // waiting for this core.
+    // keeps up finds its claim word in its own cache; a pool with more threads than CPUs
+    // takes a late range at once, since its worker may be waiting for this core.
     const auto steal_at = std::chrono::steady_clock::now() + kStealAfter;
     int polls = 0;
     wait([&] {
