@@ -48,7 +48,8 @@ class ThreadPool {
   }
   // Runs op(context, bounds[t], bounds[t + 1]) for each t in [0, parts), parts <= threads():
   // range t on thread t (0: the caller), or on the caller when thread t has not taken it by
-  // the time the caller has waited kStealAfter for it. times[t]: the seconds range t took.
+  // the time the caller has waited kStealAfter for it (at once in a pool with more threads
+  // than CPUs). times[t]: the seconds range t took.
   using RangeOp = void (*)(const int64_t*, int64_t, int64_t);
   void run_ranges(RangeOp op, const int64_t* context, const int64_t* bounds, int parts,
                   double* times);
