@@ -101,22 +101,28 @@ TEST(ThreadPool, RunsEachGivenRangeOnceAndTheCallerTakesTheRangeOfAWorkerThatSle
       for (double t : times) EXPECT_GE(t, 0.0);
     }
   }
-  // A worker asleep (the pool idle for longer than its workers spin) takes tens of
-  // microseconds to wake: the caller, done with its own range, runs the others' itself.
-  ThreadPool pool(3);
+  // A worker asleep (the pool idle for longer than its workers spin) takes microseconds to
+  // wake, and the caller, done with its own range, runs the others' itself: at once in a pool
+  // with more threads than CPUs (asserted: the caller tries before the worker can have woken),
+  // after 10 us in the others (each range still runs once, whoever runs it).
   const std::thread::id caller = std::this_thread::get_id();
   const std::vector<int64_t> three = {0, 1, 2, 3};
   unit_cost.store(0);
-  bool took = false;
-  for (int trial = 0; trial < 200 && !took; ++trial) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(3));
-    for (auto& r : runs) r.store(0);
-    std::vector<double> times(3, -1.0);
-    pool.run_ranges(op, nullptr, three.data(), 3, times.data());
-    for (int64_t u = 0; u < 3; ++u) ASSERT_EQ(runs[static_cast<size_t>(u)].load(), 1);
-    took = by[1] == caller || by[2] == caller;
+  for (int cpus : {1, 0}) {
+    ThreadPool pool(3, cpus);
+    bool took = false;
+    for (int trial = 0; trial < (cpus == 1 ? 200 : 20) && !(took && cpus == 1); ++trial) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(3));
+      for (auto& r : runs) r.store(0);
+      std::vector<double> times(3, -1.0);
+      pool.run_ranges(op, nullptr, three.data(), 3, times.data());
+      for (int64_t u = 0; u < 3; ++u) ASSERT_EQ(runs[static_cast<size_t>(u)].load(), 1);
+      took = took || by[1] == caller || by[2] == caller;
+    }
+    if (cpus == 1) {
+      EXPECT_TRUE(took) << "the caller never ran a sleeping worker's range";
+    }
   }
-  EXPECT_TRUE(took) << "the caller never ran a sleeping worker's range";
 }
 
 TEST(ParallelFor, RunsOneContiguousRangePerThreadCoveringEveryUnitOnce) {
