@@ -36,6 +36,13 @@ void relax() {
 #endif
 }
 
+// Runs op over units [first, end) (nothing when empty); the seconds it took.
+double run_timed(ThreadPool::RangeOp op, const int64_t* context, int64_t first, int64_t end) {
+  const auto start = std::chrono::steady_clock::now();
+  if (first < end) op(context, first, end);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // A range's word: job (32 bits), front (16), end (16).
 constexpr uint64_t range_word(uint32_t job, uint64_t front, uint64_t end) {
   return uint64_t{job} << 32 | front << 16 | end;
@@ -152,10 +159,7 @@ bool ThreadPool::take_range(int self, uint64_t job) {
   if (last >= job || !claim.job.compare_exchange_strong(last, job, std::memory_order_acq_rel))
     return false;
   const Post& p = posts_[static_cast<size_t>(self)];
-  const auto start = std::chrono::steady_clock::now();
-  if (p.first < p.end) p.op(p.context, p.first, p.end);
-  reports_[static_cast<size_t>(self)].seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  reports_[static_cast<size_t>(self)].seconds = run_timed(p.op, p.context, p.first, p.end);
   return true;
 }
 
@@ -171,9 +175,7 @@ void ThreadPool::run_ranges(RangeOp op, const int64_t* context, const int64_t* b
     p.end = bounds[t + 1];
   }
   post(job << 1 | 1, parts);
-  const auto start = std::chrono::steady_clock::now();
-  if (bounds[0] < bounds[1]) op(context, bounds[0], bounds[1]);
-  times[0] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  times[0] = run_timed(op, context, bounds[0], bounds[1]);
   // After the caller's own range: the fence waits for the posts' stores, which by now have
   // long reached the workers.
   wake_sleepers();
