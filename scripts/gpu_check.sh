@@ -57,12 +57,12 @@ GLIBC_EXTRAS=(libdl.so.2 libpthread.so.0 librt.so.1 libm.so.6 libc.so.6)
 # The one file of a bundle folder: the bundle, packed.
 ARCHIVE=simit-gpu-bundle.tar.xz
 # The bundled programs and where the build puts them: simit, the probe, the unit tests of the
-# JIT (for the random programs under the GPU executor) and the examples' Eigen baselines (the
-# benchmark's reference rows).
+# JIT (for the random programs under the GPU executor), the examples' Eigen baselines (the
+# benchmark's reference rows) and the STREAM triad (the memory bandwidth at each thread count).
 declare -A BUNDLED=(
   [simit]=tools/simit [gpu_probe]=bench/gpu_probe [jit_tests]=tests/jit_tests
   [fem_baseline]=bench/fem_baseline [springs_baseline]=bench/springs_baseline
-  [cloth_baseline]=bench/cloth_baseline
+  [cloth_baseline]=bench/cloth_baseline [stream_triad]=bench/stream_triad
 )
 
 # The wrapper that starts bin/NAME through the carried loader and libraries.

@@ -13,6 +13,7 @@
 #include "interp/exec_state.h"
 #include "jit/controller.h"
 #include "jit/deferred_plan.h"
+#include "jit/loop_traffic.h"
 #include "jit/pruned_matrix.h"
 #include "jit/specialise.h"
 #include "jit/write_guard.h"
@@ -79,6 +80,7 @@ struct TraceController::LoopEntry {
   // Per array slot under float32: a vector's binary32 storage (the program's vectors are
   // copied in before the call and out after it; the scratch vectors live there).
   std::vector<std::vector<float>> single;
+  TrafficCount traffic;  // --jit-stats: the bytes its calls moved, and how fast
   TraceStats stats;
 };
 

@@ -277,7 +277,8 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
         case Part::Scratch: break;
       }
     }
-  std::vector<double> scalars(b.scalars.size(), 0.0);
+  // One more than the program's: the iterations the kernel's loop ran (SystemArgs::scalars).
+  std::vector<double> scalars(b.scalars.size() + 1, 0.0);
   for (size_t i = 0; i < b.scalars.size(); ++i) {
     const Value& v = in.variable(*b.scalars[i]);
     if (!v.empty()) scalars[i] = component(v, 0);
@@ -288,11 +289,16 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   for (size_t i = 0; i < b.arrays.size(); ++i) array_written[i] = t.arrays[i].written;
   args.array_count = b.arrays.size();
   args.size_count = t.sizes.size();
-  args.scalar_count = scalars.size();
+  args.scalar_count = b.scalars.size();
   args.array_bytes = bytes.data();
   args.array_written = array_written.get();
   args.array_resident = runtime_array.data();
+  const auto kernel_start = std::chrono::steady_clock::now();
   const int32_t rc = (e->on_device ? *device_executor_ : *executor_).run_system(*e->kernel, args);
+  e->traffic.add(
+      loop_traffic(t, bytes), static_cast<int64_t>(scalars.back()),
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - kernel_start)
+          .count());
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written
   // in place and cannot be put back), as what the interpreter ran before an interrupt stays;
   // the scalars go back to their variables, and the interrupt is raised below.
@@ -337,6 +343,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
                   e->prune_cpu_ms);
     e->stats.note += note;
   }
+  e->stats.note += e->traffic.note();
   if (e->not_binary32 > 0)
     e->stats.note += "; " + std::to_string(e->not_binary32) + " call" +
                      (e->not_binary32 > 1 ? "s" : "") +

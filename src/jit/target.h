@@ -68,6 +68,8 @@ struct ElementRange {
 // top of every iteration.
 struct SystemArgs {
   void* const* arrays = nullptr;
+  // The program's scalars in and out; after them, one more that a host kernel with a loop
+  // sets to the iterations it ran (--jit-stats), and a device program leaves as it is.
   double* scalars = nullptr;
   const int64_t* sizes = nullptr;
   const void* interrupt = nullptr;

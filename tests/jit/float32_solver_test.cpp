@@ -152,6 +152,15 @@ TEST(Float32Solver, BinaryThirtyTwoArraysWhereEveryValueIsOne) {
   // multiplies, holds its binary32 values in binary64 storage (system_tracer.cpp).
   for (const char* a : {"A.values f32", " x f32", " r f32", " p f64", " Ap f32", " b f64"})
     EXPECT_NE(jit.dump.find(a), std::string::npos) << a << "\n" << jit.dump;
+  // One iteration's bytes (jit/loop_traffic.h): the product reads the matrix's copy (88
+  // binary32 values, 88 column indices, 31 row starts: 828 bytes) and p (30 binary64
+  // values, 240 bytes) and writes Ap (120); the next pass reads x, p, r and Ap and writes x
+  // and r (840); the last reads r and p and writes p (600). The loop ran `iterations` times
+  // in each of the two calls.
+  EXPECT_NE(jit.stats.find("an iteration moves 2628 bytes (its matrices 828 bytes); " +
+                           std::to_string(2 * in.results[1].as_int()) + " iterations at "),
+            std::string::npos)
+      << jit.stats << jit.dump;
   // Each component of the result is a binary32 value.
   const runtime::Tensor& x = jit.results[0].tensor();
   for (size_t i = 0; i < x.size(); ++i)

@@ -439,6 +439,10 @@ void SystemEmitter::write_scalars(Value* scalars) {
     Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
     b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
   }
+  // After them, the iterations the loop ran (SystemArgs::scalars).
+  if (iterations_)
+    b_.CreateStore(b_.CreateSIToFP(b_.CreateLoad(b_.getInt64Ty(), iterations_), f64),
+                   b_.CreateConstInBoundsGEP1_64(f64, scalars, st_.scalars));
 }
 
 // The while loop: its condition, then its ops, as long as the condition holds and no
@@ -467,6 +471,8 @@ void SystemEmitter::while_loop(const std::vector<Value*>& sizes, Value* scalars,
   b_.SetInsertPoint(test);
   b_.CreateCondBr(expr(*st_.condition), body, done);
   b_.SetInsertPoint(body);
+  b_.CreateStore(b_.CreateAdd(b_.CreateLoad(b_.getInt64Ty(), iterations_), b_.getInt64(1)),
+                 iterations_);
   emit_ops(st_.body, sizes);
   b_.CreateBr(head);
   b_.SetInsertPoint(done);
@@ -485,6 +491,10 @@ llvm::Function* SystemEmitter::run(const std::string& name) {
   b_.SetInsertPoint(entry);
   load_arrays(arrays);
   for (Ty t : local_types_) locals_.push_back(b_.CreateAlloca(type(t)));
+  if (st_.condition) {
+    iterations_ = b_.CreateAlloca(b_.getInt64Ty());
+    b_.CreateStore(b_.getInt64(0), iterations_);
+  }
   llvm::Type* f64 = b_.getDoubleTy();
   for (int i = 0; i < st_.scalars; ++i) {
     Value* d = b_.CreateLoad(f64, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));

@@ -217,6 +217,7 @@ class SystemEmitter : public Emitter {
   Value* lane_of(Value* offset);
   Value* lane_at(size_t k, Value* lane);
   void write_scalars(Value* scalars);
+  Value* iterations_ = nullptr;  // the loop's count of iterations run (an i64 alloca)
   void while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt);
   std::vector<Value*> load_sizes(Value* sizes_in);
   // Component `k` (an i64) of a one-component vector array, as binary64 (a binary32 array's
