@@ -80,7 +80,10 @@ struct TraceController::LoopEntry {
   // Per array slot under float32: a vector's binary32 storage (the program's vectors are
   // copied in before the call and out after it; the scratch vectors live there).
   std::vector<std::vector<float>> single;
-  TrafficCount traffic;  // --jit-stats: the bytes its calls moved, and how fast
+  // --jit-stats: which arrays an iteration moves (made at the first call), the bytes its
+  // calls moved and how fast.
+  std::optional<TrafficPlan> traffic_plan;
+  TrafficCount traffic;
   TraceStats stats;
 };
 

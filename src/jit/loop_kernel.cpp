@@ -295,8 +295,9 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   args.array_resident = runtime_array.data();
   const auto kernel_start = std::chrono::steady_clock::now();
   const int32_t rc = (e->on_device ? *device_executor_ : *executor_).run_system(*e->kernel, args);
+  if (!e->traffic_plan) e->traffic_plan = plan_traffic(t);
   e->traffic.add(
-      loop_traffic(t, bytes), static_cast<int64_t>(scalars.back()),
+      e->traffic_plan->bytes(bytes), static_cast<int64_t>(scalars.back()),
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - kernel_start)
           .count());
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written

@@ -33,48 +33,53 @@ void stmt_touches(const std::vector<Stmt>& body, Touched& t) {
   }
 }
 
-struct Bytes {
-  int64_t all = 0, matrices = 0;
-};
-
-Bytes ops_bytes(const std::vector<VectorOp>& ops, std::span<const size_t> array_bytes) {
-  auto size = [&](int slot) {
-    return slot >= 0 && static_cast<size_t>(slot) < array_bytes.size()
-               ? static_cast<int64_t>(array_bytes[static_cast<size_t>(slot)])
-               : int64_t{0};
-  };
-  Bytes b;
+// The arrays one list of ops moves: each slot once per read and once per write.
+TrafficPlan::Section section_of(const std::vector<VectorOp>& ops) {
+  TrafficPlan::Section out;
   for (const VectorOp& op : ops) {
     if (op.kind == VectorOp::Kind::Scalar) continue;
     Touched t;
     stmt_touches(op.body, t);
     if (op.kind == VectorOp::Kind::SpMV) {
       for (int m : {op.values, op.cols, op.row_ptr}) {
-        b.matrices += size(m);
+        out.matrices.push_back(m);
         t.read.erase(m);
       }
-      b.all += size(op.values) + size(op.cols) + size(op.row_ptr);
       t.read.insert(op.x);
       t.written.insert(op.y);
       // The product's own row is read back from registers by the body, not from memory.
       t.read.erase(op.y);
     }
-    for (int s : t.read) b.all += size(s);
-    for (int s : t.written) b.all += size(s);
+    out.vectors.insert(out.vectors.end(), t.read.begin(), t.read.end());
+    out.vectors.insert(out.vectors.end(), t.written.begin(), t.written.end());
   }
-  return b;
+  return out;
 }
 
 }  // namespace
 
-LoopTraffic loop_traffic(const SystemTrace& t, std::span<const size_t> array_bytes) {
+TrafficPlan plan_traffic(const SystemTrace& t) {
+  return {section_of(t.before), section_of(t.body), section_of(t.after)};
+}
+
+LoopTraffic TrafficPlan::bytes(std::span<const size_t> array_bytes) const {
+  auto sum = [&](const std::vector<int>& slots) {
+    int64_t total = 0;
+    for (int s : slots)
+      if (s >= 0 && static_cast<size_t>(s) < array_bytes.size())
+        total += static_cast<int64_t>(array_bytes[static_cast<size_t>(s)]);
+    return total;
+  };
   LoopTraffic out;
-  out.before = ops_bytes(t.before, array_bytes).all;
-  const Bytes body = ops_bytes(t.body, array_bytes);
-  out.per_iteration = body.all;
-  out.matrices = body.matrices;
-  out.after = ops_bytes(t.after, array_bytes).all;
+  out.before = sum(before.matrices) + sum(before.vectors);
+  out.matrices = sum(body.matrices);
+  out.per_iteration = out.matrices + sum(body.vectors);
+  out.after = sum(after.matrices) + sum(after.vectors);
   return out;
+}
+
+LoopTraffic loop_traffic(const SystemTrace& t, std::span<const size_t> array_bytes) {
+  return plan_traffic(t).bytes(array_bytes);
 }
 
 void TrafficCount::add(const LoopTraffic& t, int64_t call_iterations, double kernel_ms) {

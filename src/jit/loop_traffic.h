@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "jit/loop_ir.h"
 
@@ -17,10 +18,21 @@ struct LoopTraffic {
   int64_t matrices = 0;  // of per_iteration: the products' matrices (values, columns, rows)
 };
 
+// Which arrays a trace's ops move, by slot (counted once per read and once per write), for
+// sizes that change from call to call: made once per trace, summed per call.
+struct TrafficPlan {
+  struct Section {
+    std::vector<int> matrices, vectors;
+  };
+  Section before, body, after;
+  LoopTraffic bytes(std::span<const size_t> array_bytes) const;
+};
+
 // Counted as STREAM counts: every array an op reads once, every array it writes once more
 // (no write-allocate traffic); a product's vector once (its components are reused from the
 // cache across the rows that read them). `array_bytes` holds each array slot's size in bytes
 // as the call binds it.
+TrafficPlan plan_traffic(const SystemTrace& t);
 LoopTraffic loop_traffic(const SystemTrace& t, std::span<const size_t> array_bytes);
 
 // A loop's calls, for --jit-stats: those whose kernel counted the iterations it ran (a device
