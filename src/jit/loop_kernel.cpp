@@ -277,8 +277,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
         case Part::Scratch: break;
       }
     }
-  // One more than the program's: the iterations the kernel's loop ran (SystemArgs::scalars).
-  std::vector<double> scalars(b.scalars.size() + 1, 0.0);
+  std::vector<double> scalars(b.scalars.size(), 0.0);
   for (size_t i = 0; i < b.scalars.size(); ++i) {
     const Value& v = in.variable(*b.scalars[i]);
     if (!v.empty()) scalars[i] = component(v, 0);
@@ -293,11 +292,13 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   args.array_bytes = bytes.data();
   args.array_written = array_written.get();
   args.array_resident = runtime_array.data();
+  int64_t iterations = 0;
+  args.iterations = &iterations;
   const auto kernel_start = std::chrono::steady_clock::now();
   const int32_t rc = (e->on_device ? *device_executor_ : *executor_).run_system(*e->kernel, args);
   if (!e->traffic_plan) e->traffic_plan = plan_traffic(t);
   e->traffic.add(
-      e->traffic_plan->bytes(bytes), static_cast<int64_t>(scalars.back()),
+      e->traffic_plan->bytes(bytes), iterations,
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - kernel_start)
           .count());
   // Ctrl-C: the loop stopped between two iterations. What it wrote stays (fields are written

@@ -68,8 +68,6 @@ struct ElementRange {
 // top of every iteration.
 struct SystemArgs {
   void* const* arrays = nullptr;
-  // The program's scalars in and out; after them, one more that a host kernel with a loop
-  // sets to the iterations it ran (--jit-stats), and a device program leaves as it is.
   double* scalars = nullptr;
   const int64_t* sizes = nullptr;
   const void* interrupt = nullptr;
@@ -83,6 +81,9 @@ struct SystemArgs {
   const bool* array_written = nullptr;
   // As MapArgs::array_resident.
   const uint8_t* array_resident = nullptr;
+  // Where a host kernel with a loop stores the iterations it ran (--jit-stats), or null; a
+  // device program leaves it as it is.
+  int64_t* iterations = nullptr;
 };
 
 // A system kernel's return when its loop stopped for the interrupt flag (the scalars written

@@ -29,6 +29,8 @@ class CpuHooks : public codegen::TargetHooks {
   llvm::FunctionCallee runtime_call(llvm::IRBuilder<>& b, const char* name,
                                     llvm::FunctionType* type) override;
   bool parallel_passes() const override { return true; }
+  llvm::Value* math_lanes(llvm::IRBuilder<>& b, MathFn f,
+                          const std::vector<llvm::Value*>& args) override;
 
  private:
   llvm::Value* failed_ = nullptr;  // the map kernel's failed_element (none in a system kernel)

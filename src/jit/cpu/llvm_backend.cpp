@@ -62,6 +62,7 @@ const MathSymbol kMathSymbols[] = {
     {"simit_math_acos", reinterpret_cast<void*>(&simit_math_acos)},
     {"simit_math_atan2", reinterpret_cast<void*>(&simit_math_atan2)},
     {"simit_math_cbrt", reinterpret_cast<void*>(&simit_math_cbrt)},
+    {"simit_math_atan2_x4", reinterpret_cast<void*>(&simit_math_atan2_x4)},
 };
 
 // The C library's names of those functions, which kernels compiled by earlier versions
@@ -158,7 +159,7 @@ class Session {
 using MapFn = int32_t (*)(void* const* arrays, const double* scalars, const int32_t* endpoints,
                           int32_t begin, int32_t end, int32_t* failed_element);
 using SystemFn = int32_t (*)(void* const* arrays, double* scalars, const int64_t* sizes,
-                             const void* interrupt, void* pool);
+                             const void* interrupt, void* pool, int64_t* iterations);
 
 // A kernel's code lives in a JITDylib of its own: a cached object keeps the name its function
 // had when it was compiled, and two kernels of the same key (two engines, two threads) may
@@ -177,8 +178,10 @@ class CpuKernel : public Kernel {
   }
   int32_t run(const SystemArgs& a) const override {
     if (device) throw std::logic_error("a device program runs through its executor's steps");
+    int64_t uncounted = 0;
     return system ? reinterpret_cast<SystemFn>(address)(a.arrays, a.scalars, a.sizes, a.interrupt,
-                                                        a.pool)
+                                                        a.pool,
+                                                        a.iterations ? a.iterations : &uncounted)
                   : 0;
   }
   void run_step(int32_t step, int64_t* context, int64_t first, int64_t end) const override {

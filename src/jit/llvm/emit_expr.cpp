@@ -26,6 +26,7 @@ Value* Emitter::math(const Expr& e, const std::vector<Value*>& args) {
   }
   auto* lanes = llvm::dyn_cast<llvm::FixedVectorType>(args[0]->getType());
   if (!lanes) return hooks_.math(b_, f, args);
+  if (Value* all = hooks_.math_lanes(b_, f, args)) return all;
   // Lanes: the same library call once per lane.
   Value* out = llvm::PoisonValue::get(lanes);
   for (unsigned l = 0; l < lanes->getNumElements(); ++l) {

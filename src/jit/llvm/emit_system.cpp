@@ -439,10 +439,8 @@ void SystemEmitter::write_scalars(Value* scalars) {
     Value* d = t == Ty::F64 ? v : t == Ty::I32 ? b_.CreateSIToFP(v, f64) : b_.CreateUIToFP(v, f64);
     b_.CreateStore(d, b_.CreateConstInBoundsGEP1_64(f64, scalars, i));
   }
-  // After them, the iterations the loop ran (SystemArgs::scalars).
-  if (iterations_)
-    b_.CreateStore(b_.CreateSIToFP(b_.CreateLoad(b_.getInt64Ty(), iterations_), f64),
-                   b_.CreateConstInBoundsGEP1_64(f64, scalars, st_.scalars));
+  // And the iterations the loop ran (SystemArgs::iterations).
+  if (iterations_) b_.CreateStore(b_.CreateLoad(b_.getInt64Ty(), iterations_), iterations_out_);
 }
 
 // The while loop: its condition, then its ops, as long as the condition holds and no
@@ -482,11 +480,12 @@ void SystemEmitter::while_loop(const std::vector<Value*>& sizes, Value* scalars,
 // and the ops after it in between.
 llvm::Function* SystemEmitter::run(const std::string& name) {
   llvm::Type* ptr = b_.getPtrTy();
-  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr, ptr}, false);
+  auto* ft = llvm::FunctionType::get(b_.getInt32Ty(), {ptr, ptr, ptr, ptr, ptr, ptr}, false);
   fn_ = llvm::Function::Create(ft, llvm::Function::ExternalLinkage, name, m_);
   auto arg = fn_->arg_begin();
   Value *arrays = &*arg++, *scalars = &*arg++, *sizes_in = &*arg++, *interrupt = &*arg++;
-  pool_ = &*arg;
+  pool_ = &*arg++;
+  iterations_out_ = &*arg;
   auto* entry = llvm::BasicBlock::Create(ctx_, "entry", fn_);
   b_.SetInsertPoint(entry);
   load_arrays(arrays);

@@ -175,10 +175,11 @@ class MapEmitter : public Emitter {
 };
 
 // A system kernel: int32_t fn(void* const* arrays, double* scalars, const int64_t* sizes,
-// const void* interrupt, void* pool) (jit/target.h, SystemArgs), whose returns are the
-// kernel's status. Where the target runs passes in parallel (TargetHooks::parallel_passes),
-// each pass and product is outlined into a function over a range of its units, which the
-// runtime's simit_jit_parallel_for runs on the pool (jit/llvm/emit_parallel.cpp).
+// const void* interrupt, void* pool, int64_t* iterations) (jit/target.h, SystemArgs), whose
+// returns are the kernel's status. Where the target runs passes in parallel
+// (TargetHooks::parallel_passes), each pass and product is outlined into a function over a range of
+// its units, which the runtime's simit_jit_parallel_for runs on the pool
+// (jit/llvm/emit_parallel.cpp).
 class SystemEmitter : public Emitter {
  public:
   SystemEmitter(const SystemTrace& t, llvm::Module& m, TargetHooks& hooks)
@@ -217,7 +218,8 @@ class SystemEmitter : public Emitter {
   Value* lane_of(Value* offset);
   Value* lane_at(size_t k, Value* lane);
   void write_scalars(Value* scalars);
-  Value* iterations_ = nullptr;  // the loop's count of iterations run (an i64 alloca)
+  Value* iterations_ = nullptr;      // the loop's count of iterations run (an i64 alloca)
+  Value* iterations_out_ = nullptr;  // where the kernel stores it (SystemArgs::iterations)
   void while_loop(const std::vector<Value*>& sizes, Value* scalars, Value* interrupt);
   std::vector<Value*> load_sizes(Value* sizes_in);
   // Component `k` (an i64) of a one-component vector array, as binary64 (a binary32 array's

@@ -48,6 +48,12 @@ class TargetHooks {
   // this process's, the GPU links their device bitcode). LLVM knows nothing of these names,
   // so it folds no call.
   virtual llvm::Value* math(llvm::IRBuilder<>& b, MathFn f, const std::vector<llvm::Value*>& args);
+  // `f` of vectors of lanes (a map kernel's elements at once) by one call, or null where the
+  // target has none for `f` and that many lanes: each lane then calls math().
+  virtual llvm::Value* math_lanes(llvm::IRBuilder<>& /*b*/, MathFn /*f*/,
+                                  const std::vector<llvm::Value*>& /*args*/) {
+    return nullptr;
+  }
   // *at += value (a double, or a vector of doubles at 8-byte alignment): an assembly write
   // with `reduce +`. `aa`: the alias metadata of the accesses to the result. By default a
   // plain load, add and store: right where one thread writes each block at a time.

@@ -41,15 +41,17 @@ inline double scale(double x, int k) {
   return x * pow2(k);
 }
 
-// s + e == a + b exactly (Knuth's two-sum).
-inline void two_sum(double a, double b, double& s, double& e) {
+// s + e == a + b exactly (Knuth's two-sum); F is double, or a vector of doubles lane by lane.
+template <class F>
+inline void two_sum(F a, F b, F& s, F& e) {
   s = a + b;
-  const double bb = s - a;
+  const F bb = s - a;
   e = (a - (s - bb)) + (b - bb);
 }
 
 // s + e == a + b exactly, when |a| >= |b| or a == 0 (Dekker's fast two-sum).
-inline void fast_two_sum(double a, double b, double& s, double& e) {
+template <class F>
+inline void fast_two_sum(F a, F b, F& s, F& e) {
   s = a + b;
   e = b - (s - a);
 }

@@ -1,6 +1,7 @@
 // atan2, asin and acos (docs/math.md), all from one atan of a quotient n/d <= 1 kept as a
 // double-double: atan t = atan c + atan((t - c)/(1 + t c)) with c = j/64 from a table, and a
 // short odd polynomial for the second term; asin and acos are atan2 of x and sqrt(1 - x^2).
+#include "runtime/math/atan_fast.h"
 #include "runtime/math/dd.h"
 #include "runtime/math/math_functions.h"
 #include "runtime/math/tables.h"
@@ -147,13 +148,6 @@ int biased_exponent(double x) { return static_cast<int>((bits_of(x) & kAbsMask) 
 // ---- The fast path (Ziv's strategy): the same reduction in plain doubles, an error bound,
 // and a rounding test; the few results it cannot round go to the accurate path above ----
 
-// x with the low kBits bits of its significand cleared: for a normal x, x - truncated(x)
-// is exact and has at most kBits significant bits, and |truncated(x)| <= |x|.
-template <int kBits>
-double truncated(double x) {
-  return from_bits(bits_of(x) & ~((uint64_t{1} << kBits) - 1));
-}
-
 // The result is K + s atan(n/d) with n <= d: octant bit 0 says that n/d is the reciprocal
 // of the ratio asked for (pi/2 - atan), bit 1 that the angle is pi minus that.
 struct Octant {
@@ -164,69 +158,15 @@ constexpr Octant kOctants[4] = {{0.0, 0.0, 1.0},
                                 {tb::kPiHi, tb::kPiLo, -1.0},
                                 {tb::kPio2Hi, tb::kPio2Lo, 1.0}};
 
-// The fast path's error bound relative to its result. Its error stays below 2^-63.7 of the
-// result: mostly the polynomial's, at most 9.2 ulp of |v|^3 <= 2^-14 |v| (7.5 ulp from v
-// rounded, the rest from the rounding of the polynomial), with |v| <= 1.0001 atan(n/d); v
-// itself comes out within 2^-75 and the table within 2^-106, and each of the four roundings
-// of the low parts costs at most 2^-73.
-constexpr double kFastError = 0x1p-62;
-
-// K + s atan((n + n_lo)/(d + d_lo)) (kOctants[octant]) correctly rounded, into out, or
-// false when the rounding test cannot tell. Needs 0 <= n <= d with n/d >= 2^-62,
-// 2^-900 <= d < 2^901, |n_lo| <= 2.5 2^-53 n and |d_lo| <= 2.5 2^-53 d (zero unless
-// kWithLo), and q, n/d to within 8 ulp.
+// atan_fast (runtime/math/atan_fast.h) in `octant`: true with the correctly rounded result in
+// out, false when the rounding test cannot tell.
 template <bool kWithLo>
 [[gnu::always_inline]] inline bool atan_fast(double q, double n, double d, double n_lo, double d_lo,
                                              int octant, double& out) {
-  // j = round(64 q (1 - 2^-40)) (the low bits of the shifted sum) and c = j/64: then
-  // |n/d - c| <= 1/128 + 2^-40, and j >= 1 only where n/d > 1/128, so c d < 2n.
-  constexpr double kShift = 0x1.8p52;
-  const double shifted = q * (64.0 - 0x1p-34) + kShift;
-  const int j = static_cast<int>(bits_of(shifted) & 127);
-  const double c = (shifted - kShift) * 0x1p-6;
-  // v = (n - c d)/(d + c n), |v| <= 2^-7 (1 + 2^-33). With the last 7 bits of d and n cleared
-  // (dh, nh), c dh and c nh are exact (c has 7 bits), and so are c (d - dh) and c (n - nh),
-  // products of numbers of 7 bits; n - c dh cancels exactly (0 <= c dh < 2n). So num and
-  // den are unevaluated sums of exact parts and parts below 2^-44 of them.
-  const double dh = truncated<7>(d), nh = truncated<7>(n);
-  double num_small = -(c * (d - dh)), den_small = c * (n - nh);
-  if constexpr (kWithLo) {
-    num_small += n_lo - c * d_lo;
-    den_small += d_lo + c * n_lo;
-  }
-  DD num;
-  two_sum(n - c * dh, num_small, num.hi, num.lo);
-  double den, den_lo;
-  fast_two_sum(d, c * nh, den, den_lo);  // d >= c nh
-  den_lo += den_small;
-  // v = vh + vl: vd is v within 7.5 ulp (den rounded apart, without waiting for the exact
-  // sum), vh is vd to 27 bits and denh is den to 26, so vh denh is exact and num - vh den,
-  // at most 2^-25 num, comes out within a few of its ulps; over den it is vl.
-  const double r = 1.0 / (d + c * n);
-  const double vd = num.hi * r;
-  const double vh = truncated<26>(vd);
-  const double denh = truncated<27>(den);
-  const double rest = (num.hi - vh * denh) + (num.lo - vh * ((den - denh) + den_lo));
-  // atan v - v = v^3 (-1/3 + v^2/5 - v^4/7 + v^6/9), below 2^-22.6 |v|; the next term is
-  // below 2^-73 |v|. Estrin's scheme, for a shorter chain of dependent operations.
   const Octant& o = kOctants[octant];
-  const double* a = tb::kAtanPoly;
-  const double v2 = vd * vd, v4 = v2 * v2;
-  const double poly = (a[0] + v2 * a[1]) + v4 * (a[2] + v2 * a[3]);
-  const double tail = ((o.s * vd) * v2) * poly;  // s (atan v - v)
-  // K + s (atan c + vh + vl) + tail. K + s atan c = k0 + e0 exactly (K is 0 or above
-  // pi/2 >= 2 atan c), before v is known; k0 + s vh = hi + e1 exactly too (k0 is 0 or above
-  // 2^-6 > |vh|). The low parts, below 2^-20 hi, are summed in the order they come.
-  double k0, e0, hi, e1;
-  fast_two_sum(o.k_hi, o.s * tb::kAtan[2 * j], k0, e0);
-  fast_two_sum(k0, o.s * vh, hi, e1);
-  const double lo_first = (o.k_lo + e0) + o.s * tb::kAtan[2 * j + 1];
-  const double err = hi * kFastError;
-  const double lo_last = (e1 + tail) + rest * (o.s * r);  // e1 + s vl + tail
-  // The true value lies within err of hi + lo_first + lo_last: if both ends round alike, so
-  // does it (the roundings of each end move it by under 2^-71 hi).
-  const double result = hi + ((lo_first + err) + lo_last);
-  if (result != hi + ((lo_first - err) + lo_last)) return false;
+  double other;
+  const double result = detail::atan_fast<kWithLo>(q, n, d, n_lo, d_lo, o.k_hi, o.k_lo, o.s, other);
+  if (result != other) return false;
   out = result;
   return true;
 }
