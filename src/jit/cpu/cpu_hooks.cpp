@@ -55,34 +55,36 @@ llvm::FunctionCallee CpuHooks::runtime_call(llvm::IRBuilder<>& b, const char* na
   return b.GetInsertBlock()->getModule()->getOrInsertFunction(name, type);
 }
 
-// atan2 of four lanes by one call of the runtime's simit_math_atan2_x4 (its lanes have the
-// bits of simit_math_atan2), through three arrays on the kernel's stack: atan2 of four
-// elements at once takes about a third of four calls' time, and it is the bend force's.
+// atan2 and log of four lanes by one call of the runtime's simit_math_atan2_x4 and
+// simit_math_log_x4 (their lanes have the bits of simit_math_atan2 and simit_math_log),
+// through arrays on the kernel's stack: four elements at once take about a third of four
+// calls' time (docs/math.md), and they are the bend force's and the Neo-Hookean force's.
 llvm::Value* CpuHooks::math_lanes(llvm::IRBuilder<>& b, MathFn f,
                                   const std::vector<llvm::Value*>& args) {
   auto* lanes = llvm::dyn_cast<llvm::FixedVectorType>(args[0]->getType());
-  if (f != MathFn::Atan2 || !lanes || lanes->getNumElements() != 4) return nullptr;
+  if ((f != MathFn::Atan2 && f != MathFn::Log) || !lanes || lanes->getNumElements() != 4)
+    return nullptr;
   llvm::Function* fn = b.GetInsertBlock()->getParent();
   llvm::IRBuilder<> entry(&fn->getEntryBlock(), fn->getEntryBlock().begin());
-  std::vector<llvm::Value*> at;
-  for (int i = 0; i < 3; ++i) {
+  std::vector<llvm::Value*> at;  // the arguments' arrays, then the result's
+  for (size_t i = 0; i <= args.size(); ++i) {
     llvm::AllocaInst* a = entry.CreateAlloca(lanes);
     a->setAlignment(llvm::Align(32));
     at.push_back(a);
   }
-  b.CreateAlignedStore(args[0], at[0], llvm::Align(32));
-  b.CreateAlignedStore(args[1], at[1], llvm::Align(32));
-  llvm::Type* ptr = b.getPtrTy();
-  auto* ft = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr}, false);
-  llvm::FunctionCallee callee = runtime_call(b, "simit_math_atan2_x4", ft);
+  for (size_t i = 0; i < args.size(); ++i) b.CreateAlignedStore(args[i], at[i], llvm::Align(32));
+  auto* ft = llvm::FunctionType::get(b.getVoidTy(),
+                                     std::vector<llvm::Type*>(at.size(), b.getPtrTy()), false);
+  llvm::FunctionCallee callee =
+      runtime_call(b, f == MathFn::Atan2 ? "simit_math_atan2_x4" : "simit_math_log_x4", ft);
   if (auto* callee_fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
     callee_fn->setDoesNotThrow();
     callee_fn->setWillReturn();
     callee_fn->setOnlyAccessesArgMemory();
   }
-  llvm::CallInst* c = b.CreateCall(callee, {at[0], at[1], at[2]});
+  llvm::CallInst* c = b.CreateCall(callee, at);
   c->addFnAttr(llvm::Attribute::NoBuiltin);
-  return b.CreateAlignedLoad(lanes, at[2], llvm::Align(32));
+  return b.CreateAlignedLoad(lanes, at.back(), llvm::Align(32));
 }
 
 // The steps as internal functions, and one external function that calls step `step` (a

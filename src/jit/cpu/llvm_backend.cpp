@@ -63,6 +63,7 @@ const MathSymbol kMathSymbols[] = {
     {"simit_math_atan2", reinterpret_cast<void*>(&simit_math_atan2)},
     {"simit_math_cbrt", reinterpret_cast<void*>(&simit_math_cbrt)},
     {"simit_math_atan2_x4", reinterpret_cast<void*>(&simit_math_atan2_x4)},
+    {"simit_math_log_x4", reinterpret_cast<void*>(&simit_math_log_x4)},
 };
 
 // The C library's names of those functions, which kernels compiled by earlier versions

@@ -1,6 +1,6 @@
 // The fast path of atan2, asin and acos (runtime/math/inverse_trig.cpp): atan of a quotient
 // n/d <= 1 in plain doubles with an error bound, for one value (F = double) or for the four
-// lanes of a vector (F = Lanes4, runtime/math/atan2_lanes.cpp). Both run the same operations
+// lanes of a vector (F = Lanes4, runtime/math/lanes.cpp). Both run the same operations
 // in the same order, so every lane gives the bits of the one-value path.
 #pragma once
 

@@ -57,16 +57,18 @@ inline void fast_two_sum(F a, F b, F& s, F& e) {
 }
 
 // a == hi + lo with each half of 26 bits or fewer (Veltkamp), for |a| < 2^995.
-inline void split(double a, double& hi, double& lo) {
-  const double t = 134217729.0 * a;  // 2^27 + 1
+template <class F>
+inline void split(F a, F& hi, F& lo) {
+  const F t = 134217729.0 * a;  // 2^27 + 1
   hi = t - (t - a);
   lo = a - hi;
 }
 
 // p + e == a * b exactly (Dekker's product; no FMA), when nothing overflows or underflows.
-inline void two_prod(double a, double b, double& p, double& e) {
+template <class F>
+inline void two_prod(F a, F b, F& p, F& e) {
   p = a * b;
-  double ah, al, bh, bl;
+  F ah, al, bh, bl;
   split(a, ah, al);
   split(b, bh, bl);
   e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;

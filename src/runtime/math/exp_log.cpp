@@ -2,6 +2,7 @@
 // pow's y log x, up to 745 in size, still has an absolute error near 2^-67, and exp takes its
 // argument as a double-double: pow is then almost always correctly rounded, as exp and log are.
 #include "runtime/math/dd.h"
+#include "runtime/math/log_core.h"
 #include "runtime/math/math_functions.h"
 #include "runtime/math/tables.h"
 
@@ -86,43 +87,14 @@ DD log_dd(double x, bool precise) {
     e += 1;
   }
   const double z = from_bits(mant | (zexp << 52));
-  // r = z c - 1 exactly, c ~ 1/z from the table; log z = -log c + log1p(r), |r| < 2^-7.
-  const double c = tb::kLog[3 * j];
-  double ph, pl, rh, rl;
-  two_prod(z, c, ph, pl);
-  two_sum(ph - 1.0, pl, rh, rl);  // ph - 1 is exact (ph is within 2^-6 of 1)
-  // log1p(r) = r - r^2/2 + r^3 (1/3 + r P(r)); the terms down to r^3/3 in double-doubles.
-  const double* p = tb::kLogPoly;
-  const double tail =
-      p[0] +
-      rh * (p[1] + rh * (p[2] + rh * (p[3] + rh * (p[4] + rh * (p[5] + rh * (p[6] + rh * p[7]))))));
-  DD r2;
-  two_prod(rh, rh, r2.hi, r2.lo);
-  r2.lo += 2.0 * rh * rl;
-  DD t3{r2.hi * rh * (tb::kThirdHi + rh * tail), 0.0};  // at most 2^-14.6 of log1p(r)
-  if (precise) {
-    DD u;
-    fast_two_sum(tb::kThirdHi, rh * tail, u.hi, u.lo);
-    u.lo += tb::kThirdLo;
-    DD r3;
-    two_prod(r2.hi, rh, r3.hi, r3.lo);
-    r3.lo += r2.hi * rl + r2.lo * rh;
-    t3 = mul(r3, u);
-  }
-  // e ln2 - log c + r - r^2/2 + t3, the large terms by exact sums.
-  const double ed = e;
-  double h, l, t;
-  two_sum(ed * tb::kLn2Hi, tb::kLog[3 * j + 1], h, l);  // ed * kLn2Hi is exact
-  l += ed * tb::kLn2Lo + tb::kLog[3 * j + 2];
-  two_sum(h, rh, h, t);
-  l += t;
-  two_sum(h, -0.5 * r2.hi, h, t);
-  l += t;
-  two_sum(h, t3.hi, h, t);
-  l += t;
-  l += (rl - 0.5 * r2.lo) + t3.lo;
   DD out;
-  fast_two_sum(h, l, out.hi, out.lo);
+  const double ed = e;
+  if (precise)
+    log_core<true>(z, tb::kLog[3 * j], ed, tb::kLog[3 * j + 1], tb::kLog[3 * j + 2], out.hi,
+                   out.lo);
+  else
+    log_core<false>(z, tb::kLog[3 * j], ed, tb::kLog[3 * j + 1], tb::kLog[3 * j + 2], out.hi,
+                    out.lo);
   return out;
 }
 

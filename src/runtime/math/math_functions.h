@@ -18,6 +18,8 @@ double atan2(double y, double x);
 double cbrt(double x);
 // out[l] = atan2(y[l], x[l]) for l < 4, with atan2's bits, in SIMD lanes where it can.
 void atan2_x4(const double* y, const double* x, double* out);
+// out[l] = log(x[l]) for l < 4, with log's bits.
+void log_x4(const double* x, double* out);
 
 }  // namespace simit::math
 
@@ -34,4 +36,5 @@ double simit_math_acos(double x);
 double simit_math_atan2(double y, double x);
 double simit_math_cbrt(double x);
 void simit_math_atan2_x4(const double* y, const double* x, double* out);
+void simit_math_log_x4(const double* x, double* out);
 }

@@ -1,4 +1,4 @@
-// atan2 by four lanes (runtime/math/atan2_lanes.cpp) against atan2 one value at a time: the
+// atan2 and log by four lanes (runtime/math/lanes.cpp) against the one-value functions: the
 // same bits in every lane, whichever path each lane takes and whatever its neighbours are.
 #include <gtest/gtest.h>
 
@@ -46,7 +46,7 @@ int lanes_that_differ(const std::vector<std::pair<double, double>>& yx) {
   return differ;
 }
 
-TEST(Atan2Lanes, EveryLaneHasTheBitsOfAtan2) {
+TEST(MathLanes, EveryAtan2LaneHasTheBitsOfAtan2) {
   const double inf = std::numeric_limits<double>::infinity();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // Special values and the edges of the fast path's domain (exponents 123 and 1923, a
@@ -104,15 +104,69 @@ TEST(Atan2Lanes, EveryLaneHasTheBitsOfAtan2) {
   EXPECT_EQ(lanes_that_differ(yx), 0);
 }
 
-// The C name that compiled kernels call computes the same.
-TEST(Atan2Lanes, TheCNameIsTheSameFunction) {
+// Every four consecutive arguments as one call of log_x4 (the last group padded with its
+// first), each lane against log of that argument alone; returns how many lanes differ.
+int log_lanes_that_differ(const std::vector<double>& xs) {
+  int differ = 0;
+  for (size_t i = 0; i < xs.size(); i += 4) {
+    double x[4], out[4];
+    for (size_t l = 0; l < 4; ++l) x[l] = xs[i + l < xs.size() ? i + l : i];
+    log_x4(x, out);
+    for (int l = 0; l < 4; ++l) {
+      const double one = log(x[l]);
+      if (bits(one) != bits(out[l])) {
+        ++differ;
+        ADD_FAILURE() << "log(" << x[l] << "): lane " << l << " gives " << out[l]
+                      << ", one value at a time " << one;
+      }
+    }
+  }
+  return differ;
+}
+
+TEST(MathLanes, EveryLogLaneHasTheBitsOfLog) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Special values and the edges of the lanes' domain (the smallest normal, the largest
+  // finite, 1 and the neighbours of the table's halving point 1.5), beside ordinary values.
+  std::vector<double> xs = {0.0,     -0.0,      -1.0,          inf,
+                            -inf,    nan,       DBL_MIN,       DBL_MIN / 2,
+                            DBL_MAX, 1.0,       1.5,           std::nextafter(1.5, 0.0),
+                            0.75,    0x1p-1074, 1.0 + 0x1p-52, 1.0 - 0x1p-53};
+  std::mt19937_64 g(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < 400000; ++i) {
+    double x;
+    switch (i % 4) {
+      case 0: {  // any bits at all
+        const uint64_t a = g();
+        std::memcpy(&x, &a, sizeof x);
+        break;
+      }
+      case 1:  // a wide range of magnitudes
+        x = std::ldexp(unit(g), static_cast<int>(g() % 2200) - 1100);
+        break;
+      default:  // near 1, as the determinant of a deformation gradient
+        x = 0.5 + unit(g);
+    }
+    xs.push_back(x);
+  }
+  EXPECT_EQ(log_lanes_that_differ(xs), 0);
+}
+
+// The C names that compiled kernels call compute the same.
+TEST(MathLanes, TheCNamesAreTheSameFunctions) {
   const double y[4] = {1.0, -2.0, 0.5, 1e-300}, x[4] = {2.0, 3.0, -0.25, -1.0};
-  double a[4], b[4];
+  double a[4], b[4], c[4], d[4];
   atan2_x4(y, x, a);
   simit_math_atan2_x4(y, x, b);
+  log_x4(x, c);
+  simit_math_log_x4(x, d);
   for (int l = 0; l < 4; ++l) {
     EXPECT_EQ(bits(a[l]), bits(b[l])) << l;
     EXPECT_EQ(bits(a[l]), bits(atan2(y[l], x[l]))) << l;
+    EXPECT_EQ(bits(c[l]), bits(d[l])) << l;
+    EXPECT_EQ(bits(c[l]), bits(log(x[l]))) << l;
   }
 }
 

@@ -1,9 +1,11 @@
-// atan2 of four pairs at once, for compiled map kernels that compute four elements in SIMD
-// lanes: the fast path of runtime/math/atan_fast.h lane by lane, and atan2 itself for each
-// lane it does not cover or cannot round. Every lane gets the bits of simit::math::atan2.
+// atan2 and log of four arguments at once, for compiled map kernels that compute four
+// elements in SIMD lanes: the arithmetic of runtime/math/atan_fast.h and log_core.h lane by
+// lane, and the one-value function for each lane outside it (special values, subnormals, a
+// result atan2's fast path cannot round). Every lane gets the one-value function's bits.
 #include <cstdint>
 
 #include "runtime/math/atan_fast.h"
+#include "runtime/math/log_core.h"
 #include "runtime/math/math_functions.h"
 
 namespace simit::math {
@@ -22,6 +24,10 @@ Lanes4 pick(Mask4 c, Lanes4 a, Lanes4 b) {
   return from_bits((bits_of(a) & m) | (bits_of(b) & ~m));
 }
 Lanes4 splat(double v) { return Lanes4{v, v, v, v}; }
+LaneBits4 pick_bits(Mask4 c, LaneBits4 a, LaneBits4 b) {
+  const LaneBits4 m = std::bit_cast<LaneBits4>(c);
+  return (a & m) | (b & ~m);
+}
 
 }  // namespace
 
@@ -59,8 +65,42 @@ void atan2_x4(const double* y, const double* x, double* out) {
   for (int l = 0; l < 4; ++l) out[l] = done[l] ? signed_result[l] : math::atan2(y[l], x[l]);
 }
 
+void log_x4(const double* x, double* out) {
+  Lanes4 vx;
+  for (int l = 0; l < 4; ++l) vx[l] = x[l];
+  const LaneBits4 bx = bits_of(vx);
+  // Positive normal finite arguments (biased exponent 1 to 2046, sign clear) take the lanes;
+  // the others (zeros, negatives, subnormals, infinities, NaNs) log itself.
+  const LaneBits4 biased = bx >> 52;
+  const Mask4 normal = (biased - 1) < 2046;
+  // x = 2^e z with z in [3/4, 3/2) (a significand of 1.5 or more is halved), e as a double,
+  // and the table's entries for z's interval j (the top 7 bits of the significand). A lane
+  // not taken computes log 1.
+  const LaneBits4 mant = bx & ((uint64_t{1} << 52) - 1);
+  const LaneBits4 j = pick_bits(normal, mant >> 45, LaneBits4{});
+  const Mask4 upper = j >= 64;
+  const LaneBits4 zexp = pick_bits(upper, LaneBits4{} + 1022, LaneBits4{} + 1023);
+  const Lanes4 z =
+      pick(normal, from_bits(pick_bits(normal, mant, LaneBits4{}) | (zexp << 52)), splat(1.0));
+  Lanes4 ed, c, log_c_hi, log_c_lo;
+  for (int l = 0; l < 4; ++l) {
+    const int e = normal[l] ? static_cast<int>(biased[l]) - 1023 + (upper[l] ? 1 : 0) : 0;
+    ed[l] = e;
+    c[l] = tb::kLog[3 * j[l]];
+    log_c_hi[l] = tb::kLog[3 * j[l] + 1];
+    log_c_lo[l] = tb::kLog[3 * j[l] + 2];
+  }
+  Lanes4 hi, lo;
+  detail::log_core<false>(z, c, ed, log_c_hi, log_c_lo, hi, lo);
+  const Lanes4 result = hi + lo;
+  for (int l = 0; l < 4; ++l) out[l] = normal[l] ? result[l] : math::log(x[l]);
+}
+
 }  // namespace simit::math
 
-extern "C" void simit_math_atan2_x4(const double* y, const double* x, double* out) {
+extern "C" {
+void simit_math_atan2_x4(const double* y, const double* x, double* out) {
   simit::math::atan2_x4(y, x, out);
+}
+void simit_math_log_x4(const double* x, double* out) { simit::math::log_x4(x, out); }
 }
