@@ -230,13 +230,9 @@ bool TraceController::run_site(interp::SiteCall& call) {
   Entry* e = entry_for(call);
   if (!e || !e->kernel) return false;
   if (options_.check) return check_site(*e, call);
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu = thread_cpu_ms();
+  CallTimer timer(e->stats);
   const bool done = run_kernel(*e, call);
-  e->stats.cpu_ms += thread_cpu_ms() - cpu;
-  e->stats.run_ms +=
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  ++e->stats.calls;
+  timer.done();
   return done;
 }
 

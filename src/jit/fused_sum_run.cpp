@@ -62,8 +62,7 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   } else if (options_.check) {
     want = runtime::add(*m, *k, 1.0, beta, &in.patterns());
   }
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu = thread_cpu_ms();
+  CallTimer timer(s.stats);
   // On the GPU where its map left K (the device's copy newest), else on the host.
   const bool on_device =
       device_executor_ && device_executor_->add_into(*m, 1.0, *k, beta, options_.float32);
@@ -79,10 +78,7 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
         "interpreted: " + sum.base->name + " has blocks outside the pattern of " + sum.scaled->name;
     return false;
   }
-  s.stats.cpu_ms += thread_cpu_ms() - cpu;
-  s.stats.run_ms +=
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  ++s.stats.calls;
+  timer.done();
   s.stats.status = "fused";
   if (want) {
     const runtime::MatrixPattern &pw = want->pattern(), &pk = k->pattern();

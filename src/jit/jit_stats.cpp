@@ -43,6 +43,20 @@ double thread_cpu_ms() {
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
+CallTimer::CallTimer(TraceStats& stats) : stats_(stats), start_(std::chrono::steady_clock::now()) {
+  constexpr double kReadCpuFromMs = 0.2;
+  if (stats_.calls == 0 || stats_.run_ms >= kReadCpuFromMs * static_cast<double>(stats_.calls))
+    cpu_ = thread_cpu_ms();
+}
+
+void CallTimer::done() {
+  const double wall =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+  stats_.run_ms += wall;
+  stats_.cpu_ms += cpu_ >= 0.0 ? thread_cpu_ms() - cpu_ : wall;
+  ++stats_.calls;
+}
+
 std::string SimdReport::summary() const {
   std::string out = "SIMD: ";
   if (map && lanes > 1) {
