@@ -143,9 +143,11 @@ SimdRemarks::SimdRemarks(llvm::Module& m, bool lanes) {
     std::sort(loops.begin(), loops.end(), [&](const llvm::Loop* a, const llvm::Loop* b) {
       return place.at(a->getHeader()) < place.at(b->getHeader());
     });
-    // A map kernel returns a status and takes six arguments (jit/cpu/cpu_hooks.h); a system
-    // kernel five; an outlined op returns nothing.
-    const bool map = f.arg_size() == 6, kernel_function = !f.getReturnType()->isVoidTy();
+    // A map kernel returns a status and takes its element range as two i32s, its fourth and
+    // fifth arguments (jit/cpu/cpu_hooks.h); a system kernel takes six pointers; an outlined
+    // op returns nothing.
+    const bool map = f.arg_size() == 6 && f.getArg(3)->getType()->isIntegerTy(32);
+    const bool kernel_function = !f.getReturnType()->isVoidTy();
     for (llvm::Loop* l : loops) {
       Loop seen;
       seen.what = map ? map_loop(*l, lanes) : system_loop(*l, li, kernel_function);
