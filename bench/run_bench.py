@@ -4,7 +4,7 @@
 Usage: bench/run_bench.py [--build DIR] [--frames N] [--dragon160k] [--cloth 32,64]
                           [--only SUBSTRING]... [--baseline-only SUBSTRING]...
                           [--compare-baseline LABEL=DIR]... [--compare-simit LABEL=DIR]...
-                          [--fem-sim-form] [--threads N]
+                          [--fem-sim-form] [--threads N[,M...]]
                           [--executors interpreter,...] [--out FILE]...
 
 For each example and mesh (fem: bunny, dragon40k and, with --dragon160k, dragon160k;
@@ -65,6 +65,10 @@ option runs on one thread and is given nothing (with N above 1 its runs are skip
 note). Baselines get --threads only when N is above 1, so that the --compare-baseline builds
 that predate it still run at 1 (above 1 those are skipped with a note). The default keeps
 the table comparable with one-thread results from before the option.
+--threads 1,2 (several counts) runs each case at every count one after the other, in every
+repeat, so that the counts see the machine alike, and adds the column "vs 1 thread": a
+row's ms/frame over the same runner's at the first count (the interpreter runs at the first
+count only).
 
 Simit and the baseline run with the same CG stopping rule (r'r <= cg_tol or cg_max
 iterations): the baseline gets the scene's [tensors] cg_tol and cg_max through --cg-tol and
@@ -79,6 +83,7 @@ least of the N medians of each timing column (load only ever adds time). The def
 runs 5 frames of each example; --frames changes that for all of them.
 """
 import argparse
+import copy
 import csv
 import filecmp
 import functools
@@ -385,7 +390,8 @@ def row_of(case, who, threads, frames_run, code, peak, data, loc):
         "solve": median(data["solve"]),
         "iterations": median(data["iterations"]) if data["iterations"] else None,
         "residual": data["residual"][-1] if data["residual"] else None,
-        "peak_mb": peak, "loc": loc, "ratio": None, "error": None, "same_bits": False,
+        "peak_mb": peak, "loc": loc, "ratio": None, "scaling": None, "error": None,
+        "same_bits": False,
     }
 
 
@@ -490,6 +496,8 @@ def measure(case, args, workdir, notes):
              for label, build in args.compare_simit for name in args.executors]
     for runner, name, simit in ([] if baseline_only(case, args) else runs):
         make_argv, unavailable, threaded = EXECUTORS[name]
+        if not threaded and not getattr(args, "first_count", True):
+            continue  # one thread whatever the count: its row is the first count's
         why = unavailable(simit)
         if why:
             notes.append("%s: executor %s is not available in %s: %s"
@@ -552,6 +560,30 @@ def measure(case, args, workdir, notes):
     return rows
 
 
+def measure_counts(case, args, workdir, notes):
+    """CASE's rows at each thread count of --threads, the counts run one after the other in
+    every repeat (so that a machine whose speed drifts affects them alike), each count's rows
+    the least of its repeats; with several counts, each row's ms/frame against the same
+    runner's at the first count ("scaling")."""
+    counts = args.thread_counts
+    runs = {t: [] for t in counts}
+    for _ in range(args.repeat):
+        for t in counts:
+            at = copy.copy(args)
+            at.threads, at.first_count = t, t == counts[0]
+            runs[t].append(measure(case, at, workdir, notes))
+    rows = []
+    for t in counts:
+        rows += fastest_of(runs[t])
+    if len(counts) > 1:
+        first = {r["runner"]: r for r in rows if r["threads"] == counts[0] or r["runner"] ==
+                 "interpreter"}
+        for r in rows:
+            ref = first.get(r["runner"])
+            r["scaling"] = r["ms"] / ref["ms"] if ref and ref["ms"] > 0 else None
+    return rows
+
+
 def fastest_of(runs):
     """One row per runner from several runs of a case: the least median of each timing
     column (a busy machine only ever adds time), the rest from the first run, and the
@@ -588,7 +620,7 @@ def cell(row, key):
         return "%.2e" % v
     if key == "peak_mb":
         return "%.0f" % v
-    if key == "ratio":
+    if key in ("ratio", "scaling"):
         return "%.1fx" % v if v >= 10 else "%.2fx" % v
     if key == "runner" and not row["ok"]:
         return v + " (failed)"
@@ -644,10 +676,12 @@ def main():
                    help="time the baselines' frames in thread CPU time (--cpu-clock), which a "
                         "busy machine inflates less than wall time; simit stays on wall time "
                         "(one thread only: not with --threads above 1)")
-    p.add_argument("--threads", type=int, default=1, metavar="N",
+    p.add_argument("--threads", default="1", metavar="N[,M...]",
                    help="run the baselines (--threads N, OpenMP) and simit's JIT (--threads N) "
                         "on N threads; the interpreter runs on one (default 1, the one-thread "
-                        "table of before the option)")
+                        "table of before the option). Several counts (1,2) run each case at "
+                        "each count side by side, every repeat, and add a column: ms/frame "
+                        "against the same runner at the first count")
     p.add_argument("--fem-sim-form", action="store_true",
                    help="also run fem_baseline --sim-form (the stiffness column by column from dP)")
     p.add_argument("--cloth", default="32,64", help="cloth sizes, comma-separated (default 32,64)")
@@ -669,8 +703,13 @@ def main():
     args.simit = os.path.join(args.build, "tools", "simit")
     args.cloth = [int(n) for n in args.cloth.split(",") if n.strip()]
     args.executors = [e for e in args.executors.split(",") if e]
-    if args.threads < 1:
-        p.error("--threads needs a whole number >= 1, got %d" % args.threads)
+    try:
+        args.thread_counts = [int(n) for n in args.threads.split(",")]
+    except ValueError:
+        args.thread_counts = []
+    if not args.thread_counts or min(args.thread_counts) < 1:
+        p.error("--threads needs whole numbers >= 1, comma-separated, got '%s'" % args.threads)
+    args.threads = max(args.thread_counts)  # the checks below; measure() runs each count
     if args.baseline_cpu_clock and args.threads > 1:
         p.error("--baseline-cpu-clock times one thread's CPU time: it cannot go with "
                 "--threads %d (time threaded runs in wall time)" % args.threads)
@@ -707,13 +746,16 @@ def main():
 
     workdir = os.path.abspath(args.keep) if args.keep else tempfile.mkdtemp(prefix="simit-bench-")
     os.makedirs(workdir, exist_ok=True)
+    if len(args.thread_counts) > 1:
+        COLUMNS.insert(COLUMNS.index(("ratio", "vs baseline")) + 1,
+                       ("scaling", "vs %d thread%s" % (args.thread_counts[0],
+                                                       "" if args.thread_counts[0] == 1 else "s")))
     rows, notes = [], []
     started = time.monotonic()
     try:
         for case in cases(args, workdir, notes):
             print("%s (%d frames)" % (case.name, args.frames or case.default_frames), flush=True)
-            runs = [measure(case, args, workdir, notes) for _ in range(args.repeat)]
-            rows += fastest_of(runs)
+            rows += measure_counts(case, args, workdir, notes)
     finally:
         if not args.keep:
             shutil.rmtree(workdir, ignore_errors=True)
@@ -724,8 +766,8 @@ def main():
     print("\nms: medians over the frames; solve = frame - assembly (simit: everything outside "
           "the maps, mostly CG).")
     print("Baseline LOC excludes baseline_common.{h,cpp} (%d lines shared by the three)." % common)
-    print("Threads: %d (the baselines' --threads and the JIT's; the interpreter runs on one)."
-          % args.threads)
+    print("Threads: %s (the baselines' --threads and the JIT's; the interpreter runs on one)."
+          % ", ".join(str(t) for t in args.thread_counts))
     # Linux counts the launcher's resident set at exec into the child's ru_maxrss.
     _, floor, _ = run_child(["true"], os.devnull, 10)
     print("Peak MB has a floor of %.0f MB (this script's own RSS, which Linux counts into the "
