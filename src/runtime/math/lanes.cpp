@@ -51,8 +51,8 @@ void atan2_x4(const double* y, const double* x, double* out) {
   const Lanes4 one = splat(1.0);
   const Lanes4 n = pick(fast, pick(ay < ax, ay, ax), one);
   const Lanes4 d = pick(fast, pick(ay < ax, ax, ay), one);
-  // The octant's K and s (inverse_trig.cpp's kOctants): K is pi/2 when steep, else pi when
-  // left, else 0; s is -1 when steep and left or neither... as the table lists them.
+  // The octant's K and s, as inverse_trig.cpp's kOctants lists them: K is pi/2 when steep,
+  // else pi when left, else 0; s is 1 when steep and left are alike, else -1.
   const Lanes4 k_hi = pick(steep, splat(tb::kPio2Hi), pick(left, splat(tb::kPiHi), splat(0.0)));
   const Lanes4 k_lo = pick(steep, splat(tb::kPio2Lo), pick(left, splat(tb::kPiLo), splat(0.0)));
   const Lanes4 s = pick(steep == left, one, splat(-1.0));
