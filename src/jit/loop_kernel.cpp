@@ -126,8 +126,7 @@ Saved save_loop_variables(const SystemBinding& b, const SystemTrace& t,
 // (Ctrl-C) stops between two iterations keeps what they wrote and throws interp::Interrupted.
 bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
   LoopEntry* e = &entry;
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu = thread_cpu_ms();
+  CallTimer timer(e->stats);
   const SystemBinding& b = e->traced.binding;
   const SystemTrace& t = *e->traced.trace;
   // A matrix or vector with a value that is not a binary32 value, where the kernel holds a
@@ -332,10 +331,7 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       case Ty::Bool: in.variable(*b.scalars[i]) = Value::of_bool(scalars[i] != 0.0); break;
     }
   }
-  e->stats.cpu_ms += thread_cpu_ms() - cpu;
-  e->stats.run_ms +=
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  ++e->stats.calls;
+  timer.done();
   e->stats.note = e->where;
   if (e->total > 0) {
     char note[160];
