@@ -27,6 +27,7 @@
 #include <llvm/Target/TargetMachine.h>
 
 #include "jit/cpu/emitter.h"
+#include "jit/cpu/perf_map.h"
 #include "jit/cpu/simd_remarks.h"
 #include "jit/device_program.h"
 #include "jit/kernel_cache.h"
@@ -139,6 +140,7 @@ class Session {
                    .create();
     if (!jit) return message_of(jit.takeError());
     jit_ = std::move(*jit);
+    cpu::add_perf_map(*jit_);
     // The project's transcendental functions, which every kernel links against (the main
     // JITDylib is in each kernel's link order).
     llvm::orc::SymbolMap math;
@@ -259,7 +261,7 @@ class CpuTarget : public Target {
     const bool large = node_count(trace) > kLargeTrace, lanes = lanes_fit(trace, &why_not);
     const int level = !large ? kOptLevel : lanes ? kLargeLanesTraceOptLevel : kLargeTraceOptLevel;
     const bool fast = large && !lanes && kLargeTraceFastCodegen;
-    auto k = build(key_of(trace), level, fast, lanes, keep_ir, error,
+    auto k = build(trace.name, key_of(trace), level, fast, lanes, keep_ir, error,
                    [&](llvm::Module& m, const std::string& name) {
                      return Emitter(trace, m, host_).run(name);
                    });
@@ -279,7 +281,7 @@ class CpuTarget : public Target {
         return nullptr;
       }
     }
-    auto k = build(key_of(trace), kOptLevel, false, false, keep_ir, error,
+    auto k = build(trace.name, key_of(trace), kOptLevel, false, false, keep_ir, error,
                    [&](llvm::Module& m, const std::string& name) {
                      return trace.device ? Emitter(trace, m).run_device_steps(name)
                                          : Emitter(trace, m).run_system(name);
@@ -317,11 +319,13 @@ class CpuTarget : public Target {
 
   // Links object code into a JITDylib of its own, in which the host functions the code calls
   // by name resolve to this process's (the main JITDylib's generator finds the C library's).
-  std::unique_ptr<CpuKernel> link(const std::string& symbol,
+  // `label` (the trace's name) follows the JITDylib's own name, after a colon, for the perf
+  // map's names (jit/cpu/perf_map.h).
+  std::unique_ptr<CpuKernel> link(const std::string& symbol, const std::string& label,
                                   std::unique_ptr<llvm::MemoryBuffer> obj, std::string& error) {
     static std::atomic<uint64_t> serial{0};
     llvm::orc::LLJIT& jit = s_.jit();
-    auto jd = jit.createJITDylib("simit_kernel_" + std::to_string(serial++));
+    auto jd = jit.createJITDylib("simit_kernel_" + std::to_string(serial++) + ":" + label);
     if (!jd) {
       error = message_of(jd.takeError());
       return nullptr;
@@ -360,8 +364,8 @@ class CpuTarget : public Target {
   // vectorisers did with its loops: `lanes`, a map kernel in lanes), compiles it, keeps the
   // object and that report in the cache, and links it.
   std::unique_ptr<CpuKernel> build(
-      const std::string& trace_key, int level, bool fast, bool lanes, bool keep_ir,
-      std::string& error,
+      const std::string& label, const std::string& trace_key, int level, bool fast, bool lanes,
+      bool keep_ir, std::string& error,
       const std::function<llvm::Function*(llvm::Module&, const std::string&)>& emit) {
     const auto start = std::chrono::steady_clock::now();
     const auto elapsed_ms = [&] {
@@ -375,7 +379,7 @@ class CpuTarget : public Target {
         std::string link_error;
         SimdReport simd;
         auto k = read_simd_report(entry->simd, simd)
-                     ? link(entry->symbol,
+                     ? link(entry->symbol, label,
                             llvm::MemoryBuffer::getMemBufferCopy(entry->object, entry->symbol),
                             link_error)
                      : nullptr;
@@ -438,7 +442,7 @@ class CpuTarget : public Target {
       cache_.store(digest, CacheEntry{name, (*obj)->getBuffer().str(), simd_report_text(simd)},
                    store_error);
     }
-    auto k = link(name, std::move(*obj), error);
+    auto k = link(name, label, std::move(*obj), error);
     if (!k) return nullptr;
     k->llvm_ir = std::move(ir);
     k->simd = std::move(simd);
