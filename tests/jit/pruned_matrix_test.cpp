@@ -1,6 +1,7 @@
-// PrunedMatrix's passes over ranges of rows (jit/pruned_matrix.h): run as tasks in any order
-// they make the copy a serial pass makes, block for block, in binary64 and in binary32, and
-// the binary32 copy says when a value is not a binary32 value.
+// PrunedMatrix (jit/pruned_matrix.h): the copy drops zero blocks, holds the others by columns
+// and is padded; its passes over ranges of rows, run as tasks in any order, make the copy a
+// serial pass makes, block for block, in binary64 and in binary32, and the binary32 copy says
+// when a value is not a binary32 value.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,6 +27,41 @@ runtime::SystemMatrix tridiagonal(int rows, bool binary32_values) {
       k.block(static_cast<int64_t>(b))[i] = binary32_values ? static_cast<float>(x) : x;
     }
   return k;
+}
+
+// A solver loop's copy of a matrix drops its zero blocks (of either sign; a block with a
+// subnormal, a NaN or an infinity is kept), holds the others by columns, and is padded so that
+// a 3-component column loads as one 4-lane vector.
+TEST(PrunedMatrix, TheCopyDropsZeroBlocksHoldsColumnsAndIsPadded) {
+  std::vector<int32_t> row_ptr{0}, cols;
+  for (int r = 0; r < 5; ++r) {
+    for (int c = std::max(0, r - 1); c <= std::min(4, r + 1); ++c) cols.push_back(c);
+    row_ptr.push_back(static_cast<int32_t>(cols.size()));
+  }
+  runtime::SystemMatrix k(runtime::MatrixPattern::from_csr(5, 5, row_ptr, cols), 3, 3);
+  for (size_t i = 0; i < k.value_count(); ++i)
+    k.values()[i] = 0.1 * static_cast<double>(i % 17) - 0.7;
+  for (int i = 0; i < 9; ++i) k.block(1)[i] = i == 4 ? -0.0 : 0.0;  // block (0, 1): dropped
+  // Zeros but for one subnormal, one NaN, one -infinity: kept; all -0.0: dropped.
+  const double odd[3] = {std::numeric_limits<double>::denorm_min(),
+                         std::numeric_limits<double>::quiet_NaN(),
+                         -std::numeric_limits<double>::infinity()};
+  for (int b = 0; b < 3; ++b)
+    for (int i = 0; i < 9; ++i) k.block(3 + b)[i] = i == 8 - b ? odd[b] : -0.0;
+  for (int i = 0; i < 9; ++i) k.block(6)[i] = -0.0;  // block (2, 2): dropped
+  PrunedMatrix p;
+  p.assign(k);
+  EXPECT_EQ(p.total, 13);
+  EXPECT_EQ(p.kept, 11);
+  EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 4, 6, 9, 11}));
+  EXPECT_EQ(p.cols[0], 0);
+  EXPECT_EQ(p.cols[1], 0);        // row 1 starts with block (1, 0)
+  ASSERT_EQ(p.cols.size(), 11u);  // the kept blocks only
+  ASSERT_EQ(p.values.size(), 11u * 9 + 1);
+  // Block (1, 0), by columns: component (i, j) at 3 j + i.
+  const double* b = k.block(2);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(p.values[9 + 3 * j + i], b[3 * i + j]) << i << j;
 }
 
 // Runs the tasks last to first, as threads might finish them.
