@@ -20,8 +20,14 @@ namespace {
 // How long a worker polls the job number before it sleeps, and the caller polls for the last
 // task before it yields: waking a sleeping thread takes tens of microseconds, as long as a
 // solver loop's pass, so a worker that slept between two passes would never take part.
-// (Measured in time: a pause instruction takes 3 to 140 cycles, by processor.)
-constexpr auto kSpinFor = std::chrono::microseconds(500);
+// Long enough, too, to outlast a small scene's output between two frames: at 0.5 ms the
+// workers slept while the fem bunny's frame was written, and the next frame's first map
+// (tet_force, 0.48 ms on one thread) ran mostly on the caller while they woke: 0.38-0.40 ms a
+// call on 2 threads, against 0.25-0.26 at 5 ms and at 20 ms (springs' spring_force: 0.128
+// against 0.103). OpenMP runtimes poll as long or longer (libgomp some milliseconds, Intel's
+// 200 ms by default). (Measured in time: a pause instruction takes 3 to 140 cycles, by
+// processor.)
+constexpr auto kSpinFor = std::chrono::milliseconds(5);
 constexpr int kPausesPerClockRead = 64;
 // How long the caller waits for a worker to report its given range before it looks whether
 // the worker has taken it, and takes it itself if not (a worker asleep, or off its core). A

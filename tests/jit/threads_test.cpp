@@ -112,7 +112,7 @@ TEST(ThreadPool, RunsEachGivenRangeOnceAndTheCallerTakesTheRangeOfAWorkerThatSle
     ThreadPool pool(3, cpus);
     bool took = false;
     for (int trial = 0; trial < (cpus == 1 ? 200 : 20) && !(took && cpus == 1); ++trial) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(3));
+      std::this_thread::sleep_for(std::chrono::milliseconds(8));  // workers poll for 5 ms
       for (auto& r : runs) r.store(0);
       std::vector<double> times(3, -1.0);
       pool.run_ranges(op, nullptr, three.data(), 3, times.data());
