@@ -2,7 +2,8 @@
 // function's address, size and name once its addresses are final, one line per function, as
 // perf's "START SIZE symbolname" format asks (hexadecimal, no 0x). The name is the trace's
 // (the kernel's JITDylib carries it after a colon), then the function's own in brackets:
-// "tet_force [simit_k_5568246e66f870c5]", "statements:122-136 [simit_k_0a980c92aedb7de0.op2]"
+// "tet_force:164 [simit_k_5568246e66f870c5]",
+// "statements:122-136 [simit_k_0a980c92aedb7de0.op2]"
 // (a solver loop's passes are functions of their own; --dump llvm shows them by that name).
 //
 // JITLink keeps no names for an object's local symbols, and a solver loop's passes are local
@@ -56,6 +57,7 @@ class PerfMapPlugin : public llvm::orc::ObjectLinkingLayer::Plugin {
     std::vector<Function> functions;
     auto file = llvm::object::ObjectFile::createObjectFile(object);
     if (!file) return llvm::consumeError(file.takeError());
+    if (!llvm::isa<llvm::object::ELFObjectFileBase>(file->get())) return;  // perf: Linux only
     for (const llvm::object::SymbolRef& sym : (*file)->symbols()) {
       auto type = sym.getType();
       auto name = sym.getName();
