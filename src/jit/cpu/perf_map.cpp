@@ -93,7 +93,8 @@ class PerfMapPlugin : public llvm::orc::ObjectLinkingLayer::Plugin {
       if (!file_ || pid_ != getpid()) {
         if (file_) std::fclose(file_);
         pid_ = getpid();
-        file_ = std::fopen(perf_map_path().c_str(), "a");
+        // A file left by an earlier process of the same number is not this one's: replaced.
+        file_ = std::fopen(perf_map_path().c_str(), "w");
       }
       if (!file_) {  // no listing, and no error: the run does not depend on it
         pending_.erase(it);
