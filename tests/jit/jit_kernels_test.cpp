@@ -22,13 +22,7 @@
 namespace simit::jit {
 namespace {
 
-namespace ast = frontend::ast;
-using api::CompiledProgram;
-using api::Engine;
-using api::EngineOptions;
-using api::ExecutorKind;
-using interp::Value;
-using namespace test_support;
+using namespace test_support;  // also ast, Value and the engine API's names
 
 // A program whose `step` maps over a set `points` of `count` elements, whose fields `fill`
 // adds, run interpreted and then by the JIT at threshold 0: both runs' results, the JIT's

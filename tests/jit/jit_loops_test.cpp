@@ -21,13 +21,7 @@
 namespace simit::jit {
 namespace {
 
-namespace ast = frontend::ast;
-using api::CompiledProgram;
-using api::Engine;
-using api::EngineOptions;
-using api::ExecutorKind;
-using interp::Value;
-using namespace test_support;
+using namespace test_support;  // also ast, Value and the engine API's names
 
 // ---------------------------------------------------------------------------
 // Solver loops with ifs (jit/system_trace.cpp): a preconditioned CG whose body tests p'Ap,

@@ -12,6 +12,11 @@
 
 namespace simit::jit::test_support {
 
+namespace ast = frontend::ast;
+using api::CompiledProgram;
+using api::Engine;
+using api::EngineOptions;
+using api::ExecutorKind;
 using interp::Value;
 
 // Bit-for-bit equality of two doubles arrays.
