@@ -349,7 +349,8 @@ Value negate_typed(const Value& v) {
   Tensor& out = result.tensor();
   const T* x = data<T>(v.tensor());
   T* o = mutable_data<T>(out);
-  for (size_t i = 0; i < out.size(); ++i) {
+  const size_t n = out.size();  // read once: the stores could alias the shape
+  for (size_t i = 0; i < n; ++i) {
     if constexpr (std::is_same_v<T, int32_t>)
       o[i] = static_cast<int32_t>(0u - static_cast<uint32_t>(x[i]));
     else

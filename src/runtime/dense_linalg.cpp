@@ -402,12 +402,15 @@ Tensor lower_triangular_solve(const Tensor& a, const Tensor& b) {
 }
 
 void round_to_float32(Tensor& t) {
+  // The size read once: the stores could alias the shape as far as the compiler knows, and
+  // recomputing it per component kept the loop from vectorising (8.6% of a float32 cloth).
+  const size_t n = t.size();
   if (t.kind() == ComponentKind::Float) {
     double* d = t.mutable_floats();
-    for (size_t i = 0; i < t.size(); ++i) d[i] = static_cast<float>(d[i]);
+    for (size_t i = 0; i < n; ++i) d[i] = static_cast<float>(d[i]);
   } else if (t.kind() == ComponentKind::Complex) {
     Complex* c = t.mutable_complexes();
-    for (size_t i = 0; i < t.size(); ++i)
+    for (size_t i = 0; i < n; ++i)
       c[i] = Complex(static_cast<float>(c[i].real()), static_cast<float>(c[i].imag()));
   }
 }

@@ -485,12 +485,13 @@ bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
 }
 
 void round_to_float32(SystemMatrix& m) {
+  const size_t n = m.value_count();  // read once, as round_to_float32(Tensor&) does
   if (m.kind() == ComponentKind::Float) {
     double* v = m.values();
-    for (size_t i = 0; i < m.value_count(); ++i) v[i] = static_cast<float>(v[i]);
+    for (size_t i = 0; i < n; ++i) v[i] = static_cast<float>(v[i]);
   } else if (m.kind() == ComponentKind::Complex) {
     Complex* c = m.complexes();
-    for (size_t i = 0; i < m.value_count(); ++i)
+    for (size_t i = 0; i < n; ++i)
       c[i] = Complex(static_cast<float>(c[i].real()), static_cast<float>(c[i].imag()));
   }
 }
