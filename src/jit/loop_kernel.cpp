@@ -214,8 +214,9 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
             const runtime::Tensor& x = v.tensor();
             e->single.resize(b.arrays.size());
             std::vector<float>& s = e->single[i];
+            const double* from = x.floats();
             s.resize(x.size());
-            for (size_t k = 0; k < x.size(); ++k) s[k] = static_cast<float>(x.floats()[k]);
+            for (size_t k = 0; k < s.size(); ++k) s[k] = static_cast<float>(from[k]);
             arrays[i] = s.data();
             bytes[i] = s.size() * sizeof(float);
             break;

@@ -457,6 +457,19 @@ TEST_F(SceneErrors, NonFiniteValuesStopTheRunAtTheirFrame) {
                        hint);
   EXPECT_FALSE(fs::exists(path("out/tet.pvd")));
   EXPECT_FALSE(fs::exists(path("out/tet_000000.vtu")));
+  // The same in binary32 fields (--float32), whose check reads their bits as binary32.
+  r = run(replace(s, "v = [0.1, 0.0, 0.1]", "v = \"1/0\""), {"--float32"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err, path("scene.toml") +
+                       ": error: after init (frame 0): field 'v' of element 1 of set 'verts' is "
+                       "inf (component 0)" +
+                       hint);
+  // Finite binary32 values at the top of the range are not taken for infinities: the check
+  // after init passes, and the run stops after frame 1 (on this scene's E).
+  r = run(replace(s, "v = [0.1, 0.0, 0.1]", "v = [3.4e38, -3.4e38, 0.0]"), {"--float32"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.err.find("after init (frame 0)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(": error: after frame 1: "), std::string::npos) << r.err;
 }
 
 // A trivial step on a large generated cloth, so that a run spends its time writing frames.
