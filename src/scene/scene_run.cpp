@@ -182,9 +182,6 @@ void SceneRun::print_sizes(std::ostream& out, int frames) const {
 
 namespace {
 
-// The first non-finite component of a float field among the first `elements` of `set` in the
-// mesh's order (the element of least mesh number, then its first such component): element and
-// component, or -1.
 // Whether any of the n values is a NaN or an infinity (its exponent bits all set): one pass
 // without a branch per value, which vectorises; the usual frame has none.
 template <typename T>
@@ -196,6 +193,9 @@ bool any_non_finite(const T* p, size_t n) {
   return any != 0;
 }
 
+// The first non-finite component of a float field among the first `elements` of `set` in the
+// mesh's order (the element of least mesh number, then its first such component): element and
+// component, or -1.
 template <typename T>
 std::pair<int, int> first_non_finite(const runtime::Set& set, const runtime::Field& f,
                                      const std::vector<int32_t>* elements) {
