@@ -101,8 +101,8 @@ class PerfMapPlugin : public llvm::orc::ObjectLinkingLayer::Plugin {
         return llvm::Error::success();
       }
       for (const Function& f : it->second) {
-        // A section's code is one block from its start (an object compiled with one
-        // function per section has one function per block).
+        // JITLink makes each section of an ELF object one block, so a function lies at its
+        // section's block plus its offset there; a section it split otherwise is left out.
         llvm::jitlink::Section* s = g.findSectionByName(f.section);
         if (!s || s->blocks_size() != 1 || f.size == 0) continue;
         const uint64_t start = (*s->blocks().begin())->getAddress().getValue() + f.offset;
