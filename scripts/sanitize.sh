@@ -6,8 +6,9 @@
 #                                              the whole suite, in build-sanitize (without the
 #                                              JIT unless SIMIT_WITH_LLVM=ON: build-sanitize-jit)
 #   scripts/sanitize.sh --thread [CTEST ARGS]  ThreadSanitizer, with the JIT, in build-tsan, over
-#                                              the threaded tests (thread pool, executors, the
-#                                              corpus, random programs and examples on 3 threads)
+#                                              the threaded tests (thread pool, executors, a
+#                                              scene's frame writer, the corpus, random programs
+#                                              and examples on 3 threads)
 #
 # With the JIT only our code is instrumented (LLVM and the compiled kernels are not: two
 # kernels' writes are kept apart by construction, and the tests compare every thread count's
@@ -21,11 +22,12 @@ if [ "${1:-}" = --thread ]; then
   ensure_deps --tests --llvm
   configure_build "$build" RelWithDebInfo -DSIMIT_BUILD_TESTS=ON -DSIMIT_TSAN=ON \
     -DSIMIT_WITH_LLVM=ON -DSIMIT_GENERIC_TWIN=OFF
-  # The threaded tests live in jit_tests and run through simit: only those are built.
-  cmake --build "$build" -j2 --target jit_tests simit
+  # The threaded tests live in jit_tests and scene_tests and run through simit: only those
+  # are built.
+  cmake --build "$build" -j2 --target jit_tests scene_tests simit
   export TSAN_OPTIONS="${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}"
   if [ $# -eq 0 ]; then
-    set -- -R "ThreadPool|ParallelFor|ThreadedExecutor|DeferAssembly|PrunedMatrix|Executor\.|lang_corpus_jit_threads3|jit_agrees_threads3_(fem|springs)"
+    set -- -R "ThreadPool|ParallelFor|ThreadedExecutor|DeferAssembly|PrunedMatrix|Executor\.|FrameWriter|BackgroundFrames|lang_corpus_jit_threads3|jit_agrees_threads3_(fem|springs)"
   fi
   ctest --test-dir "$build" --output-on-failure -j1 "$@"
   exit

@@ -113,7 +113,7 @@ void OutputSeries::configure(const BoundSets& sets) {
   if (!t) file_.fail(node, "output: expected a table");
   file_.check_keys(*t, kTable,
                    {"folder", "name", "points", "position", "cells", "point_fields", "cell_fields",
-                    "every", "csv", "png"});
+                    "every", "csv", "png", "background"});
   folder_ = options_.output_dir.empty() ? file_.required_string(*t, kTable, "folder")
                                         : options_.output_dir;
   file_.required_string(*t, kTable, "name");
@@ -131,6 +131,11 @@ void OutputSeries::configure(const BoundSets& sets) {
     if (!n->is_integer() || *n->value<int64_t>() < 1)
       file_.fail(n, std::string(kTable) + " every: expected a whole number >= 1");
     every_ = static_cast<int>(*n->value<int64_t>());
+  }
+  if (const toml::node* n = t->get("background")) {
+    if (!n->is_boolean())
+      file_.fail(n, std::string(kTable) + " background: expected true or false");
+    background_wanted_ = *n->value<bool>();
   }
   if (t->get("csv")) {
     csv_name_ = plain_name(*t, "csv");
@@ -342,22 +347,36 @@ void OutputSeries::remove_stale_temporaries() const {
 
 void OutputSeries::write_frame(const MeshCache& meshes, int frame, bool last) {
   if (!pvd_) return;
-  runtime::Mesh& m = frame_;
   const runtime::Set& ps = *points_->set;
+  std::vector<runtime::Point> points;
   if (position_field_.empty()) {
-    m.points = meshes.at(points_->mesh_path).points;  // the mesh's order already
+    points = meshes.at(points_->mesh_path).points;  // the mesh's order already
   } else {
     const runtime::Field& f = ps.field(position_field_);
-    m.points.resize(ps.size());
+    points.resize(static_cast<size_t>(ps.size()));
     for (int r = 0; r < ps.size(); ++r)
-      for (int d = 0; d < 3; ++d) m.points[r][d] = coordinate(f, row(point_rows_, r), d);
+      for (int d = 0; d < 3; ++d)
+        points[static_cast<size_t>(r)][d] = coordinate(f, row(point_rows_, r), d);
   }
-  ArrayStore store;
+  // A frame written in the background owns copies of the fields: the next frame changes them.
+  const bool later = background_ && !last && pieces_ == 0;
+  auto store = std::make_shared<ArrayStore>();
   std::vector<runtime::VtuArray> point_data, cell_data;
-  for (const std::string& f : point_fields_) point_data.push_back(store.add(ps, f, point_rows_));
+  for (const std::string& f : point_fields_)
+    point_data.push_back(store->add(ps, f, point_rows_, -1, later));
   if (cells_)
     for (const std::string& f : cell_fields_)
-      cell_data.push_back(store.add(*cells_->set, f, cell_rows_));
+      cell_data.push_back(store->add(*cells_->set, f, cell_rows_, -1, later));
+  const double time = frame * file_.frame_time;
+  if (later) {
+    writer_.post([this, time, points = std::move(points), store, point_data, cell_data]() mutable {
+      frame_.points = std::move(points);
+      pvd_->write_frame(time, frame_, point_data, cell_data);
+    });
+    return;
+  }
+  writer_.wait();
+  frame_.points = std::move(points);
   if (pieces_ > 0) {
     // The ranks wrote their pieces of this frame: the .pvtu joins them.
     const std::string file = pvd_->next_frame_file(".pvtu");
@@ -365,11 +384,18 @@ void OutputSeries::write_frame(const MeshCache& meshes, int frame, bool last) {
     std::vector<std::string> pieces;
     for (int r = 0; r < pieces_; ++r) pieces.push_back(PieceSeries::piece_file(name_, index, r));
     runtime::write_pvtu(pvd_->folder() + file, pieces, point_data, cell_data);
-    pvd_->add_frame(frame * file_.frame_time, file);
+    pvd_->add_frame(time, file);
   } else {
-    pvd_->write_frame(frame * file_.frame_time, m, point_data, cell_data);
+    pvd_->write_frame(time, frame_, point_data, cell_data);
   }
   if (last) write_picture();
+}
+
+void OutputSeries::finish_writing_quietly() {
+  try {
+    writer_.wait();
+  } catch (...) {  // NOLINT(bugprone-empty-catch): the run reports the error it stops on
+  }
 }
 
 PieceSeries::Settings OutputSeries::piece_settings() const {
@@ -386,6 +412,7 @@ PieceSeries::Settings OutputSeries::piece_settings() const {
 }
 
 void OutputSeries::write_picture() {
+  writer_.wait();  // frame_ is the writer's until then
   std::string png_error;
   if (pvd_ && !png_path_.empty() && !runtime::write_quicklook(frame_, png_path_, png_error))
     throw SceneError(file_.path + ": error: writing the quick-look picture: " + png_error);

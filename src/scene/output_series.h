@@ -7,10 +7,12 @@
 
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "runtime/mesh/pvd_writer.h"
+#include "scene/frame_writer.h"
 #include "scene/mesh_binding.h"
 #include "scene/mesh_cache.h"
 #include "scene/output_pieces.h"
@@ -31,8 +33,21 @@ class OutputSeries {
   void open(const std::vector<std::string>& stats);
 
   // Writes frame `frame` (0: the state after init) at time frame * frame_time; the picture
-  // too when it is `last`.
+  // too when it is `last`. In the background (below), a frame that is not the last is copied
+  // and handed to the writer thread; an error of the frame written before it throws here.
   void write_frame(const MeshCache& meshes, int frame, bool last);
+  // Frames other than the last are written on a thread of their own (scene/frame_writer.h)
+  // while the next frame computes: `simit run`'s frames, not a host's that steps them (its
+  // files are complete when step() returns).
+  // [output] background = true or false decides; without it, `spare_core`: whether the run
+  // leaves a core free.
+  void write_in_background(bool spare_core) {
+    background_ = background_wanted_.value_or(spare_core);
+  }
+  // Waits until the frames handed to the writer are written; throws the first error.
+  void finish_writing() { writer_.wait(); }
+  // The same, for a run that is stopping on another error: a write error is dropped.
+  void finish_writing_quietly();
   // The picture of the frame written last, when one is asked for (a run that did not know
   // which frame would be its last when it wrote it).
   void write_picture();
@@ -83,6 +98,10 @@ class OutputSeries {
   std::unique_ptr<runtime::PvdWriter> pvd_;
   int pieces_ = 0;  // ranks whose pieces each frame's .pvtu joins; 0: one .vtu a frame
   std::ofstream csv_;
+  bool background_ = false;
+  std::optional<bool> background_wanted_;  // [output] background
+  // Last, so that it is destroyed first: its job may be writing frame_ through pvd_.
+  FrameWriter writer_;
 };
 
 }  // namespace simit::scene

@@ -363,9 +363,26 @@ void SceneRun::run(int frames, std::ostream& out) {
   prepare(out);
   print_sizes(out, frames);
   if (options_.distributed) out << options_.distributed->describe_parts(local_sets());
-  // Everything is checked: run.
-  initialise(frames == 0);
-  const double total_ms = run_frames(frames, out);
+  // Everything is checked: run. Where the run leaves a core to spare, each frame is written
+  // on it while the next one computes (scene/frame_writer.h), unless [output] background says
+  // otherwise. Where every core computes, the writer would take time from the threads of the
+  // next frame (the fem bunny's compiled frame on both cores of a 2-core machine: 3.2 ms,
+  // 3.6-3.8 with its frames written beside it).
+  const int computing = options_.executor.kind == ExecutorKind::Gpu ? 0
+                        : options_.executor.kind == ExecutorKind::Interpreter
+                            ? 1
+                            : options_.executor.threads;
+  output_.write_in_background(computing < default_threads());  // the cores it may use
+  double total_ms = 0;
+  try {
+    initialise(frames == 0);
+    total_ms = run_frames(frames, out);
+    output_.finish_writing();
+  } catch (...) {
+    // The frames before the one the run stops at are on disk before it says why.
+    output_.finish_writing_quietly();
+    throw;
+  }
   if (options_.progress_line && frames > 0) out << '\n';
   print_summary(out, frames, total_ms, options_.quiet, output_.pvd_path());
   if (options_.distributed) out << options_.distributed->describe_traffic();

@@ -31,9 +31,11 @@ struct ArrayStore {
     return out;
   }
 
-  // The first `count` rows (every element of the set when negative).
+  // The first `count` rows (every element of the set when negative). Values that need no
+  // conversion are viewed where the field holds them, unless `own`: then the array is the
+  // store's own (a frame written while the fields change: scene/frame_writer.h).
   runtime::VtuArray add(const runtime::Set& set, const std::string& name,
-                        std::span<const int32_t> rows, int count_rows = -1) {
+                        std::span<const int32_t> rows, int count_rows = -1, bool own = false) {
     const runtime::Field& f = set.field(name);
     const runtime::FieldType& ft = f.type();
     const size_t comps = ft.components();
@@ -41,7 +43,7 @@ struct ArrayStore {
     runtime::VtuArray a{name, static_cast<int>(comps), std::span<const double>()};
     switch (ft.kind) {
       case runtime::ComponentKind::Float:
-        if (!ft.single && rows.empty())
+        if (!ft.single && rows.empty() && !own)
           a.values = std::span<const double>(f.data<double>(), comps * count);
         else if (!ft.single)
           a.values = copy(doubles, f.data<double>(), comps, count, rows);
@@ -49,7 +51,7 @@ struct ArrayStore {
           a.values = copy(doubles, f.data<float>(), comps, count, rows);
         break;
       case runtime::ComponentKind::Int:
-        if (rows.empty())
+        if (rows.empty() && !own)
           a.values = std::span<const int32_t>(f.data<int32_t>(), comps * count);
         else
           a.values = copy(ints, f.data<int32_t>(), comps, count, rows);

@@ -21,7 +21,11 @@ namespace {
 constexpr int kSlots = 8;
 constexpr size_t kPathMax = 4096;
 char g_temp_paths[kSlots][kPathMax];
-volatile std::sig_atomic_t g_slot_used[kSlots];
+// Claimed by compare-and-swap: a scene's frames are written on a thread of their own while
+// the main thread may write another file (scene/frame_writer.h). Lock-free, so a handler may
+// read them.
+std::atomic<int> g_slot_used[kSlots];
+static_assert(std::atomic<int>::is_always_lock_free);
 
 // Creates the temporary (mkstemp) in a slot's buffer, so that a signal finds its name from the
 // moment the file exists. Returns the descriptor (or -1) and sets `slot` (-1 when every slot
@@ -29,30 +33,32 @@ volatile std::sig_atomic_t g_slot_used[kSlots];
 int create_in_slot(std::string& temp, int& slot) {
   slot = -1;
   if (temp.size() < kPathMax)
-    for (int i = 0; i < kSlots && slot < 0; ++i)
-      if (!g_slot_used[i]) slot = i;
+    for (int i = 0; i < kSlots && slot < 0; ++i) {
+      int free = 0;
+      if (g_slot_used[i].compare_exchange_strong(free, 1)) slot = i;  // 1: claimed, no path yet
+    }
   if (slot < 0) return mkstemp(temp.data());
   char* buffer = g_temp_paths[slot];
   std::memcpy(buffer, temp.c_str(), temp.size() + 1);
   std::atomic_signal_fence(std::memory_order_seq_cst);
-  g_slot_used[slot] = 1;  // until then the handler ignores the buffer; after, it may see the
-                          // template (no such file) or the name chosen
+  g_slot_used[slot].store(2);  // until then the handler ignores the buffer; after, it may see
+                               // the template (no such file) or the name chosen
   const int fd = mkstemp(buffer);
   std::memcpy(temp.data(), buffer, temp.size());
   if (fd < 0) {
-    g_slot_used[slot] = 0;
+    g_slot_used[slot].store(0);
     slot = -1;
   }
   return fd;
 }
 
 void release_slot(int slot) {
-  if (slot >= 0) g_slot_used[slot] = 0;
+  if (slot >= 0) g_slot_used[slot].store(0);
 }
 
 extern "C" void remove_temporaries_and_die(int sig) {
   for (int i = 0; i < kSlots; ++i)
-    if (g_slot_used[i]) unlink(g_temp_paths[i]);  // async-signal-safe
+    if (g_slot_used[i].load() == 2) unlink(g_temp_paths[i]);  // async-signal-safe
   // SA_RESETHAND restored the default action; the signal is delivered once the handler returns.
   raise(sig);
 }
