@@ -117,7 +117,10 @@ class Stepper {
   // Checks the bindings and the output, runs the scene's `init` and writes frame 0. Once.
   void init();
   bool initialised() const;
-  // One frame (init() first when it has not run); the step's dense results by name.
+  // One frame (init() first when it has not run); the step's dense results by name. Its
+  // output files are written when it returns, unless the scene's [output] background = true:
+  // then they are written while the next step runs, complete at its return or at finish(),
+  // which throw the failure of a frame that could not be written.
   std::vector<std::pair<std::string, DenseResult>> step();
   int frame() const;  // frames run
   // Writes what a run writes after its last frame (the picture, --final-csv). Again only

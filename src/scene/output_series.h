@@ -37,8 +37,7 @@ class OutputSeries {
   // and handed to the writer thread; an error of the frame written before it throws here.
   void write_frame(const MeshCache& meshes, int frame, bool last);
   // Frames other than the last are written on a thread of their own (scene/frame_writer.h)
-  // while the next frame computes: `simit run`'s frames, not a host's that steps them (its
-  // files are complete when step() returns).
+  // while the next frame computes.
   // [output] background = true or false decides; without it, `spare_core`: whether the run
   // leaves a core free.
   void write_in_background(bool spare_core) {

@@ -309,6 +309,9 @@ void SceneRun::prepare(std::ostream& out) {
   engine_ = std::make_unique<api::Engine>(file_.program, engine_options(out));
   bind(*engine_);
   output_.open(file_.stat_names);
+  // A host that steps the scene finds each frame's files written when step() returns, unless
+  // [output] background = true; run() decides by the cores (below).
+  output_.write_in_background(false);
   if (options_.distributed && options_.distributed->ranks() > 1) start_pieces();
 }
 

@@ -4,7 +4,8 @@
 // (each after the next frame's step, in the test), are byte for byte those of a host that
 // steps the scene (written before step() returns), each with its own frame's field values;
 // a frame that cannot be written stops the run, one frame later in the background, and the
-// series lists the frames before it; [output] background decides where frames are written.
+// series lists the frames before it; [output] background decides where frames are written,
+// also for a host that steps the scene, which then learns of a failed frame a step later.
 #include "scene/frame_writer.h"
 
 #include <gtest/gtest.h>
@@ -200,8 +201,11 @@ TEST_F(BackgroundFrames, AreTheFramesOfAHostThatStepsTheScene) {
     HeldJobs held;
     ASSERT_EQ(run_scene(options("run"), out, err), 0) << err.str();
   }
-  // The host's frames are written before each step() returns.
-  std::unique_ptr<Scene> scene = Scene::open(options("stepped"), err);
+  // The host's frames are written before each step() returns (no background key).
+  std::ofstream(dir_ / "in_turn.toml") << kScene;
+  SceneOptions o = options("stepped");
+  o.file = (dir_ / "in_turn.toml").string();
+  std::unique_ptr<Scene> scene = Scene::open(o, err);
   ASSERT_TRUE(scene) << err.str();
   std::ostringstream stepped_out;
   {
@@ -253,6 +257,48 @@ TEST_F(BackgroundFrames, AFrameThatCannotBeWrittenStopsTheRun) {
     EXPECT_EQ(names("run"), (std::vector<std::string>{"tet.pvd", "tet_000000.vtu", "tet_000001.vtu",
                                                       "tet_000002.vtu"}));
   }
+}
+
+TEST_F(BackgroundFrames, AHostThatStepsLearnsOfAFailedFrameAtTheNextStepOrAtFinish) {
+  // In turn by default: frame 2's step() throws. With background = true: the next one does,
+  // and finish() reports a failed last-but-one frame when no step follows.
+  for (const bool background : {false, true}) {
+    SCOPED_TRACE(background ? "background = true" : "no background key");
+    std::ofstream(dir_ / "tet.toml")
+        << std::string(kScene) + (background ? "background = true\n" : "");
+    std::error_code ec;
+    fs::remove_all(dir_ / "run", ec);
+    fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+    std::ostringstream err, out;
+    std::unique_ptr<Scene> scene = Scene::open(options("run"), err);
+    ASSERT_TRUE(scene) << err.str();
+    Stepper stepper(*scene, out);
+    stepper.init();
+    stepper.step();
+    int failed_at = 0;
+    for (int k = 2; k <= 4 && failed_at == 0; ++k) {
+      try {
+        stepper.step();
+      } catch (const Error& e) {
+        failed_at = k;
+        EXPECT_NE(std::string(e.what()).find("writing output: "), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("tet_000002.vtu"), std::string::npos) << e.what();
+      }
+    }
+    EXPECT_EQ(failed_at, background ? 3 : 2);
+  }
+  // A failed frame with no step after it: finish() throws.
+  std::ofstream(dir_ / "tet.toml") << std::string(kScene) + "background = true\n";
+  std::error_code ec;
+  fs::remove_all(dir_ / "run", ec);
+  fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+  std::ostringstream err, out;
+  std::unique_ptr<Scene> scene = Scene::open(options("run"), err);
+  ASSERT_TRUE(scene) << err.str();
+  Stepper stepper(*scene, out);
+  stepper.step();
+  stepper.step();
+  EXPECT_THROW(stepper.finish(), Error);
 }
 
 TEST_F(BackgroundFrames, TheKeyIsTrueOrFalse) {
