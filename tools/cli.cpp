@@ -311,7 +311,9 @@ void add_run(CLI::App& app, Commands& c) {
   c.run->footer(
       "A .toml FILE is a scene (see README.md, 'Scenes'): its sets are built from mesh files, "
       "its init procedure runs once and its step procedure once per frame, and the output is a "
-      "ParaView series (NAME.pvd + one .vtu per frame).\n"
+      "ParaView series (NAME.pvd + one .vtu per frame), each frame written on a thread of its "
+      "own while the next computes where the run leaves a core free ([output] background "
+      "decides otherwise).\n"
       "A .sim FILE needs --call NAME. ARGS: one literal per parameter after the file, e.g. 2 "
       "-1.5 true \"text\" <1.0,-1.0> \"[1.0, 2.0]'\" (a column vector) \"[1, 2; 3, 4]\".\n"
       "Prints what the program prints, then one 'name = value' line per result.\nExit status: "
