@@ -176,6 +176,14 @@ class BackgroundFrames : public ::testing::Test {
     s << in.rdbuf();
     return s.str();
   }
+  // The scene with `output_lines` added to its [output] table, and a fresh output folder
+  // "run" holding a folder where frame 2's file goes, so that the rename onto it fails.
+  void block_frame_2(const std::string& output_lines) const {
+    std::ofstream(dir_ / "tet.toml") << std::string(kScene) + output_lines;
+    std::error_code ec;
+    fs::remove_all(dir_ / "run", ec);
+    fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+  }
   std::vector<std::string> names(const std::string& out) const {
     std::vector<std::string> v;
     for (const auto& e : fs::directory_iterator(dir_ / out)) v.push_back(e.path().filename());
@@ -236,13 +244,7 @@ TEST_F(BackgroundFrames, AFrameThatCannotBeWrittenStopsTheRun) {
   // frame 2 itself. Either way with the same message, the series listing frames 0 and 1.
   for (const bool background : {true, false}) {
     SCOPED_TRACE(background ? "background = true" : "background = false");
-    std::string scene = kScene;
-    scene += background ? "background = true\n" : "background = false\n";
-    std::ofstream(dir_ / "tet.toml") << scene;
-    std::error_code ec;
-    fs::remove_all(dir_ / "run", ec);
-    // A folder where frame 2's file goes: the rename onto it fails.
-    fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+    block_frame_2(background ? "background = true\n" : "background = false\n");
     std::ostringstream out, err;
     EXPECT_EQ(run_scene(options("run"), out, err), 1);
     EXPECT_NE(err.str().find("tet.toml: error: writing output: "), std::string::npos) << err.str();
@@ -264,11 +266,7 @@ TEST_F(BackgroundFrames, AHostThatStepsLearnsOfAFailedFrameAtTheNextStepOrAtFini
   // and finish() reports a failed last-but-one frame when no step follows.
   for (const bool background : {false, true}) {
     SCOPED_TRACE(background ? "background = true" : "no background key");
-    std::ofstream(dir_ / "tet.toml")
-        << std::string(kScene) + (background ? "background = true\n" : "");
-    std::error_code ec;
-    fs::remove_all(dir_ / "run", ec);
-    fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+    block_frame_2(background ? "background = true\n" : "");
     std::ostringstream err, out;
     std::unique_ptr<Scene> scene = Scene::open(options("run"), err);
     ASSERT_TRUE(scene) << err.str();
@@ -288,10 +286,7 @@ TEST_F(BackgroundFrames, AHostThatStepsLearnsOfAFailedFrameAtTheNextStepOrAtFini
     EXPECT_EQ(failed_at, background ? 3 : 2);
   }
   // A failed frame with no step after it: finish() throws.
-  std::ofstream(dir_ / "tet.toml") << std::string(kScene) + "background = true\n";
-  std::error_code ec;
-  fs::remove_all(dir_ / "run", ec);
-  fs::create_directories(dir_ / "run" / "tet_000002.vtu");
+  block_frame_2("background = true\n");
   std::ostringstream err, out;
   std::unique_ptr<Scene> scene = Scene::open(options("run"), err);
   ASSERT_TRUE(scene) << err.str();
