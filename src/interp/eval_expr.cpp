@@ -174,7 +174,7 @@ Value Interpreter::eval_binary(const ast::Binary& b) {
       return v;
     }
   }
-  Value v = binary_op(b.op, l, is_row(*b.lhs->type), r, is_row(*b.rhs->type));
+  Value v = binary_op(b.op, l, is_row(*b.lhs->type), r, is_row(*b.rhs->type), options_.float32);
   finish(v, b);
   return v;
 }

@@ -63,19 +63,22 @@ const double* floats_of(const Value& v, size_t& n) {
 
 // Both sum each element's block first, as every inner product does, and then the element
 // sums left to right, or for global vectors (`over_set`) in the blocked order
-// (docs/arithmetic.md).
-double sum_of_products(const double* x, const double* y, size_t n, size_t group, bool over_set) {
-  return over_set ? runtime::blocked_dot(x, y, n, group) : runtime::grouped_dot(x, y, n, group);
+// (docs/arithmetic.md). float32: a dense vector's sum in binary32 steps; a reduction over a
+// set keeps binary64 and is rounded once by the caller.
+double sum_of_products(const double* x, const double* y, size_t n, size_t group, bool over_set,
+                       bool float32) {
+  return over_set ? runtime::blocked_dot(x, y, n, group)
+                  : runtime::grouped_dot(x, y, n, group, float32);
 }
 
-Value norm(const Value& v, bool over_set) {
+Value norm(const Value& v, bool over_set, bool float32) {
   size_t n;
   const double* x = floats_of(v, n);
   const size_t group = runtime::inner_product_group(v.tensor().shape());
-  return Value::of_float(std::sqrt(sum_of_products(x, x, n, group, over_set)));
+  return Value::of_float(std::sqrt(sum_of_products(x, x, n, group, over_set, float32)));
 }
 
-Value dot(const Value& a, const Value& b, bool over_set) {
+Value dot(const Value& a, const Value& b, bool over_set, bool float32) {
   size_t n, m;
   const double* x = floats_of(a, n);
   const double* y = floats_of(b, m);
@@ -83,7 +86,7 @@ Value dot(const Value& a, const Value& b, bool over_set) {
   const size_t group = runtime::inner_product_group(a.tensor().shape());
   if (runtime::inner_product_group(b.tensor().shape()) != group)
     throw runtime::Fault("dot of vectors blocked differently");
-  return Value::of_float(sum_of_products(x, y, n, group, over_set));
+  return Value::of_float(sum_of_products(x, y, n, group, over_set, float32));
 }
 
 Value cross(const Value& a, const Value& b) {
@@ -138,13 +141,14 @@ Value Interpreter::call_intrinsic(const ast::Call& c) {
     case Intrinsic::Norm:
       if (const runtime::Set* set = distributed_set(c.args[0]->type.get()))
         return distributed_inner_product(a0, a0, *set, true, c.span);
-      return norm(a0, is_set_vector(c.args[0]->type.get()));
+      return norm(a0, is_set_vector(c.args[0]->type.get()), options_.float32);
     case Intrinsic::Dot: {
       const runtime::Set* set = distributed_set(c.args[0]->type.get());
       if (!set) set = distributed_set(c.args[1]->type.get());
       if (set) return distributed_inner_product(a0, a1, *set, false, c.span);
       return dot(a0, a1,
-                 is_set_vector(c.args[0]->type.get()) || is_set_vector(c.args[1]->type.get()));
+                 is_set_vector(c.args[0]->type.get()) || is_set_vector(c.args[1]->type.get()),
+                 options_.float32);
     }
     case Intrinsic::CreateComplex: return Value::of_complex({a0.as_float(), a1.as_float()});
     case Intrinsic::ComplexGetReal: return Value::of_float(a0.as_complex().real());

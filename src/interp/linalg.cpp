@@ -11,6 +11,7 @@
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
 #include "runtime/solvers.h"
+#include "runtime/sum_rounding.h"
 #include "runtime/system_ops.h"
 
 namespace simit::interp {
@@ -55,15 +56,24 @@ std::span<T> mutable_components(Tensor& t) {
 }
 
 template <class T>
-void matrix_vector_as(const SystemMatrix& a, const Tensor& x, bool transposed, Tensor& y) {
-  if (transposed)
-    runtime::multiply_transposed(a, components<T>(x), mutable_components<T>(y));
-  else
-    runtime::multiply(a, components<T>(x), mutable_components<T>(y));
+void matrix_vector_as(const SystemMatrix& a, const Tensor& x, bool transposed, Tensor& y,
+                      bool float32) {
+  if constexpr (std::is_same_v<T, int32_t>) {
+    if (transposed)
+      runtime::multiply_transposed(a, components<T>(x), mutable_components<T>(y));
+    else
+      runtime::multiply(a, components<T>(x), mutable_components<T>(y));
+  } else if (transposed) {
+    runtime::multiply_transposed(a, components<T>(x), mutable_components<T>(y), float32);
+  } else {
+    runtime::multiply(a, components<T>(x), mutable_components<T>(y), float32);
+  }
 }
 
-// y = A x (or Aᵀ x) in the component kind of A, which the vector must share (§6.5).
-Tensor matrix_vector(const SystemMatrix& a, const Tensor& x, bool transposed, const Shape& result) {
+// y = A x (or Aᵀ x) in the component kind of A, which the vector must share (§6.5); float32:
+// each row's sum in binary32 steps.
+Tensor matrix_vector(const SystemMatrix& a, const Tensor& x, bool transposed, const Shape& result,
+                     bool float32) {
   if (a.kind() == ComponentKind::Bool) throw Fault("a matrix of bool components has no products");
   if (x.kind() != a.kind())
     throw Fault(std::string("cannot multiply a matrix of ") + runtime::component_name(a.kind()) +
@@ -78,9 +88,9 @@ Tensor matrix_vector(const SystemMatrix& a, const Tensor& x, bool transposed, co
                 result.str());
   Tensor y(a.kind(), result);
   switch (a.kind()) {
-    case ComponentKind::Float: matrix_vector_as<double>(a, x, transposed, y); break;
-    case ComponentKind::Complex: matrix_vector_as<Complex>(a, x, transposed, y); break;
-    default: matrix_vector_as<int32_t>(a, x, transposed, y); break;
+    case ComponentKind::Float: matrix_vector_as<double>(a, x, transposed, y, float32); break;
+    case ComponentKind::Complex: matrix_vector_as<Complex>(a, x, transposed, y, float32); break;
+    default: matrix_vector_as<int32_t>(a, x, transposed, y, false); break;
   }
   return y;
 }
@@ -127,12 +137,16 @@ T scalar_as(const Value& v) {
   if constexpr (std::is_same_v<T, int32_t>) return v.as_int();
 }
 
-// Stores or adds v into count components; int sums wrap (through uint32).
+// Stores or adds v into count components; int sums wrap (through uint32), and under float32
+// each addition rounds to binary32 (docs/arithmetic.md).
 template <class T>
-void write_part(T* dst, size_t count, const Value& v, bool accumulate) {
+void write_part(T* dst, size_t count, const Value& v, bool accumulate, bool float32) {
   using Acc = std::conditional_t<std::is_same_v<T, int32_t>, uint32_t, T>;
   auto put = [&](size_t i, T x) {
-    dst[i] = accumulate ? static_cast<T>(static_cast<Acc>(dst[i]) + static_cast<Acc>(x)) : x;
+    T sum = accumulate ? static_cast<T>(static_cast<Acc>(dst[i]) + static_cast<Acc>(x)) : x;
+    if constexpr (!std::is_same_v<T, int32_t>)
+      if (accumulate && float32) sum = runtime::Binary32Sums::r(sum);
+    dst[i] = sum;
   };
   if (!v.is_tensor()) {
     const T x = scalar_as<T>(v);
@@ -204,16 +218,18 @@ void store_tensor_part(SystemMatrix& m, size_t offset, const Tensor& src, size_t
 }
 
 void write_matrix_part(SystemMatrix& m, size_t offset, size_t count, const Value& v,
-                       bool accumulate) {
+                       bool accumulate, bool float32) {
   const ComponentKind k = v.component_kind();
   if (k != m.kind())
     throw Fault(std::string("cannot store ") + runtime::component_name(k) +
                 " components into a matrix of " + runtime::component_name(m.kind()) + " ones");
   if (offset + count > m.value_count()) throw Fault("a write past the end of a matrix block");
   switch (k) {
-    case ComponentKind::Float: return write_part(m.values() + offset, count, v, accumulate);
-    case ComponentKind::Int: return write_part(m.ints() + offset, count, v, accumulate);
-    case ComponentKind::Complex: return write_part(m.complexes() + offset, count, v, accumulate);
+    case ComponentKind::Float:
+      return write_part(m.values() + offset, count, v, accumulate, float32);
+    case ComponentKind::Int: return write_part(m.ints() + offset, count, v, accumulate, false);
+    case ComponentKind::Complex:
+      return write_part(m.complexes() + offset, count, v, accumulate, float32);
     default: break;
   }
   // Bool blocks store only: there is no sum of booleans to reduce with.
@@ -268,20 +284,20 @@ bool Interpreter::system_binary(const ast::Binary& b, const Value& l, const Valu
       }
       if (lm && rm) {
         if (distributed) not_distributed(b.span, "a product of two system matrices");
-        out = matrix_value(runtime::multiply(*l.matrix(), *r.matrix()));
+        out = matrix_value(runtime::multiply(*l.matrix(), *r.matrix(), options_.float32));
         return true;
       }
       if (lm && r.is_tensor()) {
-        out = Value::of_tensor(
-            matrix_vector(*l.matrix(), r.tensor(), false, shape_of(*b.type, b.span)));
+        out = Value::of_tensor(matrix_vector(*l.matrix(), r.tensor(), false,
+                                             shape_of(*b.type, b.span), options_.float32));
         // The ghost rows' sums miss the other ranks' elements: their owners' sums replace them.
         if (distributed) refresh_ghosts(out, b.type.get());
         return true;
       }
       if (rm && l.is_tensor()) {
         if (distributed) not_distributed(b.span, "a vector times a system matrix (x' * A)");
-        out = Value::of_tensor(
-            matrix_vector(*r.matrix(), l.tensor(), true, shape_of(*b.type, b.span)));
+        out = Value::of_tensor(matrix_vector(*r.matrix(), l.tensor(), true,
+                                             shape_of(*b.type, b.span), options_.float32));
         return true;
       }
       if (lm && r.is_scalar()) {

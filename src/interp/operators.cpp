@@ -6,6 +6,7 @@
 
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
+#include "runtime/sum_rounding.h"
 #include "runtime/system_ops.h"
 
 namespace simit::interp {
@@ -208,7 +209,9 @@ Shape levels_shape(int levels, F pick) {
 
 // Unblocked float operands of order 1 or 2, straight into the result: the interpreter's
 // common case (3x3 matrices and 3-vectors). Sums run over k in ascending order
-// (docs/arithmetic.md). False when the operands are not of that form.
+// (docs/arithmetic.md), each product and addition rounded by R. False when the operands are
+// not of that form.
+template <class R>
 bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value& out) {
   const Shape &sa = a.shape(), &sb = b.shape();
   if (a.kind() != ComponentKind::Float || b.kind() != ComponentKind::Float || sa.levels() != 1 ||
@@ -221,7 +224,7 @@ bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value
     if (arow && !brow) {
       if (n != m) return false;
       double s = 0.0;
-      for (int k = 0; k < n; ++k) s += x[k] * y[k];
+      for (int k = 0; k < n; ++k) s = R::r(s + R::r(x[k] * y[k]));
       out = Value::of_float(s);
       return true;
     }
@@ -239,7 +242,7 @@ bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value
     double* o = out.tensor().mutable_floats();
     for (int i = 0; i < m; ++i) {
       double s = 0.0;
-      for (int k = 0; k < n; ++k) s += x[i * n + k] * y[k];
+      for (int k = 0; k < n; ++k) s = R::r(s + R::r(x[i * n + k] * y[k]));
       o[i] = s;
     }
     return true;
@@ -251,7 +254,7 @@ bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value
     double* o = out.tensor().mutable_floats();
     for (int j = 0; j < m; ++j) {
       double s = 0.0;
-      for (int k = 0; k < n; ++k) s += x[k] * y[k * m + j];
+      for (int k = 0; k < n; ++k) s = R::r(s + R::r(x[k] * y[k * m + j]));
       o[j] = s;
     }
     return true;
@@ -264,7 +267,7 @@ bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value
     for (int i = 0; i < m; ++i)
       for (int j = 0; j < p; ++j) {
         double s = 0.0;
-        for (int k = 0; k < n; ++k) s += x[i * n + k] * y[k * p + j];
+        for (int k = 0; k < n; ++k) s = R::r(s + R::r(x[i * n + k] * y[k * p + j]));
         o[i * p + j] = s;
       }
     return true;
@@ -272,8 +275,11 @@ bool float_product(const Tensor& a, bool arow, const Tensor& b, bool brow, Value
   return false;
 }
 
-Value product(const Tensor& a, bool arow, const Tensor& b, bool brow) {
-  if (Value fast; float_product(a, arow, b, brow, fast)) return fast;
+// float32: each product and addition of a sum rounded to binary32 (runtime/sum_rounding.h).
+Value product(const Tensor& a, bool arow, const Tensor& b, bool brow, bool float32) {
+  if (Value fast; runtime::with_sums(
+          float32, [&]<class R>(R) { return float_product<R>(a, arow, b, brow, fast); }))
+    return fast;
   const Shape &sa = a.shape(), &sb = b.shape();
   if (sa.levels() != sb.levels() || !sa.uniform() || !sb.uniform())
     throw Fault("product of tensors blocked differently: " + sa.str() + " and " + sb.str());
@@ -283,7 +289,7 @@ Value product(const Tensor& a, bool arow, const Tensor& b, bool brow) {
   if (ao == 1 && bo == 1 && arow && !brow) {
     if (sa != sb)
       throw Fault("inner product of vectors of shapes " + sa.str() + " and " + sb.str());
-    return Value::component(runtime::inner_product(a, b), 0);
+    return Value::component(runtime::inner_product(a, b, float32), 0);
   }
   Tensor ua = runtime::unblock(a), ub = runtime::unblock(b);
   Tensor logical;
@@ -295,13 +301,13 @@ Value product(const Tensor& a, bool arow, const Tensor& b, bool brow) {
       return std::vector<int>{level_dim(sa, l, 0), level_dim(sb, l, 0)};
     });
   } else if (ao == 2 && bo == 1) {
-    logical = runtime::matrix_vector_product(ua, ub);
+    logical = runtime::matrix_vector_product(ua, ub, float32);
     result = levels_shape(levels, [&](int l) { return std::vector<int>{level_dim(sa, l, 0)}; });
   } else if (ao == 1 && bo == 2) {
-    logical = runtime::vector_matrix_product(ua, ub);
+    logical = runtime::vector_matrix_product(ua, ub, float32);
     result = levels_shape(levels, [&](int l) { return std::vector<int>{level_dim(sb, l, 1)}; });
   } else {
-    logical = runtime::matrix_product(ua, ub);
+    logical = runtime::matrix_product(ua, ub, float32);
     result = levels_shape(levels, [&](int l) {
       return std::vector<int>{level_dim(sa, l, 0), level_dim(sb, l, 1)};
     });
@@ -309,10 +315,10 @@ Value product(const Tensor& a, bool arow, const Tensor& b, bool brow) {
   return Value::of_tensor(levels > 1 ? runtime::reblock(logical, result) : std::move(logical));
 }
 
-Value multiply(const Value& l, bool lrow, const Value& r, bool rrow) {
+Value multiply(const Value& l, bool lrow, const Value& r, bool rrow, bool float32) {
   if (!l.is_tensor() || !r.is_tensor()) return elementwise(Arith::Mul, l, r);
   if (l.component_kind() != r.component_kind()) throw Fault("product of different component types");
-  return product(l.tensor(), lrow, r.tensor(), rrow);
+  return product(l.tensor(), lrow, r.tensor(), rrow, float32);
 }
 
 Value solve(const Value& a, const Value& b) {
@@ -375,14 +381,14 @@ bool ordered(frontend::ast::Compare::Op op, const T& x, const T& y) {
 
 }  // namespace
 
-Value binary_op(Op op, const Value& l, bool lrow, const Value& r, bool rrow) {
+Value binary_op(Op op, const Value& l, bool lrow, const Value& r, bool rrow, bool float32) {
   switch (op) {
     case Op::Add: return elementwise(Arith::Add, l, r);
     case Op::Sub: return elementwise(Arith::Sub, l, r);
     case Op::ElemMul: return elementwise(Arith::Mul, l, r);
     case Op::ElemDiv:
     case Op::Div: return elementwise(Arith::Div, l, r);
-    case Op::Mul: return multiply(l, lrow, r, rrow);
+    case Op::Mul: return multiply(l, lrow, r, rrow, float32);
     case Op::LeftDiv: return solve(l, r);
     case Op::And:
     case Op::Or:

@@ -9,8 +9,10 @@
 
 namespace simit::interp {
 
-// `l op r`; `lrow` / `rrow` say whether an order-1 operand is a row vector.
-Value binary_op(frontend::ast::Binary::Op op, const Value& l, bool lrow, const Value& r, bool rrow);
+// `l op r`; `lrow` / `rrow` say whether an order-1 operand is a row vector. float32: a
+// product's sums add in binary32 steps (runtime/sum_rounding.h); the caller rounds the value.
+Value binary_op(frontend::ast::Binary::Op op, const Value& l, bool lrow, const Value& r, bool rrow,
+                bool float32 = false);
 // `-v` (also of tensors); `+v` is the identity and needs no function.
 Value negate(const Value& v);
 // `v'`: scalars and vectors are unchanged (orientation is a property of the type).

@@ -4,6 +4,7 @@
 #include "interp/map_context.h"
 #include "interp/system_values.h"
 #include "runtime/fault.h"
+#include "runtime/sum_rounding.h"
 
 namespace simit::interp {
 
@@ -74,33 +75,37 @@ Value Interpreter::read_place(const Place& p) const {
 namespace {
 
 // `reduce +` writes add (§8.5.4); the target is a tensor or a system matrix's values.
+// dst += v over count components; under float32 each addition rounded to binary32 (an
+// assembled block adds its contributions in binary32 steps: docs/arithmetic.md).
 template <class T>
-void add_into(T* dst, const Value& v, size_t count) {
-  if (v.is_tensor()) {
-    const Tensor& t = v.tensor();
-    if (t.size() != count)
-      throw runtime::Fault("cannot add a value of shape " + t.shape().str() + " into a part of " +
-                           std::to_string(count) + " components");
-    if constexpr (std::is_same_v<T, double>) {
-      const double* s = t.floats();
-      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
-    } else if constexpr (std::is_same_v<T, int32_t>) {
-      const int32_t* s = t.ints();
-      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
-    } else {
-      const Complex* s = t.complexes();
-      for (size_t i = 0; i < count; ++i) dst[i] += s[i];
+void add_into(T* dst, const Value& v, size_t count, bool float32) {
+  runtime::with_sums(float32, [&]<class R>(R) {
+    if (v.is_tensor()) {
+      const Tensor& t = v.tensor();
+      if (t.size() != count)
+        throw runtime::Fault("cannot add a value of shape " + t.shape().str() + " into a part of " +
+                             std::to_string(count) + " components");
+      if constexpr (std::is_same_v<T, double>) {
+        const double* s = t.floats();
+        for (size_t i = 0; i < count; ++i) dst[i] = R::r(dst[i] + s[i]);
+      } else if constexpr (std::is_same_v<T, int32_t>) {
+        const int32_t* s = t.ints();
+        for (size_t i = 0; i < count; ++i) dst[i] += s[i];
+      } else {
+        const Complex* s = t.complexes();
+        for (size_t i = 0; i < count; ++i) dst[i] = R::r(dst[i] + s[i]);
+      }
+      return;
     }
-    return;
-  }
-  for (size_t i = 0; i < count; ++i) {
-    if constexpr (std::is_same_v<T, double>)
-      dst[i] += v.as_float();
-    else if constexpr (std::is_same_v<T, int32_t>)
-      dst[i] += v.as_int();
-    else
-      dst[i] += v.as_complex();
-  }
+    for (size_t i = 0; i < count; ++i) {
+      if constexpr (std::is_same_v<T, double>)
+        dst[i] = R::r(dst[i] + v.as_float());
+      else if constexpr (std::is_same_v<T, int32_t>)
+        dst[i] += v.as_int();
+      else
+        dst[i] = R::r(dst[i] + v.as_complex());
+    }
+  });
 }
 
 }  // namespace
@@ -119,14 +124,17 @@ void Interpreter::write_place(const Place& p, Value value, const SourceSpan& at)
 void Interpreter::write_place_raw(const Place& p, Value value, const SourceSpan& at) {
   // A block of a system matrix (assembly); a whole matrix variable is replaced below.
   if (!p.whole && p.root->kind() == Value::Kind::Matrix)
-    return write_matrix_part(*p.root->matrix(), p.offset, p.shape.size(), value, p.accumulate);
+    return write_matrix_part(*p.root->matrix(), p.offset, p.shape.size(), value, p.accumulate,
+                             options_.float32);
   if (p.accumulate && !p.whole) {
     Tensor& t = p.root->tensor();
     const size_t n = p.shape.size();
     switch (t.kind()) {
-      case ComponentKind::Float: return add_into(t.mutable_floats() + p.offset, value, n);
-      case ComponentKind::Int: return add_into(t.mutable_ints() + p.offset, value, n);
-      case ComponentKind::Complex: return add_into(t.mutable_complexes() + p.offset, value, n);
+      case ComponentKind::Float:
+        return add_into(t.mutable_floats() + p.offset, value, n, options_.float32);
+      case ComponentKind::Int: return add_into(t.mutable_ints() + p.offset, value, n, false);
+      case ComponentKind::Complex:
+        return add_into(t.mutable_complexes() + p.offset, value, n, options_.float32);
       case ComponentKind::Bool:
         throw runtime::Fault("'reduce +' cannot assemble a vector of bool components");
       default: break;

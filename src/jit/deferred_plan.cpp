@@ -6,6 +6,8 @@
 #include <map>
 #include <set>
 
+#include "runtime/sum_rounding.h"
+
 namespace simit::jit {
 
 namespace {
@@ -67,6 +69,7 @@ bool DeferredPlan::prepare(const Trace& t, const runtime::Set& target,
       results_.push_back(std::move(r));
     }
   }
+  float32_ = t.float32;
   split_ = false;
   if (!split) return true;
   bool fresh = false;  // build leaves the deferred blocks at -0.0
@@ -207,7 +210,10 @@ void DeferredPlan::finish(
         double* to = v + static_cast<size_t>(r.gather_block[i]) * n;
         for (int32_t j = r.gather_start[i]; j < r.gather_start[i + 1]; ++j) {
           const double* from = r.scratch.data() + static_cast<size_t>(r.gather_k[j]) * n;
-          for (size_t c = 0; c < n; ++c) to[c] += from[c];
+          if (float32_)
+            for (size_t c = 0; c < n; ++c) to[c] = runtime::Binary32Sums::r(to[c] + from[c]);
+          else
+            for (size_t c = 0; c < n; ++c) to[c] += from[c];
         }
       }
     };
@@ -233,6 +239,7 @@ std::vector<DeferredPlan::Gather> DeferredPlan::gathers() const {
     g.k = r.gather_k.data();
     g.deferred = r.scratch.data();
     g.deferred_values = r.scratch.size();
+    g.round32 = float32_;
     out.push_back(g);
   }
   return out;

@@ -62,6 +62,7 @@ class DeferredPlan {
     const int32_t* k = nullptr;      // start[blocks] entries
     const double* deferred = nullptr;
     size_t deferred_values = 0;
+    bool round32 = false;  // --float32: each addition rounded to binary32
   };
   // Per result written, its gather index; empty unless the last prepare split the elements.
   std::vector<Gather> gathers() const;
@@ -87,6 +88,7 @@ class DeferredPlan {
     std::vector<int32_t> gather_block, gather_start, gather_k;
     std::vector<double> scratch;
   };
+  bool float32_ = false;  // the trace's: each addition of finish rounded to binary32
   bool build(Result& r, const runtime::Set& target, int64_t blocks);
 
   // What the tables were built for.

@@ -268,6 +268,7 @@ std::string kernel_key_text(const SystemTrace& t) {
   w.num(static_cast<int64_t>(t.sizes.size()));
   w.num(t.matrices_in_place);
   w.num(t.device);
+  w.num(t.float32);
   w.num(static_cast<int64_t>(t.errors.size()));
   w.out += '\n';
   w.arrays(t.arrays);

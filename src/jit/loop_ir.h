@@ -239,6 +239,9 @@ struct SystemTrace {
   // Compiled as a device program (jit/device_program.h): its steps as kernels of their own,
   // the scalars in device memory, for an executor whose memory is elsewhere (the GPU's).
   bool device = false;
+  // --float32: a product's row sums add in binary32 steps (docs/arithmetic.md), each product
+  // and addition rounded, as runtime::multiply sums them.
+  bool float32 = false;
 };
 
 // Prints the trace as text (`--dump=loop-ir`).

@@ -258,7 +258,7 @@ void print(std::ostream& os, const Trace& t) {
 
 void print(std::ostream& os, const SystemTrace& t) {
   os << "system trace " << t.name << (t.matrices_in_place ? " (matrices read in place)" : "")
-     << (t.device ? " (device program)" : "") << "\n";
+     << (t.device ? " (device program)" : "") << (t.float32 ? " (binary32 sums)" : "") << "\n";
   for (size_t i = 0; i < t.arrays.size(); ++i)
     os << "  a" << i << ": " << t.arrays[i].name << " "
        << (t.arrays[i].single ? "f32" : ty_name(t.arrays[i].ty))

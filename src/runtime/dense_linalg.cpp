@@ -9,6 +9,7 @@
 
 #include "runtime/blocked_sum.h"
 #include "runtime/fault.h"
+#include "runtime/sum_rounding.h"
 
 namespace simit::runtime {
 
@@ -76,23 +77,28 @@ void require(bool ok, const char* what) {
 
 int32_t wrap(uint32_t v) { return static_cast<int32_t>(v); }
 
-// C = A (m x k) * B (k x n), all row-major: each entry sums from zero over l in order.
-template <class T>
+// C = A (m x k) * B (k x n), all row-major: each entry sums from zero over l in order, each
+// product and addition rounded by R.
+template <class R, class T>
 void gemm_loops(const T* a, const T* b, T* c, int m, int k, int n) {
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < n; ++j) {
       T s{};
-      for (int l = 0; l < k; ++l) s += a[i * k + l] * b[l * n + j];
+      for (int l = 0; l < k; ++l) s = R::r(s + R::r(a[i * k + l] * b[l * n + j]));
       c[i * n + j] = s;
     }
 }
 
-void gemm(const Tensor& a, const Tensor& b, Tensor& c, int m, int k, int n) {
+void gemm(const Tensor& a, const Tensor& b, Tensor& c, int m, int k, int n, bool float32) {
   switch (a.kind()) {
     case ComponentKind::Float:
-      return gemm_loops(a.floats(), b.floats(), c.mutable_floats(), m, k, n);
+      return with_sums(float32, [&]<class R>(R) {
+        gemm_loops<R>(a.floats(), b.floats(), c.mutable_floats(), m, k, n);
+      });
     case ComponentKind::Complex:
-      return gemm_loops(a.complexes(), b.complexes(), c.mutable_complexes(), m, k, n);
+      return with_sums(float32, [&]<class R>(R) {
+        gemm_loops<R>(a.complexes(), b.complexes(), c.mutable_complexes(), m, k, n);
+      });
     case ComponentKind::Int: {
       // Integer arithmetic wraps (LANGUAGE.md §5.1); unsigned arithmetic makes that defined.
       int32_t* out = c.mutable_ints();
@@ -225,33 +231,33 @@ Tensor reblock(const Tensor& logical, const Shape& blocked) {
   return out;
 }
 
-Tensor matrix_product(const Tensor& a, const Tensor& b) {
+Tensor matrix_product(const Tensor& a, const Tensor& b, bool float32) {
   check_product(a, b);
   const Shape &sa = a.shape(), &sb = b.shape();
   require(sa.order() == 2 && sb.order() == 2 && sa.dim(1) == sb.dim(0),
           "matrix product: dimensions do not match");
   Tensor c(a.kind(), Shape{sa.dim(0), sb.dim(1)});
-  gemm(a, b, c, sa.dim(0), sa.dim(1), sb.dim(1));
+  gemm(a, b, c, sa.dim(0), sa.dim(1), sb.dim(1), float32);
   return c;
 }
 
-Tensor matrix_vector_product(const Tensor& a, const Tensor& x) {
+Tensor matrix_vector_product(const Tensor& a, const Tensor& x, bool float32) {
   check_product(a, x);
   const Shape& sa = a.shape();
   require(sa.order() == 2 && x.shape().order() == 1 && sa.dim(1) == x.shape().dim(0),
           "matrix-vector product: dimensions do not match");
   Tensor c(a.kind(), Shape{sa.dim(0)});
-  gemm(a, x, c, sa.dim(0), sa.dim(1), 1);
+  gemm(a, x, c, sa.dim(0), sa.dim(1), 1, float32);
   return c;
 }
 
-Tensor vector_matrix_product(const Tensor& x, const Tensor& a) {
+Tensor vector_matrix_product(const Tensor& x, const Tensor& a, bool float32) {
   check_product(x, a);
   const Shape& sa = a.shape();
   require(sa.order() == 2 && x.shape().order() == 1 && sa.dim(0) == x.shape().dim(0),
           "vector-matrix product: dimensions do not match");
   Tensor c(a.kind(), Shape{sa.dim(1)});
-  gemm(x, a, c, 1, sa.dim(0), sa.dim(1));
+  gemm(x, a, c, 1, sa.dim(0), sa.dim(1), float32);
   return c;
 }
 
@@ -259,7 +265,7 @@ Tensor outer_product(const Tensor& u, const Tensor& v) {
   check_product(u, v);
   int m = static_cast<int>(u.size()), n = static_cast<int>(v.size());
   Tensor c(u.kind(), Shape{m, n});
-  gemm(u, v, c, m, 1, n);
+  gemm(u, v, c, m, 1, n, false);  // one product per component, rounded by the caller
   return c;
 }
 
@@ -268,51 +274,46 @@ size_t inner_product_group(const Shape& s) {
   return s.block().size();
 }
 
-double grouped_dot(const double* x, const double* y, size_t n, size_t group) {
-  double sum = 0.0;
+namespace {
+
+template <class R, class T>
+T grouped_sum_of_products(const T* x, const T* y, size_t n, size_t group) {
+  T sum{};
   if (group <= 1) {
-    for (size_t k = 0; k < n; ++k) sum += x[k] * y[k];
+    for (size_t k = 0; k < n; ++k) sum = R::r(sum + R::r(x[k] * y[k]));
     return sum;
   }
   for (size_t k = 0; k < n; k += group) {
-    double part = 0.0;
-    for (size_t c = 0; c < group; ++c) part += x[k + c] * y[k + c];
-    sum += part;
-  }
-  return sum;
-}
-
-namespace {
-
-template <class T>
-T grouped_sum_of_products(const T* x, const T* y, size_t n, size_t group) {
-  T sum{};
-  for (size_t k = 0; k < n; k += group) {
     T part{};
-    for (size_t c = 0; c < group; ++c) part += x[k + c] * y[k + c];
-    sum += part;
+    for (size_t c = 0; c < group; ++c) part = R::r(part + R::r(x[k + c] * y[k + c]));
+    sum = R::r(sum + part);
   }
   return sum;
 }
 
 }  // namespace
 
-Tensor inner_product(const Tensor& u, const Tensor& v) {
+double grouped_dot(const double* x, const double* y, size_t n, size_t group, bool float32) {
+  return with_sums(float32, [&]<class R>(R) { return grouped_sum_of_products<R>(x, y, n, group); });
+}
+
+Tensor inner_product(const Tensor& u, const Tensor& v, bool float32) {
   require(u.kind() == v.kind() && u.size() == v.size(), "inner product: sizes do not match");
   const size_t group = inner_product_group(u.shape());
   Tensor c(u.kind(), Shape{1});
   switch (u.kind()) {
     case ComponentKind::Float:
-      c.mutable_floats()[0] = grouped_dot(u.floats(), v.floats(), u.size(), group);
+      c.mutable_floats()[0] = grouped_dot(u.floats(), v.floats(), u.size(), group, float32);
       return c;
     case ComponentKind::Complex:
-      c.mutable_complexes()[0] =
-          grouped_sum_of_products(u.complexes(), v.complexes(), u.size(), group);
+      c.mutable_complexes()[0] = with_sums(float32, [&]<class R>(R) {
+        return grouped_sum_of_products<R>(u.complexes(), v.complexes(), u.size(), group);
+      });
       return c;
     default: {
       // Integer sums wrap, so their order does not matter.
       int n = static_cast<int>(u.size());
-      gemm(u, v, c, 1, n, 1);
+      gemm(u, v, c, 1, n, 1, false);
       return c;
     }
   }
@@ -329,7 +330,7 @@ Tensor set_inner_product(const Tensor& u, const Tensor& v) {
     case ComponentKind::Complex:
       c.mutable_complexes()[0] = blocked_dot(u.complexes(), v.complexes(), u.size(), group);
       return c;
-    default: return inner_product(u, v);  // integer sums wrap: any order gives the same
+    default: return inner_product(u, v, false);  // integer sums wrap: any order gives the same
   }
 }
 

@@ -15,15 +15,17 @@ Tensor unblock(const Tensor& t);
 // The inverse of unblock: `logical` laid out with the blocking of `blocked`.
 Tensor reblock(const Tensor& logical, const Shape& blocked);
 
-// Products of unblocked operands (Int, Float or Complex components of one kind).
-Tensor matrix_product(const Tensor& a, const Tensor& b);         // (m x k)(k x n) -> m x n
-Tensor matrix_vector_product(const Tensor& a, const Tensor& x);  // (m x n)(n) -> m
-Tensor vector_matrix_product(const Tensor& x, const Tensor& a);  // (m)(m x n) -> n
-Tensor outer_product(const Tensor& u, const Tensor& v);          // (m)(n) -> m x n
+// Products of unblocked operands (Int, Float or Complex components of one kind): (m x k)(k x n)
+// -> m x n, (m x n)(n) -> m, (m)(m x n) -> n and the outer product (m)(n) -> m x n. float32:
+// each product and addition of a sum rounded to binary32 (runtime/sum_rounding.h).
+Tensor matrix_product(const Tensor& a, const Tensor& b, bool float32 = false);
+Tensor matrix_vector_product(const Tensor& a, const Tensor& x, bool float32 = false);
+Tensor vector_matrix_product(const Tensor& x, const Tensor& a, bool float32 = false);
+Tensor outer_product(const Tensor& u, const Tensor& v);
 // Sum over all components of u_i * v_i (same size, any shape); a 1-component tensor. A
 // blocked u sums each outermost block first, then the block sums left to right
 // (docs/arithmetic.md): the order of dense vectors.
-Tensor inner_product(const Tensor& u, const Tensor& v);
+Tensor inner_product(const Tensor& u, const Tensor& v, bool float32 = false);
 // The same for global vectors (whose outer dimension is a set): each outermost block summed
 // first, then the block sums in the blocked order of runtime/blocked_sum.h.
 Tensor set_inner_product(const Tensor& u, const Tensor& v);
@@ -33,7 +35,7 @@ size_t inner_product_group(const Shape& s);
 // sum over k < n of x[k] y[k]: each run of `group` components summed from +0.0, the run sums
 // added in order from +0.0. With group 1 this is the plain left-to-right sum. For dense
 // vectors only: a reduction over a set is runtime::blocked_dot's.
-double grouped_dot(const double* x, const double* y, size_t n, size_t group);
+double grouped_dot(const double* x, const double* y, size_t n, size_t group, bool float32 = false);
 
 // Swaps the two dimensions of a matrix, and of each of its blocks.
 Tensor transpose(const Tensor& m);

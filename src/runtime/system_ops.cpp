@@ -8,6 +8,7 @@
 
 #include "runtime/blocked_sum.h"
 #include "runtime/dense_linalg.h"
+#include "runtime/sum_rounding.h"
 
 namespace simit::runtime {
 
@@ -57,8 +58,9 @@ void check_kind(const SystemMatrix& a, const char* what) {
                 " components with vectors of another component type");
 }
 
-// Block kernels: compile-time sizes for the common blocks, run-time sizes (0) otherwise.
-template <class T, int BR, int BC>
+// Block kernels: compile-time sizes for the common blocks, run-time sizes (0) otherwise; R
+// rounds each product and addition (runtime/sum_rounding.h).
+template <class R, class T, int BR, int BC>
 void matvec_rows(const SystemMatrix& a, const T* x, T* y) {
   const int br = BR ? BR : a.block_rows(), bc = BC ? BC : a.block_cols();
   const int32_t* row_ptr = a.pattern().row_ptr().data();
@@ -78,8 +80,9 @@ void matvec_rows(const SystemMatrix& a, const T* x, T* y) {
       for (int i = 0; i < br; ++i) {
         Acc<T> part = 0;
         for (int j = 0; j < bc; ++j)
-          part += static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xc[j]);
-        sum[i] += part;
+          part =
+              R::r(part + R::r(static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xc[j])));
+        sum[i] = R::r(sum[i] + part);
       }
     }
     for (int i = 0; i < br; ++i) yr[i] = static_cast<T>(sum[i]);
@@ -87,7 +90,7 @@ void matvec_rows(const SystemMatrix& a, const T* x, T* y) {
 }
 
 // y must start at zero.
-template <class T, int BR, int BC>
+template <class R, class T, int BR, int BC>
 void matvec_transposed_rows(const SystemMatrix& a, const T* x, T* y) {
   const int br = BR ? BR : a.block_rows(), bc = BC ? BC : a.block_cols();
   const int32_t* row_ptr = a.pattern().row_ptr().data();
@@ -100,49 +103,52 @@ void matvec_transposed_rows(const SystemMatrix& a, const T* x, T* y) {
       T* yc = y + static_cast<size_t>(col_idx[k]) * bc;
       for (int i = 0; i < br; ++i)
         for (int j = 0; j < bc; ++j)
-          yc[j] = static_cast<T>(static_cast<Acc<T>>(yc[j]) +
-                                 static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xr[i]));
+          yc[j] = static_cast<T>(
+              R::r(static_cast<Acc<T>>(yc[j]) +
+                   R::r(static_cast<Acc<T>>(blk[i * bc + j]) * static_cast<Acc<T>>(xr[i]))));
     }
   }
 }
 
-template <template <class, int, int> class Kernel, class T>
+template <template <class, class, int, int> class Kernel, class R, class T>
 void dispatch_blocks(const SystemMatrix& a, const T* x, T* y) {
   const int br = a.block_rows(), bc = a.block_cols();
-  if (br == 1 && bc == 1) return Kernel<T, 1, 1>::run(a, x, y);
-  if (br == 2 && bc == 2) return Kernel<T, 2, 2>::run(a, x, y);
-  if (br == 3 && bc == 3) return Kernel<T, 3, 3>::run(a, x, y);
-  if (br == 4 && bc == 4) return Kernel<T, 4, 4>::run(a, x, y);
-  Kernel<T, 0, 0>::run(a, x, y);
+  if (br == 1 && bc == 1) return Kernel<R, T, 1, 1>::run(a, x, y);
+  if (br == 2 && bc == 2) return Kernel<R, T, 2, 2>::run(a, x, y);
+  if (br == 3 && bc == 3) return Kernel<R, T, 3, 3>::run(a, x, y);
+  if (br == 4 && bc == 4) return Kernel<R, T, 4, 4>::run(a, x, y);
+  Kernel<R, T, 0, 0>::run(a, x, y);
 }
 
-template <class T, int BR, int BC>
+template <class R, class T, int BR, int BC>
 struct Matvec {
-  static void run(const SystemMatrix& a, const T* x, T* y) { matvec_rows<T, BR, BC>(a, x, y); }
+  static void run(const SystemMatrix& a, const T* x, T* y) { matvec_rows<R, T, BR, BC>(a, x, y); }
 };
 
-template <class T, int BR, int BC>
+template <class R, class T, int BR, int BC>
 struct MatvecTransposed {
   static void run(const SystemMatrix& a, const T* x, T* y) {
-    matvec_transposed_rows<T, BR, BC>(a, x, y);
+    matvec_transposed_rows<R, T, BR, BC>(a, x, y);
   }
 };
 
 template <class T>
-void multiply_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
+void multiply_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y, bool float32) {
   check_kind<T>(a, "multiply");
   check_length(x.size(), a.scalar_cols(), "the vector multiplied by the matrix");
   check_length(y.size(), a.scalar_rows(), "the result of the matrix-vector product");
-  dispatch_blocks<Matvec>(a, x.data(), y.data());
+  with_sums(float32, [&]<class R>(R) { dispatch_blocks<Matvec, R>(a, x.data(), y.data()); });
 }
 
 template <class T>
-void multiply_transposed_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y) {
+void multiply_transposed_into(const SystemMatrix& a, std::span<const T> x, std::span<T> y,
+                              bool float32) {
   check_kind<T>(a, "multiply");
   check_length(x.size(), a.scalar_rows(), "the vector multiplied by the transposed matrix");
   check_length(y.size(), a.scalar_cols(), "the result of the transposed product");
   std::fill(y.begin(), y.end(), T(0));
-  dispatch_blocks<MatvecTransposed>(a, x.data(), y.data());
+  with_sums(float32,
+            [&]<class R>(R) { dispatch_blocks<MatvecTransposed, R>(a, x.data(), y.data()); });
 }
 
 void check_block_match(const SystemMatrix& a, const SystemMatrix& b, const char* op) {
@@ -294,8 +300,9 @@ PatternPtr product_pattern(const MatrixPattern& a, const MatrixPattern& b) {
                                  a.row_axis(), b.col_axis());
 }
 
-// out += A B, block by block, out having the product pattern.
-template <class T>
+// out += A B, block by block, out having the product pattern; R rounds each product and
+// addition.
+template <class R, class T>
 void product_values(const SystemMatrix& a, const SystemMatrix& b, SystemMatrix& out) {
   const MatrixPattern &pa = a.pattern(), &pb = b.pattern(), &po = out.pattern();
   const int br = a.block_rows(), bm = a.block_cols(), bc = b.block_cols();
@@ -312,9 +319,9 @@ void product_values(const SystemMatrix& a, const SystemMatrix& b, SystemMatrix& 
         for (int i = 0; i < br; ++i)
           for (int m = 0; m < bm; ++m)
             for (int j = 0; j < bc; ++j)
-              z[i * bc + j] = static_cast<T>(static_cast<Acc<T>>(z[i * bc + j]) +
-                                             static_cast<Acc<T>>(x[i * bm + m]) *
-                                                 static_cast<Acc<T>>(y[m * bc + j]));
+              z[i * bc + j] = static_cast<T>(R::r(
+                  static_cast<Acc<T>>(z[i * bc + j]) +
+                  R::r(static_cast<Acc<T>>(x[i * bm + m]) * static_cast<Acc<T>>(y[m * bc + j]))));
       }
     }
   }
@@ -325,24 +332,27 @@ void product_values(const SystemMatrix& a, const SystemMatrix& b, SystemMatrix& 
 // ---------------------------------------------------------------------------
 // Matrix-vector products
 
-void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y) {
-  multiply_into(a, x, y);
+void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y, bool float32) {
+  multiply_into(a, x, y, float32);
 }
 void multiply(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y) {
-  multiply_into(a, x, y);
+  multiply_into(a, x, y, false);
 }
 
-void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y) {
-  multiply_transposed_into(a, x, y);
+void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y,
+                         bool float32) {
+  multiply_transposed_into(a, x, y, float32);
 }
 void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y) {
-  multiply_transposed_into(a, x, y);
+  multiply_transposed_into(a, x, y, false);
 }
-void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
-  multiply_into(a, x, y);
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y,
+              bool float32) {
+  multiply_into(a, x, y, float32);
 }
-void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y) {
-  multiply_transposed_into(a, x, y);
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y,
+                         bool float32) {
+  multiply_transposed_into(a, x, y, float32);
 }
 
 // ---------------------------------------------------------------------------
@@ -574,7 +584,7 @@ SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry) {
   return out;
 }
 
-SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b) {
+SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b, bool float32) {
   if (a.cols() != b.rows() || a.block_cols() != b.block_rows())
     throw Fault("cannot multiply a " + dims(a.scalar_rows(), a.scalar_cols()) + " matrix by a " +
                 dims(b.scalar_rows(), b.scalar_cols()) + " matrix (blocks " +
@@ -585,7 +595,9 @@ SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b) {
                 " components by one of " + component_name(b.kind()) + " components");
   SystemMatrix out(product_pattern(a.pattern(), b.pattern()), a.block_rows(), b.block_cols(),
                    a.kind());
-  by_kind(a.kind(), [&](auto t) { product_values<decltype(t)>(a, b, out); });
+  with_sums(float32, [&]<class R>(R) {
+    by_kind(a.kind(), [&](auto t) { product_values<R, decltype(t)>(a, b, out); });
+  });
   return out;
 }
 

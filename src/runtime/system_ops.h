@@ -14,14 +14,19 @@ namespace simit::runtime {
 
 // y = A x, with x of A.scalar_cols() and y of A.scalar_rows() components. The vectors'
 // component type must be the one storing A's (double for Float, int32 for Int, Complex for
-// Complex; int arithmetic wraps).
-void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
+// Complex; int arithmetic wraps). float32: each product and addition of a row's sum rounded
+// to binary32 (runtime/sum_rounding.h).
+void multiply(const SystemMatrix& a, std::span<const double> x, std::span<double> y,
+              bool float32 = false);
 void multiply(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
-void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
+void multiply(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y,
+              bool float32 = false);
 // y = Aᵀ x, with x of A.scalar_rows() and y of A.scalar_cols() components.
-void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y);
+void multiply_transposed(const SystemMatrix& a, std::span<const double> x, std::span<double> y,
+                         bool float32 = false);
 void multiply_transposed(const SystemMatrix& a, std::span<const int32_t> x, std::span<int32_t> y);
-void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y);
+void multiply_transposed(const SystemMatrix& a, std::span<const Complex> x, std::span<Complex> y,
+                         bool float32 = false);
 
 // Matrices of any kind the SystemMatrix holds; operands of one operation share the kind,
 // factors applied to int matrices must be integers and only complex matrices take complex
@@ -60,8 +65,9 @@ SystemMatrix divided(const SystemMatrix& a, double s);
 SystemMatrix divided(const SystemMatrix& a, Complex s);
 // Aᵀ: transposed pattern (cached with a registry) and transposed blocks.
 SystemMatrix transposed(const SystemMatrix& a, PatternRegistry* registry = nullptr);
-// The sparse product A B; its pattern is the product pattern, built on each call.
-SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b);
+// The sparse product A B; its pattern is the product pattern, built on each call. float32:
+// each product and addition rounded to binary32.
+SystemMatrix multiply(const SystemMatrix& a, const SystemMatrix& b, bool float32 = false);
 
 // Blocks that are themselves blocked (`tensor[V,V](tensor[3,3](tensor[2,2](float)))`): a
 // matrix stores each block as its logical unblocked form (here 6 x 6, row-major), while a

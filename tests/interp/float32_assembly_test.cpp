@@ -1,7 +1,8 @@
-// --float32 and system-level values (docs/arithmetic.md): a map's assembled vector or matrix
-// is rounded to binary32 once, when its sums are complete (not after each addition, and not
-// left in binary64), and every matrix operator's value is rounded like any other operator's.
-// The expected values are worked out here from the element data.
+// --float32 and sums (docs/arithmetic.md): a map's assembled block, a dense product and a row
+// of a system matrix times a vector add in binary32 steps (each product and addition rounded,
+// as a binary32 machine computes them), a reduction over a set keeps binary64 and is rounded
+// once, and every matrix operator's value is rounded like any other operator's. The expected
+// values are worked out here from the data.
 #include <cmath>
 #include <cstring>
 
@@ -14,8 +15,8 @@ namespace {
 
 // Three edges between two vertices: edge e adds w(e) into g(a) and K(a, b), and u(e) into
 // g(b). With w = 1, 2^-24, 2^-24 the binary64 sum 1 + 2^-23 is a binary32 value, which
-// successive binary32 additions would miss (1 + 2^-24 rounds to 1 first); with u = 1, 2^-30,
-// 0 the binary64 sum is not one, and rounding once gives 1.
+// successive binary32 additions miss (1 + 2^-24 rounds to 1 first); with u = 1, 2^-30, 0
+// the binary64 sum is not one, and either order of rounding gives 1.
 const char* kProgram = R"(
 element V
 end
@@ -37,6 +38,27 @@ export func assemble() -> (g : vector[verts](float), K : matrix[verts,verts](flo
                            A : matrix[verts,verts](float))
   g, K = map f to edges reduce +;
   A = K - 0.1 * K;
+end
+
+% 2^-24 is 5.9604644775390625e-08. In binary32 steps 1 + 2^-24 + 2^-24 - 1 is 0; in binary64
+% it is 2^-23. `dense` sums it as a dense inner product and as a matrix row; `over_set` sums
+% the edges' w (1, 2^-24, 2^-24) as a reduction over a set.
+export func dense() -> (d : float, y : vector[2](float))
+  u = [1.0, 5.9604644775390625e-08, 5.9604644775390625e-08, -1.0];
+  var ones : vector[4](float) = 1.0;
+  d = u * ones;
+  M = [1.0, 5.9604644775390625e-08, 5.9604644775390625e-08, -1.0; 0.0, 0.0, 0.0, 2.0];
+  y = M * ones;
+end
+
+func part(e : E) -> h : vector[edges](float)
+  h(e) = e.w;
+end
+
+export func over_set() -> s : float
+  h = map part to edges reduce +;
+  var ones : vector[edges](float) = 1.0;
+  s = h' * ones;
 end
 )";
 
@@ -72,24 +94,50 @@ struct Edges {
 bool same(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 double f32(double x) { return static_cast<float>(x); }
 
-TEST(Float32Assembly, SumsAreRoundedOnceWhenComplete) {
+TEST(Float32Assembly, SumsRoundAtEveryAddition) {
   Edges run(true);
   const std::vector<Value> r = run.assemble();
   const double once_w = 1.0 + std::ldexp(1.0, -23);  // the binary64 sum, a binary32 value
   const double stepwise_w = f32(f32(1.0 + std::ldexp(1.0, -24)) + std::ldexp(1.0, -24));
   ASSERT_NE(once_w, stepwise_w);  // the order matters: 1 + 2^-23 against 1
-  EXPECT_TRUE(same(r[0].tensor().floats()[0], once_w));
-  EXPECT_TRUE(same(r[0].tensor().floats()[1], 1.0));  // 1 + 2^-30 rounded once
+  EXPECT_TRUE(same(r[0].tensor().floats()[0], stepwise_w));
+  EXPECT_TRUE(same(r[0].tensor().floats()[1], 1.0));  // 1 + 2^-30 rounded
   const runtime::SystemMatrix& k = *r[1].matrix();
-  EXPECT_TRUE(same(k.component(0, 1), once_w));
+  EXPECT_TRUE(same(k.component(0, 1), stepwise_w));
   EXPECT_TRUE(same(k.component(1, 0), 1.0));
   EXPECT_TRUE(runtime::is_binary32(k));
   // A matrix operator's value is rounded: 0.1 * K, then K - that.
   const runtime::SystemMatrix& a = *r[2].matrix();
   const double s = f32(0.1);
-  EXPECT_TRUE(same(a.component(0, 1), f32(once_w - f32(s * once_w))));
+  EXPECT_TRUE(same(a.component(0, 1), f32(stepwise_w - f32(s * stepwise_w))));
   EXPECT_TRUE(same(a.component(1, 0), f32(1.0 - f32(s * 1.0))));
   EXPECT_TRUE(runtime::is_binary32(a));
+}
+
+// 1 + 2^-24 + 2^-24 - 1, left to right: 0 in binary32 steps, 2^-23 in binary64.
+const double kTiny = std::ldexp(1.0, -24);
+const double kStepwise = f32(f32(f32(1.0 + kTiny) + kTiny) - 1.0);
+
+TEST(Float32Assembly, DenseProductsAddInBinary32Steps) {
+  ASSERT_EQ(kStepwise, 0.0);
+  Edges run(true);
+  const std::vector<Value> r = run.in->call(testing::func(*run.c, "dense"), {});
+  EXPECT_TRUE(same(r[0].as_float(), 0.0));
+  EXPECT_TRUE(same(r[1].tensor().floats()[0], 0.0));
+  EXPECT_TRUE(same(r[1].tensor().floats()[1], 2.0));
+  // In float64 both keep 2^-23.
+  Edges wide(false);
+  const std::vector<Value> w = wide.in->call(testing::func(*wide.c, "dense"), {});
+  EXPECT_TRUE(same(w[0].as_float(), 2 * kTiny));
+  EXPECT_TRUE(same(w[1].tensor().floats()[0], 2 * kTiny));
+}
+
+// The edges' w are 1, 2^-24, 2^-24: summed over the set in binary64 and rounded once, 1 +
+// 2^-23 (in binary32 steps it would be 1).
+TEST(Float32Assembly, AReductionOverASetKeepsBinary64) {
+  Edges run(true);
+  const std::vector<Value> r = run.in->call(testing::func(*run.c, "over_set"), {});
+  EXPECT_TRUE(same(r[0].as_float(), 1.0 + 2 * kTiny));
 }
 
 TEST(Float32Assembly, Float64KeepsTheBinary64Sums) {

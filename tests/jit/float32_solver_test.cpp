@@ -149,15 +149,15 @@ TEST(Float32Solver, BinaryThirtyTwoArraysWhereEveryValueIsOne) {
   // Every value the loop stores is rounded: x, r, Ap and the matrix are binary32; b and x0,
   // which it only reads, are the binary64 field `points.b` as it is (the interpreter does not
   // round a read either) and 0.25 * b, as the caller made them. p, which the loop's product
-  // multiplies, holds its binary32 values in binary64 storage (system_tracer.cpp).
-  for (const char* a : {"A.values f32", " x f32", " r f32", " p f64", " Ap f32", " b f64"})
+  // multiplies, is binary32 too: the product's sums are binary32 steps.
+  for (const char* a : {"A.values f32", " x f32", " r f32", " p f32", " Ap f32", " b f64"})
     EXPECT_NE(jit.dump.find(a), std::string::npos) << a << "\n" << jit.dump;
   // One iteration's bytes (jit/loop_traffic.h): the product reads the matrix's copy (88
-  // binary32 values, 88 column indices, 31 row starts: 828 bytes) and p (30 binary64
-  // values, 240 bytes) and writes Ap (120); the next pass reads x, p, r and Ap and writes x
-  // and r (840); the last reads r and p and writes p (600). The loop ran `iterations` times
+  // binary32 values, 88 column indices, 31 row starts: 828 bytes) and p (30 binary32
+  // values, 120 bytes) and writes Ap (120); the next pass reads x, p, r and Ap and writes x
+  // and r (720); the last reads r and p and writes p (360). The loop ran `iterations` times
   // in each of the two calls.
-  EXPECT_NE(jit.stats.find("an iteration moves 2628 bytes (its matrices 828 bytes); " +
+  EXPECT_NE(jit.stats.find("an iteration moves 2148 bytes (its matrices 828 bytes); " +
                            std::to_string(2 * in.results[1].as_int()) + " iterations at "),
             std::string::npos)
       << jit.stats << jit.dump;

@@ -206,6 +206,7 @@ inline DriverTable fake_table() {
       l.g.k = reinterpret_cast<const int32_t*>(param<CUdeviceptr>(params, 4));
       l.g.blocks = param<uint32_t>(params, 5);
       l.g.components = param<uint32_t>(params, 6);
+      l.g.round32 = param<uint32_t>(params, 7);
     } else {
       l.table = param<CUdeviceptr>(params, 0);
       l.scalars = param<CUdeviceptr>(params, 1);

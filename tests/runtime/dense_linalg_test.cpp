@@ -1,6 +1,8 @@
 // Small dense linear algebra: blocking conversion, products, transpose, det, inv, solves.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "runtime/dense_linalg.h"
 #include "runtime/fault.h"
 
@@ -65,6 +67,33 @@ TEST(Products, MatrixMatrixVectorAndOuter) {
   expect_floats(outer_product(y, x), {1, -1, 2, 1, -1, 2});
   expect_floats(inner_product(x, x), {6});
   EXPECT_THROW(matrix_product(a, a), Fault);
+}
+
+// --float32: each product and addition of a sum rounded to binary32, as float arithmetic
+// computes it; 1 + 2^-24 + 2^-24 - 1 then sums to 0, and to 2^-23 in binary64.
+TEST(Products, Float32SumsAddInBinary32Steps) {
+  const double tiny = std::ldexp(1.0, -24);
+  Tensor a = floats(Shape{2, 4}, {1, tiny, tiny, -1, 0.5, 0.25, 3, -0.75});
+  Tensor x = floats(Shape{4}, {1, 1, 1, 1});
+  expect_floats(matrix_vector_product(a, x, true), {0, 3});
+  expect_floats(matrix_vector_product(a, x), {2 * tiny, 3});
+  Tensor u = floats(Shape{4}, {1, tiny, tiny, -1});
+  expect_floats(inner_product(u, x, true), {0});
+  expect_floats(inner_product(u, x), {2 * tiny});
+  // Against float arithmetic on binary32 values that round at each step (0.1f * 3 is not a
+  // binary32 product without rounding): a 3 x 5 times 5 x 2 product.
+  Tensor l(ComponentKind::Float, Shape{3, 5}), r(ComponentKind::Float, Shape{5, 2});
+  for (size_t i = 0; i < l.size(); ++i) l.mutable_floats()[i] = static_cast<float>(0.1 * (i + 1));
+  for (size_t i = 0; i < r.size(); ++i) r.mutable_floats()[i] = static_cast<float>(0.37 / (i + 1));
+  const Tensor p = matrix_product(l, r, true);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j) {
+      float sum = 0.0f;
+      for (int k = 0; k < 5; ++k)
+        sum +=
+            static_cast<float>(l.floats()[i * 5 + k]) * static_cast<float>(r.floats()[k * 2 + j]);
+      EXPECT_EQ(p.floats()[i * 2 + j], static_cast<double>(sum)) << i << ", " << j;
+    }
 }
 
 TEST(Products, IntegerProductsWrap) {

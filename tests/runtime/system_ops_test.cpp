@@ -55,6 +55,35 @@ TEST_F(TetMatrices, MatrixVectorProductBlocked) {
   EXPECT_LT((as_eigen(y) - dense * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// --float32: each row block's part and the row's sum in binary32 steps (docs/arithmetic.md),
+// against the same order in float arithmetic on binary32 values.
+TEST_F(TetMatrices, Float32ProductsAddInBinary32Steps) {
+  auto [m, dense] = tet_matrix(verts, verts, 3, 3, 12);
+  round_to_float32(m);
+  std::vector<double> x = random_vector(m.scalar_cols(), 13);
+  for (double& v : x) v = static_cast<float>(v);
+  std::vector<double> y(m.scalar_rows()), wide(m.scalar_rows());
+  multiply(m, x, y, true);
+  multiply(m, x, wide);
+  const MatrixPattern& p = m.pattern();
+  int differ = 0;
+  for (int row = 0; row < m.rows(); ++row)
+    for (int i = 0; i < 3; ++i) {
+      float sum = 0.0f;
+      for (int32_t k = p.row_ptr()[row]; k < p.row_ptr()[row + 1]; ++k) {
+        float part = 0.0f;
+        for (int j = 0; j < 3; ++j)
+          part += static_cast<float>(m.values()[k * 9 + i * 3 + j]) *
+                  static_cast<float>(x[static_cast<size_t>(p.col_idx()[k]) * 3 + j]);
+        sum += part;
+      }
+      const size_t at = static_cast<size_t>(row) * 3 + i;
+      EXPECT_EQ(y[at], static_cast<double>(sum)) << at;
+      differ += static_cast<float>(wide[at]) != sum;
+    }
+  EXPECT_GT(differ, 0);  // the order of rounding shows: binary64 sums rounded once differ
+}
+
 TEST_F(TetMatrices, MatrixVectorProductUnblocked) {
   auto [m, dense] = tet_matrix(verts, verts, 1, 1, 4);
   const std::vector<double> x = random_vector(m.scalar_cols(), 5);

@@ -322,6 +322,15 @@ Value* Lanes::lanes_uncached(const Expr& e) {
         for (int l = 0; l < kLanes; ++l) index.push_back(b_.CreateExtractElement(v, l));
       }
       for (Value* i : index) values.push_back(k_.load(e, i));
+      // A binary32 field's values are gathered as they are stored and widened as one vector:
+      // Emitter::in_binary32 then sees the widening and computes their operations in
+      // binary32 (--float32), where widened one by one they would stay binary64.
+      std::vector<Value*> narrow;
+      for (Value* v : values)
+        if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v); ext && ext->getSrcTy()->isFloatTy())
+          narrow.push_back(ext->getOperand(0));
+      if (narrow.size() == values.size())
+        return b_.CreateFPExt(gather(narrow), llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
       return gather(values);
     }
     case ExprKind::Local: return vlocal_[static_cast<size_t>(e.slot)];

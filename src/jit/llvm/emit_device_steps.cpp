@@ -27,8 +27,8 @@ class StepHooks final : public TargetHooks {
     return t_.math(b, f, args);
   }
   void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                const llvm::AAMDNodes& aa) override {
-    t_.assemble(b, at, value, aa);
+                const llvm::AAMDNodes& aa, llvm::Value* round32) override {
+    t_.assemble(b, at, value, aa, round32);
   }
   void fail(llvm::IRBuilder<>& b, int error, llvm::Value*) override {
     llvm::Value* context = b.GetInsertBlock()->getParent()->getArg(0);

@@ -92,7 +92,8 @@ void Emitter::fail_unless(Value* ok, int error, const char* what) {
 }
 
 // Where the element's block (or vector element) of an Assemble statement starts.
-Value* Emitter::assemble_base(const Stmt& s) {
+Value* Emitter::assemble_base(const Stmt& s, Value** in_place) {
+  *in_place = nullptr;
   if (s.pair < 0 && s.member < 0) return address(s.slot, expr(*s.index), 0);
   // The block's position comes from a per-element table: a matrix's pattern table, or in a
   // deferred trace a vector's table of the members it writes (jit/defer_assembly.h).
@@ -112,7 +113,8 @@ Value* Emitter::assemble_base(const Stmt& s) {
   if (deferred < 0) return at;
   // Entry -1 - k: the write goes to deferred block k (both addresses are computed, one kept).
   Value* k = b_.CreateSub(b_.getInt32(-1), pos);
-  return b_.CreateSelect(b_.CreateICmpSLT(pos, b_.getInt32(0)), address(deferred, k, 0), at);
+  *in_place = b_.CreateICmpSGE(pos, b_.getInt32(0));
+  return b_.CreateSelect(*in_place, at, address(deferred, k, 0));
 }
 
 // While the controller records the blocks a call writes (jit/write_guard.h), `marks` is an
@@ -131,14 +133,18 @@ void Emitter::mark(int marks, Value* pos) {
 // lie side by side (Precomputed::side_by_side) when n > 1: one base address, and the writes
 // up to four components at a time (lane by lane, the same additions).
 void Emitter::assemble(const Stmt* s, int n) {
-  Value* base = assemble_base(s[0]);
+  Value* in_place;
+  Value* base = assemble_base(s[0], &in_place);
+  // --float32: a block's sum rounds at each addition; a deferred block holds one element's
+  // contribution as it is (from -0.0), rounded when DeferredPlan::finish adds it to its block.
+  Value* round32 = !float32_ ? nullptr : in_place ? in_place : b_.getTrue();
   llvm::Type* f64 = b_.getDoubleTy();
   for (int k = 0; k < n;) {
     const int width = n - k >= 4 ? 4 : n - k >= 2 ? 2 : 1;
     Value* at = b_.CreateConstInBoundsGEP1_64(f64, base, static_cast<uint64_t>(s[0].comp + k));
     Value* v = width == 1 ? expr(*s[k].value) : pre_->side_by_side_values(s[k], width);
     if (reduce_)
-      hooks_.assemble(b_, at, v, alias(s[0].slot));
+      hooks_.assemble(b_, at, v, alias(s[0].slot), round32);
     else
       tag(b_.CreateAlignedStore(v, at, llvm::Align(8)), s[0].slot);
     k += width;

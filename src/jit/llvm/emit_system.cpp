@@ -154,9 +154,15 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
   // PrunedMatrix) in lane 3, which is computed and never read, so a load is one
   // instruction rather than three.
   const unsigned width = std::bit_ceil(static_cast<unsigned>(bs));
-  auto* vec = llvm::FixedVectorType::get(f64, width);
+  auto* vec64 = llvm::FixedVectorType::get(f64, width);
   auto* vec32 = llvm::FixedVectorType::get(b_.getFloatTy(), width);
   const bool single = slots_[static_cast<size_t>(op.values)].single;
+  const bool single_x = slots_[static_cast<size_t>(op.x)].single;
+  // Under --float32 every product and addition of a row's sum rounds to binary32
+  // (runtime::multiply): computed in binary32 where both factors are binary32 values (the
+  // binary32 copy of the matrix, a binary32 vector), else in binary64 and rounded.
+  const bool sums32 = st_.float32;
+  auto* vec = sums32 ? vec32 : vec64;
   Value* sums;
   {
     llvm::IRBuilder<> entry(&fn_->getEntryBlock(), fn_->getEntryBlock().begin());
@@ -182,7 +188,7 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
       if (st_.matrices_in_place) {
         // The matrix's own blocks are row-major: column j is every bs-th value, and the
         // lanes past bs stay zero (their sums are never read).
-        a = llvm::ConstantFP::get(vec, 0.0);
+        a = llvm::ConstantFP::get(vec64, 0.0);
         for (int i = 0; i < bs; ++i)
           a = b_.CreateInsertElement(
               a,
@@ -190,27 +196,37 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
                                                       b_.CreateAdd(blk, b_.getInt64(i * bs + j)))),
               static_cast<uint64_t>(i));
       } else if (single) {
-        // Under float32 the copy holds binary32 values: widened exactly, half the bytes.
+        // Under float32 the copy holds binary32 values: half the bytes.
         llvm::LoadInst* column =
             b_.CreateLoad(vec32, b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.values],
                                                       b_.CreateAdd(blk, b_.getInt64(j * bs))));
         column->setAlignment(llvm::Align(4));
-        a = b_.CreateFPExt(column, vec);
+        a = sums32 ? column : b_.CreateFPExt(column, vec64);
       } else {
         llvm::LoadInst* column = b_.CreateLoad(
-            vec,
+            vec64,
             b_.CreateInBoundsGEP(f64, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(j * bs))));
         column->setAlignment(llvm::Align(8));
         a = column;
       }
-      Value* x = load_component(op.x, b_.CreateAdd(xc, b_.getInt64(j)));
-      Value* term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
+      Value* x_at = b_.CreateAdd(xc, b_.getInt64(j));
+      Value* term;
+      if (sums32 && single && single_x && !st_.matrices_in_place) {
+        Value* x = b_.CreateLoad(b_.getFloatTy(),
+                                 b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.x], x_at));
+        term = b_.CreateFMul(a, b_.CreateVectorSplat(width, x));
+      } else {
+        if (a->getType() != vec64) a = b_.CreateFPExt(a, vec64);
+        term = b_.CreateFMul(a, b_.CreateVectorSplat(width, load_component(op.x, x_at)));
+        if (sums32) term = b_.CreateFPTrunc(term, vec32);
+      }
       part = part ? b_.CreateFAdd(part, term) : term;
     }
     b_.CreateStore(b_.CreateFAdd(b_.CreateLoad(vec, sums), part), sums);
   });
   Value* row = b_.CreateMul(r, b_.getInt64(bs));
   Value* total = b_.CreateLoad(vec, sums);
+  if (sums32) total = b_.CreateFPExt(total, vec64);
   for (int i = 0; i < bs; ++i)
     store_component(op.y, b_.CreateAdd(row, b_.getInt64(i)),
                     b_.CreateExtractElement(total, static_cast<uint64_t>(i)));

@@ -119,7 +119,9 @@ class Emitter {
   // Unless `ok` (expected true), the kernel leaves with error `error` (TargetHooks::fail).
   void fail_unless(Value* ok, int error, const char* what);
   void decompose(const Stmt& s);
-  Value* assemble_base(const Stmt& s);
+  // in_place: set to whether the write goes to the result's own block (null: it always does)
+  // rather than to a deferred block.
+  Value* assemble_base(const Stmt& s, Value** in_place);
   void mark(int marks, Value* pos);
   void assemble(const Stmt* s, int n);
   void load_arrays(Value* arrays);

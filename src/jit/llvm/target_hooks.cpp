@@ -21,10 +21,17 @@ llvm::Value* TargetHooks::math(llvm::IRBuilder<>& b, MathFn f,
 }
 
 void TargetHooks::assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                           const llvm::AAMDNodes& aa) {
+                           const llvm::AAMDNodes& aa, llvm::Value* round32) {
   llvm::LoadInst* old = b.CreateAlignedLoad(value->getType(), at, llvm::Align(8));
   old->setAAMetadata(aa);
-  b.CreateAlignedStore(b.CreateFAdd(old, value), at, llvm::Align(8))->setAAMetadata(aa);
+  llvm::Value* sum = b.CreateFAdd(old, value);
+  if (round32) {
+    llvm::Value* rounded = b.CreateFPExt(
+        b.CreateFPTrunc(sum, value->getType()->getWithNewType(b.getFloatTy())), value->getType());
+    auto* always = llvm::dyn_cast<llvm::ConstantInt>(round32);
+    sum = always && always->isOne() ? rounded : b.CreateSelect(round32, rounded, sum);
+  }
+  b.CreateAlignedStore(sum, at, llvm::Align(8))->setAAMetadata(aa);
 }
 
 }  // namespace simit::jit::codegen

@@ -55,10 +55,11 @@ class TargetHooks {
     return nullptr;
   }
   // *at += value (a double, or a vector of doubles at 8-byte alignment): an assembly write
-  // with `reduce +`. `aa`: the alias metadata of the accesses to the result. By default a
+  // with `reduce +`; round32 (an i1, or null for never; --float32): where it holds, the sum
+  // rounded to binary32. `aa`: the alias metadata of the accesses to the result. By default a
   // plain load, add and store: right where one thread writes each block at a time.
   virtual void assemble(llvm::IRBuilder<>& b, llvm::Value* at, llvm::Value* value,
-                        const llvm::AAMDNodes& aa);
+                        const llvm::AAMDNodes& aa, llvm::Value* round32);
   // Leaves the kernel reporting the failure of Trace::errors[error] (or SystemTrace's), at
   // `element` (an i32; null in a system kernel). Ends the current block.
   virtual void fail(llvm::IRBuilder<>& b, int error, llvm::Value* element) = 0;

@@ -4,15 +4,16 @@
 #include <sstream>
 
 #include "jit/ptx/ptx_target.h"
+#include "runtime/sum_rounding.h"
 
 namespace simit::jit::ptx {
 
 namespace {
 
-// Written by hand rather than through LLVM's NVPTX back end: eleven loads, one addition and a
-// store in two loops, with no math function to link. The text says outright what runs (each
-// addition an `add.rn.f64`, which ptxas never fuses or reorders), needs no LLVM context per
-// executor, and is what a fake driver sees loaded.
+// Written by hand rather than through LLVM's NVPTX back end: twelve loads, one addition (under
+// --float32 rounded to binary32 by two conversions) and a store in two loops, with no math function
+// to link. The text says outright what runs (each addition an `add.rn.f64`, which ptxas never fuses
+// or reorders), needs no LLVM context per executor, and is what a fake driver sees loaded.
 //
 // Thread i owns block block[i] (no other thread writes it). For each component c it loads the
 // block's value after the map's launch, adds the deferred blocks' component c in the order of
@@ -26,11 +27,13 @@ constexpr const char* kBody = R"(.visible .entry simit_gather(
 	.param .u64 simit_gather_param_3,
 	.param .u64 simit_gather_param_4,
 	.param .u32 simit_gather_param_5,
-	.param .u32 simit_gather_param_6
+	.param .u32 simit_gather_param_6,
+	.param .u32 simit_gather_param_7
 )
 {
-	.reg .pred 	%p<4>;
-	.reg .b32 	%r<13>;
+	.reg .pred 	%p<5>;
+	.reg .b32 	%r<14>;
+	.reg .f32 	%f<2>;
 	.reg .b64 	%rd<19>;
 	.reg .f64 	%fd<3>;
 
@@ -53,6 +56,9 @@ constexpr const char* kBody = R"(.visible .entry simit_gather(
 	ld.param.u64 	%rd5, [simit_gather_param_4];
 	cvta.to.global.u64 	%rd5, %rd5;
 	ld.param.u32 	%r6, [simit_gather_param_6];
+	// %p4: --float32, each sum rounded to binary32 and widened again (exactly).
+	ld.param.u32 	%r13, [simit_gather_param_7];
+	setp.ne.u32 	%p4, %r13, 0;
 	// b = block[i], j0 = start[i], j1 = start[i + 1].
 	mul.wide.u32 	%rd6, %r4, 4;
 	add.s64 	%rd7, %rd3, %rd6;
@@ -85,6 +91,8 @@ $L__deferred:
 	add.s64 	%rd15, %rd13, %rd14;
 	ld.global.f64 	%fd2, [%rd15];
 	add.rn.f64 	%fd1, %fd1, %fd2;
+	@%p4 cvt.rn.f32.f64 	%f1, %fd1;
+	@%p4 cvt.f64.f32 	%fd1, %f1;
 	add.s64 	%rd12, %rd12, 4;
 	add.s32 	%r11, %r11, 1;
 	bra.uni 	$L__deferred;
@@ -123,8 +131,10 @@ void gather_on_host(const GatherArgs& a, uint32_t first, uint32_t end) {
     double* to = a.values + static_cast<size_t>(a.block[i]) * n;
     for (size_t c = 0; c < n; ++c) {
       double sum = to[c];
-      for (int32_t j = a.start[i]; j < a.start[i + 1]; ++j)
+      for (int32_t j = a.start[i]; j < a.start[i + 1]; ++j) {
         sum += a.deferred[static_cast<size_t>(a.k[j]) * n + c];
+        if (a.round32) sum = runtime::Binary32Sums::r(sum);
+      }
       to[c] = sum;
     }
   }

@@ -27,6 +27,7 @@ struct GatherArgs {
   const int32_t* k = nullptr;
   uint32_t blocks = 0;
   uint32_t components = 1;
+  uint32_t round32 = 0;  // non-zero (--float32): each addition's sum rounded to binary32
 };
 
 // The gather kernel's module: `.version version`, `.target arch` (e.g. "sm_90"). Empty

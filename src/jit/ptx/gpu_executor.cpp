@@ -146,6 +146,7 @@ void GpuExecutor::finish_deferred(const DeferredPlan& plan, const std::vector<do
     a.k = reinterpret_cast<const int32_t*>(index.arrays[3 * g + 2].device);
     a.blocks = static_cast<uint32_t>(d.blocks);
     a.components = static_cast<uint32_t>(d.components);
+    a.round32 = d.round32 ? 1 : 0;
     if (emulated_) {
       // Host memory under the host driver: the device addresses are host addresses.
       gather_on_host(a, 0, a.blocks);
@@ -156,7 +157,8 @@ void GpuExecutor::finish_deferred(const DeferredPlan& plan, const std::vector<do
                                         cuda::KernelArg::of(index.arrays[3 * g + 1].device),
                                         cuda::KernelArg::of(index.arrays[3 * g + 2].device),
                                         cuda::KernelArg::of(a.blocks),
-                                        cuda::KernelArg::of(a.components)};
+                                        cuda::KernelArg::of(a.components),
+                                        cuda::KernelArg::of(a.round32)};
       device_->launch(gather_function(), cuda::Dim3{(a.blocks + kBlock - 1) / kBlock},
                       cuda::Dim3{kBlock}, params);
       launched = true;

@@ -34,6 +34,8 @@ ExprRef Builder::unary(UnOp op, Ty ty, ExprRef a, SourceSpan at) {
       case UnOp::ToF64: return fconst(static_cast<double>(a->i));
     }
   }
+  // A binary32 value rounds to itself: a sum's last rounding (--float32) and its operator's.
+  if (op == UnOp::Round32 && a->kind == ExprKind::Unary && static_cast<UnOp>(a->op) == op) return a;
   Expr e;
   e.kind = ExprKind::Unary;
   e.ty = ty;

@@ -48,9 +48,7 @@ Sym Tracer::eval_intrinsic(const ast::Call& c) {
     if (x.ty != Ty::F64 || y.ty != Ty::F64 || x.size() != y.size())
       give_up(c.span, AbortReason::IntrinsicOperands, "dot");
     ExprRef s = fconst(0.0);
-    for (size_t i = 0; i < x.size(); ++i)
-      s = build_.binary(BinOp::Add, Ty::F64, s,
-                        build_.binary(BinOp::Mul, Ty::F64, x.c[i], y.c[i], c.span), c.span);
+    for (size_t i = 0; i < x.size(); ++i) s = sum_add(s, sum_mul(x.c[i], y.c[i], c.span), c.span);
     return s;
   };
   auto square = [&](const Sym& m) {

@@ -24,12 +24,10 @@ Sym Tracer::product(const Sym& l, bool lrow, const Sym& r, bool rrow, const Sour
   if (l.ty != Ty::F64 || r.ty != Ty::F64) give_up(at, AbortReason::ProductOfNonFloats);
   auto sum = [&](int n, auto term) {
     ExprRef s = fconst(0.0);
-    for (int k = 0; k < n; ++k) s = build_.binary(BinOp::Add, Ty::F64, s, term(k), at);
+    for (int k = 0; k < n; ++k) s = sum_add(s, term(k), at);
     return s;
   };
-  auto mul = [&](const ExprRef& a, const ExprRef& b) {
-    return build_.binary(BinOp::Mul, Ty::F64, a, b, at);
-  };
+  auto mul = [&](const ExprRef& a, const ExprRef& b) { return sum_mul(a, b, at); };
   const size_t lo = l.dims.size(), ro = r.dims.size();
   if (lo == 1 && ro == 1) {
     const int n = l.dims[0], m = r.dims[0];
@@ -194,7 +192,8 @@ bool Tracer::tiled_matvec(const Sym& a, const Sym& x, bool row_vector, const Sou
       new_scratch(static_cast<size_t>(trips), scratch_loose_[static_cast<size_t>(v.array)]);
   auto mul = [&](ExprRef p, ExprRef q) {
     if (row_vector) std::swap(p, q);
-    return node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {p, q}, at);
+    return in_sum(node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Mul), {p, q}, at),
+                  at);
   };
   for_loop(trips, at, [&](const ExprRef& i) {
     const ExprRef first = local_i32(build_.i32_mul(i, per_result, at), at);
@@ -203,7 +202,8 @@ bool Tracer::tiled_matvec(const Sym& a, const Sym& x, bool row_vector, const Sou
       ExprRef term =
           mul(scratch_read(v.array, build_.i32_add(first, static_cast<int64_t>(k) * per_k, at), at),
               x.c[static_cast<size_t>(k)]);
-      sum = node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, term}, at);
+      sum = in_sum(
+          node(ExprKind::Binary, Ty::F64, static_cast<uint8_t>(BinOp::Add), {sum, term}, at), at);
     }
     put(result, i, sum, at);
   });
@@ -288,8 +288,7 @@ Sym Tracer::tiled_product(const Sym& l, const Sym& r, const SourceSpan& at) {
             const ExprRef rval =
                 scratch_read(rv.array, build_.i32_add(r_at, static_cast<int64_t>(b) * rj, at), at);
             const ExprRef& o = o_at[static_cast<size_t>(b)];
-            put(o, build_.binary(BinOp::Add, Ty::F64, scratch_read(out, o, at),
-                                 build_.binary(BinOp::Mul, Ty::F64, lval, rval, at), at));
+            put(o, sum_add(scratch_read(out, o, at), sum_mul(lval, rval, at), at));
           }
         });
       });
@@ -316,9 +315,8 @@ Sym Tracer::blocked_product(const Sym& l, bool lrow, const Sym& r, bool rrow,
     for (size_t b = 0, bs = l.block_size(); b < l.blocks(); ++b) {
       ExprRef s = fconst(0.0);
       for (size_t k = b * bs; k < (b + 1) * bs; ++k)
-        s = build_.binary(BinOp::Add, Ty::F64, s,
-                          build_.binary(BinOp::Mul, Ty::F64, l.c[k], r.c[k], at), at);
-      total = build_.binary(BinOp::Add, Ty::F64, total, s, at);
+        s = sum_add(s, sum_mul(l.c[k], r.c[k], at), at);
+      total = sum_add(total, s, at);
     }
     return scalar(Ty::F64, total);
   }

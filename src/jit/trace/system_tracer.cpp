@@ -32,6 +32,7 @@ TracedSystem SystemTracer::run() {
     // made once per call for all iterations; a run without a loop multiplies once and reads
     // the matrix where it is, as the interpreter does.
     t_.matrices_in_place = !loop;
+    t_.float32 = float32_;
     // Under float32 that copy is binary32 (PrunedMatrix::values32): every value of a
     // program's matrix is a binary32 value then (docs/arithmetic.md).
     if (loop && float32_) {
@@ -210,12 +211,6 @@ void SystemTracer::mark_binary32_vectors() {
           }
         });
   }
-  // The vector a product in the loop multiplies holds binary32 values in binary64 storage: a
-  // product reads each of its components once per block of that column (the fem bunny's 3x3
-  // blocks: 12 times a row), and widening it there each time cost more than half its bytes
-  // save (the bunny's product 34 us a call against 26, and 27 for a float64 run).
-  for (const VectorOp& op : t_.body)
-    if (op.kind == VectorOp::Kind::SpMV) ok[static_cast<size_t>(op.x)] = false;
   for (size_t i = 0; i < ok.size(); ++i)
     if (ok[i]) t_.arrays[i].single = true;
 }

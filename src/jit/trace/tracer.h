@@ -137,6 +137,17 @@ class Tracer {
   Sym eval_intrinsic(const ast::Call& c);
   std::vector<Sym> decompose(const ast::Call& c);
   int64_t const_int(const ast::Expr& e);
+  // One product or addition inside an operation's sum: under float32 rounded to binary32 as
+  // the interpreter rounds it (runtime/sum_rounding.h).
+  ExprRef in_sum(ExprRef e, const SourceSpan& at) {
+    return in_.float32 ? build_.unary(UnOp::Round32, Ty::F64, std::move(e), at) : e;
+  }
+  ExprRef sum_add(ExprRef s, ExprRef term, const SourceSpan& at) {
+    return in_sum(build_.binary(BinOp::Add, Ty::F64, std::move(s), std::move(term), at), at);
+  }
+  ExprRef sum_mul(ExprRef a, ExprRef b, const SourceSpan& at) {
+    return in_sum(build_.binary(BinOp::Mul, Ty::F64, std::move(a), std::move(b), at), at);
+  }
   Sym round(Sym s, const SourceSpan& at) {
     if (!in_.float32 || s.kind != Sym::Kind::Tensor || s.ty != Ty::F64) return s;
     for (ExprRef& e : s.c) e = build_.unary(UnOp::Round32, Ty::F64, e, at);

@@ -1,0 +1,151 @@
+// Sums under --float32 compiled (docs/arithmetic.md): a map's assembled blocks, its dense
+// products and a solver loop's products of 3 x 3 blocks add in binary32 steps, in binary32
+// instructions where the operands are binary32 values, and give the interpreter's bits on 1
+// and 3 threads (the later chunks' contributions kept apart and rounded as they join).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "api/engine.h"
+
+namespace simit::jit {
+namespace {
+
+using api::CompiledProgram;
+using api::Engine;
+using api::EngineOptions;
+using api::ExecutorKind;
+using interp::Value;
+
+const char* kProgram = R"(
+element Point
+  x : vector[3](float);
+  m : float;
+end
+element Spring
+  k : float;
+end
+extern points : set{Point};
+extern springs : set{Spring}(points, points);
+
+% A spring's 3 x 3 blocks: k (d d') / (d' d) + small, where d is the spring's direction.
+func stiffness(s : Spring, p : (Point * 2)) -> (K : matrix[points,points](matrix[3,3](float)),
+                                                f : vector[points](vector[3](float)))
+  d = p(1).x - p(0).x;
+  B = (s.k / (d' * d)) * (d * d');
+  K(p(0), p(0)) = B;
+  K(p(1), p(1)) = B;
+  K(p(0), p(1)) = -B;
+  K(p(1), p(0)) = -B;
+  f(p(0)) = B * d;
+  f(p(1)) = -(B * d);
+end
+
+func mass(q : Point) -> M : matrix[points,points](matrix[3,3](float))
+  M(q, q) = q.m * [1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 1.0];
+end
+
+export func solve() -> (x : vector[points](vector[3](float)), f : vector[points](vector[3](float)),
+                        iterations : int)
+  K, f = map stiffness to springs reduce +;
+  A = (map mass to points reduce +) + 0.01 * K;
+  var r = f;
+  var p = r;
+  var rr = dot(r, r);
+  x = 0.0 * f;
+  while (iterations < 12)
+    Ap = A * p;
+    alpha = rr / dot(p, Ap);
+    x = x + alpha * p;
+    r = r - alpha * Ap;
+    rr_new = dot(r, r);
+    p = r + (rr_new / rr) * p;
+    rr = rr_new;
+    iterations = iterations + 1;
+  end
+end
+)";
+
+struct Solved {
+  std::vector<Value> results;
+  std::string stats;
+};
+
+// A chain of 40 points with three springs each (i to i + 1, i + 2, i + 3); binary32 fields.
+Solved solve(ExecutorKind kind, int threads, bool check) {
+  auto compiled = CompiledProgram::from_source("float32_sums.sim", kProgram);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  runtime::Set springs("springs", {&points, &points});
+  const int n = 40;
+  points.add_many(n);
+  points.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, true});
+  points.add_field("m", runtime::FieldType{runtime::ComponentKind::Float, {}, true});
+  for (int i = 0; i < n; ++i) {
+    const double xyz[3] = {std::cos(0.7 * i) + 0.1 * i, std::sin(1.3 * i), 0.05 * i * i};
+    runtime::Tensor t(runtime::ComponentKind::Float, runtime::Shape{3});
+    for (int c = 0; c < 3; ++c) t.mutable_floats()[c] = xyz[c];
+    points.set(0, i, t);
+    runtime::Tensor m(runtime::ComponentKind::Float, runtime::Shape{});
+    m.mutable_floats()[0] = 1.0 + 0.01 * i;
+    points.set(1, i, m);
+  }
+  for (int i = 0; i < n; ++i)
+    for (int j = 1; j <= 3; ++j)
+      if (i + j < n) springs.add({i, i + j});
+  springs.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, true});
+  for (int e = 0; e < springs.size(); ++e) {
+    runtime::Tensor k(runtime::ComponentKind::Float, runtime::Shape{});
+    k.mutable_floats()[0] = 10.0 + std::sin(0.3 * e);
+    springs.set(0, e, k);
+  }
+  EngineOptions o;
+  o.executor.kind = kind;
+  o.executor.threads = threads;
+  o.executor.threshold = 0;
+  o.executor.check = check;
+  o.executor.jit_cache = "off";
+  o.float32 = true;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  engine.bind_set(*compiled->find_extern("springs"), springs);
+  Solved out;
+  for (int call = 0; call < 2; ++call) out.results = engine.call(*compiled->find_func("solve"), {});
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  out.stats = os.str();
+  return out;
+}
+
+bool same_bits(const runtime::Tensor& a, const runtime::Tensor& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.floats(), b.floats(), a.size() * sizeof(double)) == 0;
+}
+
+TEST(Float32Sums, CompiledMapsAndLoopsGiveTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const Solved in = solve(ExecutorKind::Interpreter, 1, false);
+  for (int threads : {1, 3}) {
+    const Solved jit = solve(ExecutorKind::Jit, threads, false);
+    ASSERT_EQ(jit.results.size(), 3u);
+    EXPECT_TRUE(same_bits(in.results[0].tensor(), jit.results[0].tensor())) << threads;
+    EXPECT_TRUE(same_bits(in.results[1].tensor(), jit.results[1].tensor())) << threads;
+    EXPECT_EQ(jit.results[2].as_int(), 12);
+    // The maps and the statements with the loop compiled (its products on a binary32 copy).
+    EXPECT_NE(jit.stats.find("stiffness (line 31)"), std::string::npos) << jit.stats;
+    EXPECT_NE(jit.stats.find("statements (lines 33-46)"), std::string::npos) << jit.stats;
+    EXPECT_NE(jit.stats.find("its matrices 10.6 KB"), std::string::npos) << jit.stats;
+    EXPECT_EQ(jit.stats.find("interpreted:"), std::string::npos) << jit.stats;
+  }
+  // --check-jit compares every compiled call with the interpreter's on the same inputs.
+  EXPECT_NO_THROW(solve(ExecutorKind::Jit, 3, true));
+  // Each component is a binary32 value.
+  const runtime::Tensor& x = in.results[0].tensor();
+  for (size_t i = 0; i < x.size(); ++i)
+    EXPECT_EQ(static_cast<double>(static_cast<float>(x.floats()[i])), x.floats()[i]) << i;
+}
+
+}  // namespace
+}  // namespace simit::jit
