@@ -54,6 +54,9 @@ struct TraceController::Entry {
   // A deferred kernel's tables (jit/deferred_plan.h).
   std::unique_ptr<DeferredPlan> plan;
   bool split_noted = false;  // --jit-stats says once how the chunks split
+  // --float32 calls left to the interpreter: a float argument that is not a binary32 value
+  // (the kernel reads its float arguments as binary32 values).
+  long not_binary32 = 0;
 };
 
 struct TraceController::SiteState {

@@ -156,6 +156,17 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     scalars.push_back(component(
         s.partial >= 0 ? call.partial_args[s.partial] : call.interpreter.global(*s.global),
         s.component));
+  // Under --float32 the kernel reads its float arguments as binary32 values, which is what
+  // the program's own are (each an operator's rounded value); one the host bound wider
+  // leaves the call to the interpreter.
+  if (t.float32)
+    for (size_t i = 0; i < scalars.size() && i < t.scalars.size(); ++i)
+      if (t.scalars[i] == Ty::F64 && !runtime::is_binary32(scalars[i])) {
+        if (e.not_binary32++ == 0)
+          e.stats.note += "; calls with a float argument that is not a binary32 value run "
+                          "interpreted";
+        return false;
+      }
   guard_results(e, call, scalars);
   std::vector<runtime::PatternPtr> patterns;
   const std::vector<const int32_t*> tables = prepare_results(e, call, &patterns);

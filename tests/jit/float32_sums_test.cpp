@@ -147,5 +147,63 @@ TEST(Float32Sums, CompiledMapsAndLoopsGiveTheInterpretersBits) {
     EXPECT_EQ(static_cast<double>(static_cast<float>(x.floats()[i])), x.floats()[i]) << i;
 }
 
+// A map's float argument: the kernel reads it as a binary32 value, so a host-bound one that
+// is wider (0.1 in binary64) leaves the call to the interpreter, which multiplies by it as it
+// is; a binary32 one (0.5) runs compiled.
+const char* kScaled = R"(
+element Point
+  x : float;
+end
+extern points : set{Point};
+extern s : float;
+
+func scale(c : float, p : Point) -> y : vector[points](float)
+  y(p) = c * p.x;
+end
+
+export func run() -> y : vector[points](float)
+  y = map scale(s) to points reduce +;
+end
+)";
+
+std::pair<runtime::Tensor, std::string> scaled(ExecutorKind kind, double s) {
+  auto compiled = CompiledProgram::from_source("float32_scaled.sim", kScaled);
+  EXPECT_TRUE(compiled->ok());
+  runtime::Set points("points");
+  points.add_many(6);
+  points.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {}, true});
+  for (int i = 0; i < 6; ++i) {
+    runtime::Tensor x(runtime::ComponentKind::Float, runtime::Shape{});
+    x.mutable_floats()[0] = 1.0 + 0.3 * i;
+    points.set(0, i, x);
+  }
+  EngineOptions o;
+  o.executor.kind = kind;
+  o.executor.threshold = 0;
+  o.executor.jit_cache = "off";
+  o.float32 = true;
+  Engine engine(compiled, o);
+  engine.bind_set(*compiled->find_extern("points"), points);
+  engine.set_global(*compiled->find_extern("s"), Value::of_float(s));
+  runtime::Tensor y = engine.call(*compiled->find_func("run"), {})[0].tensor();
+  std::ostringstream os;
+  engine.print_jit_stats(os);
+  return {y, os.str()};
+}
+
+TEST(Float32Sums, AWiderFloatArgumentRunsTheMapInterpreted) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const char* note = "calls with a float argument that is not a binary32 value run interpreted";
+  for (double s : {0.1, 0.5}) {
+    const auto [in, unused] = scaled(ExecutorKind::Interpreter, s);
+    const auto [jit, stats] = scaled(ExecutorKind::Jit, s);
+    EXPECT_TRUE(same_bits(in, jit)) << s;
+    EXPECT_EQ(stats.find(note) != std::string::npos, s == 0.1) << stats;
+    // 0.1 as it is, times x, rounded once: not (float)0.1 times x.
+    const double x1 = static_cast<float>(1.3);
+    EXPECT_EQ(in.floats()[1], static_cast<double>(static_cast<float>(s * x1))) << s;
+  }
+}
+
 }  // namespace
 }  // namespace simit::jit

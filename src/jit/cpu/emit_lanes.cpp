@@ -307,7 +307,15 @@ Value* Lanes::lanes_uncached(const Expr& e) {
   };
   switch (e.kind) {
     case ExprKind::Const:
-    case ExprKind::Scalar: return b_.CreateVectorSplat(kLanes, k_.expr(e));
+    case ExprKind::Scalar: {
+      Value* v = k_.expr(e);
+      // A binary32 value widened (a float argument under --float32): splatted as binary32
+      // and widened as one vector, which in_binary32 sees.
+      if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v); ext && ext->getSrcTy()->isFloatTy())
+        return b_.CreateFPExt(b_.CreateVectorSplat(kLanes, ext->getOperand(0)),
+                              llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
+      return b_.CreateVectorSplat(kLanes, v);
+    }
     case ExprKind::Element: return gather(element_lane_);
     case ExprKind::Endpoint: return gather(endpoint_lane_[static_cast<size_t>(e.slot)]);
     case ExprKind::Load: {

@@ -165,6 +165,11 @@ Value* Emitter::expr(const Expr& e) {
       return b_.getInt1(e.i != 0);
     case ExprKind::Scalar: {
       Value* d = scalars_[e.slot];
+      // Under --float32 a map's float arguments are binary32 values (the controller runs a
+      // call with a wider one interpreted): narrowed and widened again, exactly, so that
+      // in_binary32 computes their operations in binary32.
+      if (e.ty == Ty::F64 && float32_)
+        return b_.CreateFPExt(b_.CreateFPTrunc(d, b_.getFloatTy()), b_.getDoubleTy());
       if (e.ty == Ty::F64) return d;
       if (e.ty == Ty::I32) return b_.CreateFPToSI(d, b_.getInt32Ty());
       return b_.CreateFCmpUNE(d, llvm::ConstantFP::get(b_.getDoubleTy(), 0.0));
