@@ -163,8 +163,9 @@ bool TraceController::run_kernel(Entry& e, interp::SiteCall& call) {
     for (size_t i = 0; i < scalars.size() && i < t.scalars.size(); ++i)
       if (t.scalars[i] == Ty::F64 && !runtime::is_binary32(scalars[i])) {
         if (e.not_binary32++ == 0)
-          e.stats.note += "; calls with a float argument that is not a binary32 value run "
-                          "interpreted";
+          e.stats.note +=
+              "; calls with a float argument that is not a binary32 value run "
+              "interpreted";
         return false;
       }
   guard_results(e, call, scalars);
