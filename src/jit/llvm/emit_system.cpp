@@ -226,10 +226,17 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
   });
   Value* row = b_.CreateMul(r, b_.getInt64(bs));
   Value* total = b_.CreateLoad(vec, sums);
-  if (sums32) total = b_.CreateFPExt(total, vec64);
-  for (int i = 0; i < bs; ++i)
-    store_component(op.y, b_.CreateAdd(row, b_.getInt64(i)),
-                    b_.CreateExtractElement(total, static_cast<uint64_t>(i)));
+  const bool single_y = slots_[static_cast<size_t>(op.y)].single;
+  for (int i = 0; i < bs; ++i) {
+    Value* at = b_.CreateAdd(row, b_.getInt64(i));
+    Value* sum = b_.CreateExtractElement(total, static_cast<uint64_t>(i));
+    // A binary32 sum into a binary32 vector is stored as it is (no widening and narrowing
+    // again, which LLVM does not fold through the extraction).
+    if (sums32 && single_y)
+      b_.CreateStore(sum, b_.CreateInBoundsGEP(b_.getFloatTy(), arrays_[op.y], at));
+    else
+      store_component(op.y, at, sums32 ? b_.CreateFPExt(sum, f64) : sum);
+  }
   run_of(op, row, bs, lane);
 }
 
