@@ -424,6 +424,9 @@ TEST_F(GpuExecutorFake, TheGatherKernelsPtxAddsCorrectlyRoundedAndPtxasAcceptsIt
   EXPECT_NE(p.find(".target sm_90\n"), std::string::npos) << p;
   EXPECT_NE(p.find(".visible .entry simit_gather("), std::string::npos) << p;
   EXPECT_NE(p.find("add.rn.f64"), std::string::npos) << p;
+  // --float32 (the last parameter): each sum rounded to binary32 and widened again.
+  EXPECT_NE(p.find("@%p4 cvt.rn.f32.f64"), std::string::npos) << p;
+  EXPECT_NE(p.find("@%p4 cvt.f64.f32"), std::string::npos) << p;
   EXPECT_EQ(p.find("fma"), std::string::npos) << p;
   EXPECT_EQ(p.find("atom"), std::string::npos) << p;
   EXPECT_NE(gather_ptx("sm_100", "8.6").find(".version 8.6\n.target sm_100\n"), std::string::npos);
@@ -437,9 +440,13 @@ TEST_F(GpuExecutorFake, TheGatherKernelsPtxAddsCorrectlyRoundedAndPtxasAcceptsIt
 }
 
 // The host equivalent the emulation runs adds what finish adds, bit for bit, on a result of
-// three components whose deferred blocks hold values whose sums round.
-TEST(GatherOnHost, AddsAsDeferredPlanFinishDoes) {
-  const Trace t = deferred_edge_sum();
+// three components whose deferred blocks hold values whose sums round: in binary64, and
+// under --float32 rounding each sum to binary32.
+class GatherOnHost : public ::testing::TestWithParam<bool> {};
+
+TEST_P(GatherOnHost, AddsAsDeferredPlanFinishDoes) {
+  Trace t = deferred_edge_sum();
+  t.float32 = GetParam();
   runtime::Set v("v");
   v.add_many(7);
   runtime::Set e("e", {&v, &v});
@@ -460,15 +467,26 @@ TEST(GatherOnHost, AddsAsDeferredPlanFinishDoes) {
   plan.finish({by_finish.data()});
   const DeferredPlan::Gather d = plan.gathers().at(0);
   ASSERT_GT(d.blocks, 0u);
-  GatherArgs a{
-      by_gather.data(), d.deferred, d.block, d.start, d.k, static_cast<uint32_t>(d.blocks), 3};
+  EXPECT_EQ(d.round32, GetParam());
+  GatherArgs a{by_gather.data(), d.deferred, d.block, d.start, d.k, static_cast<uint32_t>(d.blocks),
+               3, d.round32 ? 1u : 0u};
   gather_on_host(a, 0, 2);  // threads apart, in any split, as the GPU's blocks run
   gather_on_host(a, 2, 1000);
   EXPECT_EQ(std::memcmp(by_finish.data(), by_gather.data(), 21 * sizeof(double)), 0);
   std::vector<double> before(21);
   for (size_t i = 0; i < before.size(); ++i) before[i] = 1.0 / (1.0 + i);
   EXPECT_NE(by_finish, before);  // something was added
+  // Under --float32 each block's last sum is a binary32 value; in binary64 some are not.
+  bool all_binary32 = true;
+  for (size_t b = 0; b < d.blocks; ++b)
+    for (int c = 0; c < 3; ++c) {
+      const double x = by_finish[static_cast<size_t>(d.block[b]) * 3 + static_cast<size_t>(c)];
+      all_binary32 = all_binary32 && static_cast<double>(static_cast<float>(x)) == x;
+    }
+  EXPECT_EQ(all_binary32, GetParam());
 }
+
+INSTANTIATE_TEST_SUITE_P(Binary64AndFloat32, GatherOnHost, ::testing::Bool());
 
 }  // namespace
 }  // namespace simit::jit::ptx
