@@ -468,8 +468,9 @@ TEST_P(GatherOnHost, AddsAsDeferredPlanFinishDoes) {
   const DeferredPlan::Gather d = plan.gathers().at(0);
   ASSERT_GT(d.blocks, 0u);
   EXPECT_EQ(d.round32, GetParam());
-  GatherArgs a{by_gather.data(), d.deferred, d.block, d.start, d.k, static_cast<uint32_t>(d.blocks),
-               3, d.round32 ? 1u : 0u};
+  GatherArgs a{
+      by_gather.data(),   d.deferred, d.block, d.start, d.k, static_cast<uint32_t>(d.blocks), 3,
+      d.round32 ? 1u : 0u};
   gather_on_host(a, 0, 2);  // threads apart, in any split, as the GPU's blocks run
   gather_on_host(a, 2, 1000);
   EXPECT_EQ(std::memcmp(by_finish.data(), by_gather.data(), 21 * sizeof(double)), 0);
