@@ -24,7 +24,14 @@ struct Binary32Sums {
     // The value passes through a register the compiler cannot see into: GCC 12 at -O3 kept a
     // vectorised row sum of SpMV in binary64, dropping this rounding after each addition
     // (found by the random programs against the JIT, which rounds each one).
+#if defined(__x86_64__) || defined(__i386__)
     asm("" : "+x"(f));
+#elif defined(__aarch64__)
+    asm("" : "+w"(f));
+#else
+    volatile float v = f;
+    f = v;
+#endif
     return f;
   }
   static std::complex<double> r(std::complex<double> x) { return {r(x.real()), r(x.imag())}; }

@@ -29,13 +29,14 @@ untimed() {
              print line }' "$1"
 }
 
-scene() {  # name scene.toml frames
+scene() {  # name scene.toml frames [options...]
   local name="$1" toml="$2" frames="$3" build exe
+  shift 3
   for build in native generic; do
     exe=$native
     [ "$build" = generic ] && exe=$generic
     "$exe" run "$toml" --frames "$frames" --output "$work/$build/$name" \
-      --final-csv "$work/$build/$name.csv" > "$work/$build/$name.log"
+      --final-csv "$work/$build/$name.csv" "$@" > "$work/$build/$name.log"
   done
   same "$name: final positions (--final-csv)" "$work/native/$name.csv" "$work/generic/$name.csv"
   local f
@@ -66,6 +67,9 @@ scene fem_bar2k "$root/tests/scene/fem_bar2k.toml" 2
 scene fem_bunny "$root/examples/fem/bunny.toml" 1
 scene springs_bunny "$root/examples/springs/bunny.toml" 3
 scene cloth_square "$root/examples/cloth/square.toml" 1
+# --float32: binary32 sums (the runtime's Binary32Sums, which no compiler may drop).
+scene fem_bunny_float32 "$root/examples/fem/bunny.toml" 1 --float32
+scene springs_bunny_float32 "$root/examples/springs/bunny.toml" 2 --float32
 for f in products inverses complexes decompositions; do
   program "dense_$f" "$root/tests/contract/dense.sim" "$f" 0.7
 done
