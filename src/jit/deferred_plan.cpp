@@ -210,10 +210,9 @@ void DeferredPlan::finish(
         double* to = v + static_cast<size_t>(r.gather_block[i]) * n;
         for (int32_t j = r.gather_start[i]; j < r.gather_start[i + 1]; ++j) {
           const double* from = r.scratch.data() + static_cast<size_t>(r.gather_k[j]) * n;
-          if (float32_)
-            for (size_t c = 0; c < n; ++c) to[c] = runtime::Binary32Sums::r(to[c] + from[c]);
-          else
-            for (size_t c = 0; c < n; ++c) to[c] += from[c];
+          runtime::with_sums(float32_, [&]<class R>(R) {
+            for (size_t c = 0; c < n; ++c) to[c] = R::r(to[c] + from[c]);
+          });
         }
       }
     };

@@ -311,8 +311,8 @@ Value* Lanes::lanes_uncached(const Expr& e) {
       Value* v = k_.expr(e);
       // A binary32 value widened (a float argument under --float32): splatted as binary32
       // and widened as one vector, which in_binary32 sees.
-      if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v); ext && ext->getSrcTy()->isFloatTy())
-        return b_.CreateFPExt(b_.CreateVectorSplat(kLanes, ext->getOperand(0)),
+      if (Value* narrow = codegen::widened_binary32(v))
+        return b_.CreateFPExt(b_.CreateVectorSplat(kLanes, narrow),
                               llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
       return b_.CreateVectorSplat(kLanes, v);
     }
@@ -335,8 +335,7 @@ Value* Lanes::lanes_uncached(const Expr& e) {
       // binary32 (--float32), where widened one by one they would stay binary64.
       std::vector<Value*> narrow;
       for (Value* v : values)
-        if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v); ext && ext->getSrcTy()->isFloatTy())
-          narrow.push_back(ext->getOperand(0));
+        if (Value* n = codegen::widened_binary32(v)) narrow.push_back(n);
       if (narrow.size() == values.size())
         return b_.CreateFPExt(gather(narrow), llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
       return gather(values);

@@ -37,13 +37,18 @@ Value* Emitter::math(const Expr& e, const std::vector<Value*>& args) {
   return out;
 }
 
+Value* widened_binary32(Value* v) {
+  if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v))
+    if (ext->getSrcTy()->getScalarType()->isFloatTy()) return ext->getOperand(0);
+  return nullptr;
+}
+
 namespace {
 
 // v as the binary32 value it holds exactly (a widened binary32 value, or a constant that is
 // one), or null.
 Value* binary32_of(Value* v) {
-  if (auto* ext = llvm::dyn_cast<llvm::FPExtInst>(v))
-    if (ext->getSrcTy()->getScalarType()->isFloatTy()) return ext->getOperand(0);
+  if (Value* narrow = widened_binary32(v)) return narrow;
   if (auto* c = llvm::dyn_cast<llvm::Constant>(v)) {
     auto* f = llvm::dyn_cast_or_null<llvm::ConstantFP>(c->getSplatValue());
     if (!f && v->getType()->isDoubleTy()) f = llvm::dyn_cast<llvm::ConstantFP>(c);
@@ -118,8 +123,7 @@ Value* Emitter::combine(const Expr& e, const std::vector<Value*>& args) {
         case UnOp::Not: return b_.CreateNot(x);
         case UnOp::Round32:
           if (Value* narrow = in_binary32(x)) return b_.CreateFPExt(narrow, x->getType());
-          return b_.CreateFPExt(b_.CreateFPTrunc(x, like(b_.getFloatTy(), x)),
-                                like(b_.getDoubleTy(), x));
+          return as_binary32(x);
         case UnOp::ToF64: return b_.CreateSIToFP(x, like(b_.getDoubleTy(), x));
       }
       return x;
@@ -168,8 +172,7 @@ Value* Emitter::expr(const Expr& e) {
       // Under --float32 a map's float arguments are binary32 values (the controller runs a
       // call with a wider one interpreted): narrowed and widened again, exactly, so that
       // in_binary32 computes their operations in binary32.
-      if (e.ty == Ty::F64 && float32_)
-        return b_.CreateFPExt(b_.CreateFPTrunc(d, b_.getFloatTy()), b_.getDoubleTy());
+      if (e.ty == Ty::F64 && float32_) return as_binary32(d);
       if (e.ty == Ty::F64) return d;
       if (e.ty == Ty::I32) return b_.CreateFPToSI(d, b_.getInt32Ty());
       return b_.CreateFCmpUNE(d, llvm::ConstantFP::get(b_.getDoubleTy(), 0.0));
@@ -183,8 +186,7 @@ Value* Emitter::expr(const Expr& e) {
       // Narrowed and widened again, exactly: in_binary32 then computes its operations in
       // binary32 (a compiled loop's step length times a binary32 vector, without widening
       // the vector).
-      if (e.ty == Ty::F64 && binary32_local(e.slot))
-        v = b_.CreateFPExt(b_.CreateFPTrunc(v, b_.getFloatTy()), b_.getDoubleTy());
+      if (e.ty == Ty::F64 && binary32_local(e.slot)) v = as_binary32(v);
       return v;
     }
     case ExprKind::Scratch: return b_.CreateLoad(b_.getDoubleTy(), scratch_at(e.slot, *e.ops[0]));

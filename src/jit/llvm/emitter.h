@@ -49,6 +49,10 @@ struct LoopShape {
 // Expressions and statements into the function being emitted: the part of a kernel every
 // target emits alike. The function and the values it reads before its body (arrays, locals)
 // are set up by MapEmitter or SystemEmitter.
+// v's binary32 operand where v widens a binary32 value (an fpext from float, of a scalar or
+// of lanes), or null.
+Value* widened_binary32(Value* v);
+
 class Emitter {
  public:
   // reduce: Assemble adds to the result (else it overwrites); float32: the decompositions'
@@ -111,6 +115,11 @@ class Emitter {
   Value* math(const Expr& e, const std::vector<Value*>& args);
   // x (a binary64 operation) computed in binary32 where that gives its rounded value exactly.
   Value* in_binary32(Value* x);
+  // x (binary64, a scalar or lanes) narrowed to binary32 and widened again: exactly x where x
+  // holds a binary32 value, which in_binary32 then sees as one.
+  Value* as_binary32(Value* x) {
+    return b_.CreateFPExt(b_.CreateFPTrunc(x, like(b_.getFloatTy(), x)), x->getType());
+  }
   llvm::Type* like(llvm::Type* scalar, Value* like);
   Value* int_divide(Value* x, Value* y, bool remainder);
   // Address of a component of a per-element scratch array (a tiled tensor).
