@@ -146,10 +146,13 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       if (b.arrays[i].part != SystemBinding::Array::Part::Values) continue;
       const double before = thread_cpu_ms();
       PrunedMatrix& p = e->pruned[b.arrays[i].var];
-      const bool exact = p.assign(*in.variable(*b.arrays[i].var).matrix(), t.arrays[i].single,
-                                  [this](int64_t tasks, const std::function<void(int64_t)>& task) {
-                                    executor_->for_each(tasks, task);
-                                  });
+      const runtime::SystemMatrix& m = *in.variable(*b.arrays[i].var).matrix();
+      const bool exact = p.assign(
+          m, t.arrays[i].single,
+          [this](int64_t tasks, const std::function<void(int64_t)>& task) {
+            executor_->for_each(tasks, task);
+          },
+          rows_in_pairs(t, t.arrays[i], m.block_rows()));
       e->prune_cpu_ms += thread_cpu_ms() - before;
       if (!exact) return leave_wide(*b.arrays[i].var);
       e->kept += p.kept;

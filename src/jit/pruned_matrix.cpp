@@ -98,7 +98,8 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
             const double x = blk[i * m + j];
             o[j * m + i] = static_cast<T>(x);
             // A NaN stays a NaN (its payload is not the interpreter's concern).
-            if constexpr (std::is_same_v<T, float>) all = all && runtime::is_binary32(x);
+            // (`&`, not `&&`: no branch per value, which kept the loop from vectorising.)
+            if constexpr (std::is_same_v<T, float>) all = all & runtime::is_binary32(x);
           }
         cols[at++] = ci[k];
       }
@@ -107,6 +108,105 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
     exact[static_cast<size_t>(t)] = all;
   });
   p.kept = static_cast<int64_t>(nonzero);
+  return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
+}
+
+// Rows in pairs, as binary32 (PrunedMatrix::pairs); N x N blocks, 2 <= N <= 4. The same two
+// passes over tasks of kRowsPerTask rows (an even number, so that a task holds whole pairs).
+template <int N>
+bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v,
+                 size_t rows, const runtime::ForEachTask& for_each) {
+  constexpr int bs = N * N;
+  static_assert(kRowsPerTask % 2 == 0);
+  const size_t pairs = (rows + 1) / 2;
+  const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
+  auto run = [&](const std::function<void(int64_t)>& task) {
+    if (for_each && tasks > 1) {
+      for_each(static_cast<int64_t>(tasks), task);
+    } else {
+      for (size_t t = 0; t < tasks; ++t) task(static_cast<int64_t>(t));
+    }
+  };
+  auto kept_in = [&](size_t r) {
+    int32_t n = 0;
+    if (r < rows)
+      for (int32_t k = rp[r]; k < rp[r + 1]; ++k)
+        n += zero_block<N>(v + static_cast<size_t>(k) * bs, bs) ? 0 : 1;
+    return n;
+  };
+  std::vector<int32_t> first(tasks + 1, 0);  // each task's first block pair
+  std::vector<int64_t> kept(tasks, 0);
+  run([&](int64_t t) {
+    int32_t slots = 0;
+    int64_t real = 0;
+    const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
+    for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; r += 2) {
+      const int32_t a = kept_in(r), b = kept_in(r + 1);
+      slots += std::max(a, b);
+      real += a + b;
+    }
+    first[static_cast<size_t>(t) + 1] = slots;
+    kept[static_cast<size_t>(t)] = real;
+  });
+  for (size_t t = 0; t < tasks; ++t) first[t + 1] += first[t];
+  const auto slots = static_cast<size_t>(first[tasks]);
+  constexpr int width = static_cast<int>(std::bit_ceil(static_cast<unsigned>(N)));
+  fit(p.cols, 2 * slots);
+  // The last pair's last column loads 2 width values from 2 N (N - 1).
+  fit(p.values32, slots * 2 * bs + static_cast<size_t>(2 * (width - N)));
+  std::fill(p.values32.begin() + static_cast<std::ptrdiff_t>(slots * 2 * bs), p.values32.end(),
+            0.0f);
+  p.row_ptr.resize(pairs + 1);
+  p.row_ptr[0] = 0;
+  std::vector<uint8_t> exact(tasks, 1);
+  run([&](int64_t t) {
+    int32_t at = first[static_cast<size_t>(t)];
+    bool all = true;
+    const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
+    float* values = p.values32.data();
+    int32_t* cols = p.cols.data();
+    for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; r += 2) {
+      // Each row's kept blocks into its side of the pairs from `at`, then the shorter row's
+      // padding.
+      int32_t length[2] = {0, 0};
+      for (int side = 0; side < 2 && r + static_cast<size_t>(side) < rows; ++side) {
+        const size_t row = r + static_cast<size_t>(side);
+        int32_t s = at;
+        for (int32_t k = rp[row]; k < rp[row + 1]; ++k) {
+          const double* blk = v + static_cast<size_t>(k) * bs;
+          if (zero_block<N>(blk, bs)) continue;
+          float* o = values + static_cast<size_t>(s) * 2 * bs + side * N;
+          for (int j = 0; j < N; ++j)
+            for (int i = 0; i < N; ++i) {
+              const double x = blk[i * N + j];
+              o[j * 2 * N + i] = static_cast<float>(x);
+              all = all & runtime::is_binary32(x);
+            }
+          cols[2 * static_cast<size_t>(s) + static_cast<size_t>(side)] = ci[k];
+          ++s;
+        }
+        length[side] = s - at;
+      }
+      const int32_t pairs_here = std::max(length[0], length[1]);
+      for (int side = 0; side < 2; ++side) {
+        const int32_t col =
+            length[side] > 0
+                ? cols[2 * static_cast<size_t>(at + length[side] - 1) + static_cast<size_t>(side)]
+                : 0;
+        for (int32_t s = at + length[side]; s < at + pairs_here; ++s) {
+          float* o = values + static_cast<size_t>(s) * 2 * bs + side * N;
+          for (int j = 0; j < N; ++j)
+            for (int i = 0; i < N; ++i) o[j * 2 * N + i] = 0.0f;
+          cols[2 * static_cast<size_t>(s) + static_cast<size_t>(side)] = col;
+        }
+      }
+      at += pairs_here;
+      p.row_ptr[r / 2 + 1] = at;
+    }
+    exact[static_cast<size_t>(t)] = all;
+  });
+  p.kept = 0;
+  for (int64_t n : kept) p.kept += n;
   return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
 }
 
@@ -124,13 +224,22 @@ bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* 
 }  // namespace
 
 bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single,
-                          const runtime::ForEachTask& for_each) {
+                          const runtime::ForEachTask& for_each, bool in_pairs) {
   const auto& rp = m.pattern().row_ptr();
   const int32_t* ci = m.pattern().col_idx().data();
   const size_t rows = rp.size() - 1;
-  row_ptr.resize(rp.size());
   total = m.pattern().nnz();
   const int n = m.block_rows();
+  pairs = single && in_pairs && n >= 2 && n <= 4 && m.block_cols() == n;
+  if (pairs) {
+    std::vector<double>().swap(values);
+    switch (n) {
+      case 2: return prune_pairs<2>(*this, rp.data(), ci, m.values(), rows, for_each);
+      case 3: return prune_pairs<3>(*this, rp.data(), ci, m.values(), rows, for_each);
+      default: return prune_pairs<4>(*this, rp.data(), ci, m.values(), rows, for_each);
+    }
+  }
+  row_ptr.resize(rp.size());
   switch (n) {
     case 1: return prune_into<1>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
     case 2: return prune_into<2>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);

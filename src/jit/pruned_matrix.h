@@ -7,10 +7,20 @@
 #include <cstdint>
 #include <vector>
 
+#include "jit/loop_ir.h"
 #include "runtime/system_matrix.h"
 #include "runtime/system_ops.h"
 
 namespace simit::jit {
+
+// Whether a loop's products read the binary32 copy of a matrix of `block` x `block` blocks
+// (values slot `values`) two rows at a time (PrunedMatrix::pairs): under --float32 on the
+// CPU, for blocks of 2 to 4 rows, where a row's binary32 sums fill half a vector of 4 or 8
+// lanes. The controller makes the copy and the emitter reads it by this one rule.
+inline bool rows_in_pairs(const SystemTrace& t, const ArraySlot& values, int block) {
+  return t.float32 && values.single && !t.matrices_in_place && !t.device && block >= 2 &&
+         block <= 4;
+}
 
 struct PrunedMatrix {
   std::vector<int32_t> row_ptr, cols;
@@ -23,14 +33,24 @@ struct PrunedMatrix {
   // the copy holds them as binary32, laid out as `values`: half the bytes a product streams.
   std::vector<float> values32;
   int64_t kept = 0, total = 0;  // blocks
+  // Rows in pairs (rows_in_pairs; binary32 only): row_ptr[q] is the first block pair of rows
+  // 2q and 2q + 1, which hold max(kept blocks of each) pairs; cols holds two columns per pair
+  // (row 2q's, then row 2q + 1's), and values32 each pair's columns j = 0 .. n-1 in turn, row
+  // 2q's n values then row 2q + 1's (2 n^2 values a pair), so that one load of 2 bit_ceil(n)
+  // values and one shuffle give both rows' column j. The shorter row of a pair is padded with
+  // zero blocks at its last kept column (column 0 when it has none, or for the missing row
+  // after an odd last row): a term 0 * x = +-0 changes no sum that starts at +0.0 while x is
+  // finite, as for a dropped block.
+  bool pairs = false;
 
   // Rebuilds the arrays from `m` (float components), reusing their storage while it fits:
-  // into values32 when `single`, else into values. False (and the arrays not to be used)
-  // when `single` and some value of `m` is not a binary32 value (a matrix the host bound
-  // with binary64 values), which a binary32 copy would change.
+  // into values32 when `single`, else into values; in pairs of rows when `pairs` (and
+  // `single`, with 2 to 4 rows a block). False (and the arrays not to be used) when `single`
+  // and some value of `m` is not a binary32 value (a matrix the host bound with binary64
+  // values), which a binary32 copy would change.
   // `for_each` runs the passes' tasks (ranges of rows) on the executor's threads.
   bool assign(const runtime::SystemMatrix& m, bool single = false,
-              const runtime::ForEachTask& for_each = {});
+              const runtime::ForEachTask& for_each = {}, bool pairs = false);
 };
 
 }  // namespace simit::jit

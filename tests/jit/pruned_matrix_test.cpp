@@ -109,6 +109,92 @@ TEST(PrunedMatrix, TheBinary32CopyHoldsTheValuesOrSaysItCannot) {
   EXPECT_FALSE(refused.assign(w, true, backwards));
 }
 
+// In pairs of rows (binary32): rows 2q and 2q + 1 side by side, each block pair's column j
+// row 2q's values then row 2q + 1's, the shorter row padded with zero blocks at its last
+// column, an odd last row paired with nothing (column 0, zeros).
+TEST(PrunedMatrix, InPairsTheRowsLieSideBySide) {
+  // 5 rows of 3 x 3 blocks; row 1 has blocks at columns 0 and 2, the others only (r, r);
+  // block (1, 0) is zero and dropped.
+  const std::vector<int32_t> row_ptr{0, 1, 3, 4, 5, 6}, cols{0, 0, 2, 2, 3, 4};
+  runtime::SystemMatrix k(runtime::MatrixPattern::from_csr(5, 5, row_ptr, cols), 3, 3);
+  for (size_t i = 0; i < k.value_count(); ++i)
+    k.values()[i] = static_cast<float>(0.25 * static_cast<double>(i + 1));
+  for (int i = 0; i < 9; ++i) k.block(1)[i] = 0.0;
+  PrunedMatrix p;
+  ASSERT_TRUE(p.assign(k, true, {}, true));
+  EXPECT_TRUE(p.pairs);
+  EXPECT_EQ(p.kept, 5);
+  // Pairs (0, 1), (2, 3), (4, -): one block pair each.
+  EXPECT_EQ(p.row_ptr, (std::vector<int32_t>{0, 1, 2, 3}));
+  EXPECT_EQ(p.cols, (std::vector<int32_t>{0, 2, 2, 3, 4, 0}));
+  ASSERT_EQ(p.values32.size(), 3u * 18 + 2);
+  // Pair q's block for row 2q + side, component (i, j), lies at 18 q + 6 j + 3 side + i.
+  auto expect_block = [&](int q, int side, const double* blk) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        EXPECT_EQ(
+            static_cast<double>(p.values32[static_cast<size_t>(18 * q + 6 * j + 3 * side + i)]),
+            blk ? blk[3 * i + j] : 0.0)
+            << q << side << i << j;
+  };
+  expect_block(0, 0, k.block(0));
+  expect_block(0, 1, k.block(2));
+  expect_block(1, 0, k.block(3));
+  expect_block(1, 1, k.block(4));
+  expect_block(2, 0, k.block(5));
+  expect_block(2, 1, nullptr);
+  // A row of two blocks beside a row of one: the shorter is padded.
+  const std::vector<int32_t> row_ptr2{0, 2, 3}, cols2{0, 1, 1};
+  runtime::SystemMatrix m(runtime::MatrixPattern::from_csr(2, 2, row_ptr2, cols2), 2, 2);
+  for (size_t i = 0; i < m.value_count(); ++i) m.values()[i] = static_cast<double>(i + 1);
+  PrunedMatrix q;
+  ASSERT_TRUE(q.assign(m, true, {}, true));
+  EXPECT_EQ(q.row_ptr, (std::vector<int32_t>{0, 2}));
+  EXPECT_EQ(q.cols, (std::vector<int32_t>{0, 1, 1, 1}));  // row 1's padding at its column 1
+  ASSERT_EQ(q.values32.size(), 2u * 8);
+  // Block pair 1: row 0's block (0, 1) by columns, then zeros for row 1.
+  EXPECT_EQ(std::vector<float>(q.values32.begin() + 8, q.values32.end()),
+            (std::vector<float>{5, 7, 0, 0, 6, 8, 0, 0}));
+  // Not in pairs: binary64, or blocks of one row.
+  PrunedMatrix wide;
+  ASSERT_TRUE(wide.assign(k, false, {}, true));
+  EXPECT_FALSE(wide.pairs);
+}
+
+TEST(PrunedMatrix, InPairsTasksInAnyOrderOrOnThreadsMakeTheSerialCopy) {
+  const runtime::SystemMatrix k = tridiagonal(20001, true);
+  ThreadPool pool(3);
+  const auto on_pool = [&pool](int64_t tasks, const std::function<void(int64_t)>& task) {
+    pool.run(tasks, task);
+  };
+  PrunedMatrix serial, backward, threaded, single;
+  EXPECT_TRUE(serial.assign(k, true, {}, true));
+  EXPECT_TRUE(backward.assign(k, true, backwards, true));
+  EXPECT_TRUE(threaded.assign(k, true, on_pool, true));
+  EXPECT_TRUE(single.assign(k, true));
+  EXPECT_EQ(serial.kept, single.kept);
+  for (const PrunedMatrix* other : {&backward, &threaded}) {
+    EXPECT_EQ(serial.row_ptr, other->row_ptr);
+    EXPECT_EQ(serial.cols, other->cols);
+    EXPECT_EQ(serial.values32, other->values32);
+  }
+  // Each row's blocks are the single-row copy's, in order, then padding.
+  for (size_t r = 0; r < 20001; ++r) {
+    const size_t q = r / 2, side = r % 2;
+    int32_t at = serial.row_ptr[q];
+    for (int32_t b = single.row_ptr[r]; b < single.row_ptr[r + 1]; ++b, ++at) {
+      ASSERT_LT(at, serial.row_ptr[q + 1]);
+      EXPECT_EQ(serial.cols[2 * static_cast<size_t>(at) + side],
+                single.cols[static_cast<size_t>(b)]);
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          ASSERT_EQ(serial.values32[static_cast<size_t>(at) * 18 + static_cast<size_t>(6 * j) +
+                                    3 * side + static_cast<size_t>(i)],
+                    single.values32[static_cast<size_t>(b) * 9 + static_cast<size_t>(3 * j + i)]);
+    }
+  }
+}
+
 // On a pool of threads (ThreadSanitizer runs this: scripts/sanitize.sh --thread).
 TEST(PrunedMatrix, OnThreadsTheCopyIsTheSerialOne) {
   const runtime::SystemMatrix k = tridiagonal(20000, true);

@@ -243,6 +243,7 @@ void SystemEmitter::spmv_row(const VectorOp& op, Value* r, Value* lane) {
 // arrays[y] = matrix * arrays[x], row block by row block; then the op's body for each
 // component of the row just computed.
 void SystemEmitter::spmv(const VectorOp& op, const std::vector<Value*>& sizes) {
+  if (products_in_pairs(op)) return spmv_pairs(op, sizes);
   if (op.sums.empty()) {
     const auto [lo, hi] = unit_range(sizes[op.rows], static_cast<int64_t>(runtime::kSumChunk));
     return loop(lo, hi, [&](Value* r) { spmv_row(op, r, nullptr); });

@@ -207,6 +207,10 @@ class SystemEmitter : public Emitter {
   void vector_op(const VectorOp& op, const std::vector<Value*>& sizes);
   void spmv(const VectorOp& op, const std::vector<Value*>& sizes);
   void spmv_row(const VectorOp& op, Value* r, Value* lane);
+  // Products over a copy in pairs of rows (emit_spmv_pairs.cpp; PrunedMatrix::pairs).
+  bool products_in_pairs(const VectorOp& op) const;
+  void spmv_pairs(const VectorOp& op, const std::vector<Value*>& sizes);
+  void spmv_pair(const VectorOp& op, Value* r, Value* rows, Value* lane);
   llvm::Function* device_step(const DeviceStep& s, const std::string& name);
   void device_units(const DeviceStep& s, Value* first, Value* end,
                     const std::vector<Value*>& sizes);
