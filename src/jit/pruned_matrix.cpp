@@ -54,19 +54,23 @@ void fit(std::vector<T>& v, size_t n) {
 // thread, and its solve on 2 threads took 3.5% longer (median of 6 interleaved runs).
 constexpr size_t kRowsPerTask = 512;
 
+// Runs tasks 0 .. tasks-1, on the executor's threads when there are several.
+void run_tasks(size_t tasks, const runtime::ForEachTask& for_each,
+               const std::function<void(int64_t)>& task) {
+  if (for_each && tasks > 1) {
+    for_each(static_cast<int64_t>(tasks), task);
+  } else {
+    for (size_t t = 0; t < tasks; ++t) task(static_cast<int64_t>(t));
+  }
+}
+
 template <int N, class T>
 bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int32_t* ci,
            const double* v, size_t rows, int n, const runtime::ForEachTask& for_each) {
   const int m = N ? N : n;
   const int bs = m * m;
   const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
-  auto run = [&](const std::function<void(int64_t)>& task) {
-    if (for_each && tasks > 1) {
-      for_each(static_cast<int64_t>(tasks), task);
-    } else {
-      for (size_t t = 0; t < tasks; ++t) task(static_cast<int64_t>(t));
-    }
-  };
+  auto run = [&](const std::function<void(int64_t)>& task) { run_tasks(tasks, for_each, task); };
   std::vector<int32_t> first(tasks + 1, 0);  // each task's first kept block
   run([&](int64_t t) {
     int32_t kept = 0;
@@ -82,6 +86,7 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
                   (std::bit_ceil(static_cast<unsigned>(m)) - static_cast<unsigned>(m)));
   int32_t* cols = p.cols.data();
   T* out = values.data();
+  p.slot.resize(static_cast<size_t>(rp[rows]));
   std::vector<uint8_t> exact(tasks, 1);
   p.row_ptr[0] = 0;
   run([&](int64_t t) {
@@ -91,7 +96,9 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
     for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; ++r) {
       for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
         const double* blk = v + static_cast<size_t>(k) * bs;
+        p.slot[static_cast<size_t>(k)] = -1;
         if (zero_block<N>(blk, bs)) continue;
+        p.slot[static_cast<size_t>(k)] = at;
         T* o = out + static_cast<size_t>(at) * bs;
         for (int j = 0; j < m; ++j)
           for (int i = 0; i < m; ++i) {
@@ -120,13 +127,7 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
   static_assert(kRowsPerTask % 2 == 0);
   const size_t pairs = (rows + 1) / 2;
   const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
-  auto run = [&](const std::function<void(int64_t)>& task) {
-    if (for_each && tasks > 1) {
-      for_each(static_cast<int64_t>(tasks), task);
-    } else {
-      for (size_t t = 0; t < tasks; ++t) task(static_cast<int64_t>(t));
-    }
-  };
+  auto run = [&](const std::function<void(int64_t)>& task) { run_tasks(tasks, for_each, task); };
   auto kept_in = [&](size_t r) {
     int32_t n = 0;
     if (r < rows)
@@ -158,6 +159,7 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
             0.0f);
   p.row_ptr.resize(pairs + 1);
   p.row_ptr[0] = 0;
+  p.slot.resize(static_cast<size_t>(rp[rows]));
   std::vector<uint8_t> exact(tasks, 1);
   run([&](int64_t t) {
     int32_t at = first[static_cast<size_t>(t)];
@@ -174,7 +176,9 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
         int32_t s = at;
         for (int32_t k = rp[row]; k < rp[row + 1]; ++k) {
           const double* blk = v + static_cast<size_t>(k) * bs;
+          p.slot[static_cast<size_t>(k)] = -1;
           if (zero_block<N>(blk, bs)) continue;
+          p.slot[static_cast<size_t>(k)] = 2 * s + side;
           float* o = values + static_cast<size_t>(s) * 2 * bs + side * N;
           for (int j = 0; j < N; ++j)
             for (int i = 0; i < N; ++i) {
@@ -221,6 +225,56 @@ bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* 
   return prune<N>(p, p.values, rp, ci, v, rows, n, for_each);
 }
 
+// The values of `v` into the layout the last build made (PrunedMatrix::slot), in one pass: a
+// block the build kept is copied to its slot (zero or not: a zero block adds +-0, as a padding
+// block does), and a block it dropped must still be zero. False in `still` when one is not
+// (the layout must be rebuilt); the result says whether every value is a binary32 value, as
+// for a build.
+template <int N, class T, bool Pairs>
+bool refresh(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const double* v,
+             size_t rows, int n, const runtime::ForEachTask& for_each, bool& still) {
+  const int m = N ? N : n;
+  const int bs = m * m;
+  const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
+  std::vector<uint8_t> exact(tasks, 1), kept(tasks, 1);
+  T* out = values.data();
+  const int32_t* slot = p.slot.data();
+  run_tasks(tasks, for_each, [&](int64_t t) {
+    bool all = true, same = true;
+    const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
+    for (int32_t k = rp[static_cast<size_t>(t) * kRowsPerTask]; k < rp[end]; ++k) {
+      const double* blk = v + static_cast<size_t>(k) * bs;
+      const int32_t s = slot[k];
+      if (s < 0) {
+        same = same && zero_block<N>(blk, bs);
+        continue;
+      }
+      // Pairs: slot 2 q + side, the block's column j at 2 bs q + 2 m j + m side.
+      T* o = Pairs ? out + static_cast<size_t>(s / 2) * 2 * bs + (s % 2) * m
+                   : out + static_cast<size_t>(s) * bs;
+      const int stride = Pairs ? 2 * m : m;
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) {
+          const double x = blk[i * m + j];
+          o[j * stride + i] = static_cast<T>(x);
+          if constexpr (std::is_same_v<T, float>) all = all & runtime::is_binary32(x);
+        }
+    }
+    exact[static_cast<size_t>(t)] = all;
+    kept[static_cast<size_t>(t)] = same;
+  });
+  still = std::all_of(kept.begin(), kept.end(), [](uint8_t e) { return e != 0; });
+  return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
+}
+
+template <int N>
+bool refresh_into(PrunedMatrix& p, const int32_t* rp, const double* v, size_t rows, int n,
+                  const runtime::ForEachTask& for_each, bool& still) {
+  if (p.pairs) return refresh<N, float, true>(p, p.values32, rp, v, rows, n, for_each, still);
+  if (p.single) return refresh<N, float, false>(p, p.values32, rp, v, rows, n, for_each, still);
+  return refresh<N, double, false>(p, p.values, rp, v, rows, n, for_each, still);
+}
+
 }  // namespace
 
 bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single,
@@ -230,7 +284,32 @@ bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single,
   const size_t rows = rp.size() - 1;
   total = m.pattern().nnz();
   const int n = m.block_rows();
-  pairs = single && in_pairs && n >= 2 && n <= 4 && m.block_cols() == n;
+  const bool want_pairs = single && in_pairs && n >= 2 && n <= 4 && m.block_cols() == n;
+  // The same pattern, block and layout as the last build: one pass over the values.
+  if (built_for == m.shared_pattern() && built_block == n && this->single == single &&
+      pairs == want_pairs && !slot.empty()) {
+    bool still = true, exact = true;
+    switch (n) {
+      case 1:
+        exact = refresh_into<1>(*this, rp.data(), m.values(), rows, n, for_each, still);
+        break;
+      case 2:
+        exact = refresh_into<2>(*this, rp.data(), m.values(), rows, n, for_each, still);
+        break;
+      case 3:
+        exact = refresh_into<3>(*this, rp.data(), m.values(), rows, n, for_each, still);
+        break;
+      default: exact = refresh_into<0>(*this, rp.data(), m.values(), rows, n, for_each, still);
+    }
+    if (still) {
+      ++refreshed;
+      return exact;
+    }
+  }
+  built_for = m.shared_pattern();
+  built_block = n;
+  this->single = single;
+  pairs = want_pairs;
   if (pairs) {
     std::vector<double>().swap(values);
     switch (n) {

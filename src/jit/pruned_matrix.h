@@ -42,6 +42,15 @@ struct PrunedMatrix {
   // after an odd last row): a term 0 * x = +-0 changes no sum that starts at +0.0 while x is
   // finite, as for a dropped block.
   bool pairs = false;
+  bool single = false;  // values32 holds the values (else values)
+  // Where each block of the matrix went: its slot in the copy (in pairs 2 q + side, q the
+  // block pair), or -1 when it was dropped. A later assign on the same pattern with the same
+  // layout copies each value to its slot in one pass, and builds again only when a dropped
+  // block is no longer zero (a kept block that is zero now adds +-0, as padding does).
+  std::vector<int32_t> slot;
+  runtime::PatternPtr built_for;
+  int built_block = 0;
+  int64_t refreshed = 0;  // assigns that reused the layout (for tests)
 
   // Rebuilds the arrays from `m` (float components), reusing their storage while it fits:
   // into values32 when `single`, else into values; in pairs of rows when `pairs` (and

@@ -25,7 +25,8 @@ using interp::Value;
 std::string program(int n) {
   std::string eye = "[";
   for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) eye += std::string(i == j ? "1.0" : "0.0") + (j + 1 < n ? ", " : "");
+    for (int j = 0; j < n; ++j)
+      eye += std::string(i == j ? "1.0" : "0.0") + (j + 1 < n ? ", " : "");
     eye += i + 1 < n ? "; " : "]";
   }
   std::string text = R"(
@@ -73,7 +74,8 @@ export func solve() -> (x : vector[points](vector[N](float)), iterations : int)
 end
 )";
   for (size_t at; (at = text.find('I')) != std::string::npos;) text.replace(at, 1, eye);
-  for (size_t at; (at = text.find("N")) != std::string::npos;) text.replace(at, 1, std::to_string(n));
+  for (size_t at; (at = text.find("N")) != std::string::npos;)
+    text.replace(at, 1, std::to_string(n));
   return text;
 }
 

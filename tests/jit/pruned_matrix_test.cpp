@@ -195,6 +195,54 @@ TEST(PrunedMatrix, InPairsTasksInAnyOrderOrOnThreadsMakeTheSerialCopy) {
   }
 }
 
+// A later copy of the same pattern reuses the layout: new values go to their slots in one
+// pass; a kept block that became zero stays (its zeros add +-0), and a dropped block that is
+// no longer zero makes the copy build again, the copy a first build makes.
+TEST(PrunedMatrix, ALaterCopyOfThePatternReusesTheLayoutWhileTheDroppedBlocksStayZero) {
+  for (const bool in_pairs : {false, true}) {
+    runtime::SystemMatrix k = tridiagonal(3001, true);  // every seventh block zero
+    PrunedMatrix p;
+    ASSERT_TRUE(p.assign(k, true, backwards, in_pairs));
+    EXPECT_EQ(p.pairs, in_pairs);
+    EXPECT_EQ(p.refreshed, 0);
+    // New values, the same zero blocks: the copy a first build makes of them.
+    for (size_t i = 0; i < k.value_count(); ++i)
+      if (k.values()[i] != 0.0) k.values()[i] = static_cast<float>(k.values()[i] * 1.5 + 0.25);
+    ASSERT_TRUE(p.assign(k, true, backwards, in_pairs));
+    EXPECT_EQ(p.refreshed, 1);
+    PrunedMatrix fresh;
+    ASSERT_TRUE(fresh.assign(k, true, {}, in_pairs));
+    EXPECT_EQ(p.row_ptr, fresh.row_ptr);
+    EXPECT_EQ(p.cols, fresh.cols);
+    EXPECT_EQ(p.values32, fresh.values32);
+    // Block 1 (kept) zero now: still there, as zeros; the layout stays.
+    for (int i = 0; i < 9; ++i) k.block(1)[i] = 0.0;
+    ASSERT_TRUE(p.assign(k, true, {}, in_pairs));
+    EXPECT_EQ(p.refreshed, 2);
+    EXPECT_EQ(p.cols, fresh.cols);
+    EXPECT_EQ(p.kept, fresh.kept);
+    // Block 3 (dropped) holds a value now: built again, as a first build.
+    k.block(3)[4] = 0.5;
+    ASSERT_TRUE(p.assign(k, true, {}, in_pairs));
+    EXPECT_EQ(p.refreshed, 2);
+    PrunedMatrix again;
+    ASSERT_TRUE(again.assign(k, true, {}, in_pairs));
+    EXPECT_EQ(p.kept, again.kept);
+    EXPECT_EQ(p.row_ptr, again.row_ptr);
+    EXPECT_EQ(p.cols, again.cols);
+    EXPECT_EQ(p.values32, again.values32);
+    // A binary64 copy of the same pattern is another layout: built, not refreshed.
+    ASSERT_TRUE(p.assign(k, false, {}, false));
+    EXPECT_EQ(p.refreshed, 2);
+    EXPECT_FALSE(p.pairs);
+    // A value that is not a binary32 value is still found by a refresh.
+    ASSERT_TRUE(p.assign(k, true, {}, in_pairs));
+    k.block(0)[0] = 0.1;
+    EXPECT_FALSE(p.assign(k, true, {}, in_pairs));
+    EXPECT_EQ(p.refreshed, 3);
+  }
+}
+
 // On a pool of threads (ThreadSanitizer runs this: scripts/sanitize.sh --thread).
 TEST(PrunedMatrix, OnThreadsTheCopyIsTheSerialOne) {
   const runtime::SystemMatrix k = tridiagonal(20000, true);

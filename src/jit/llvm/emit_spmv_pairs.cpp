@@ -63,9 +63,8 @@ void SystemEmitter::spmv_pair(const VectorOp& op, Value* r, Value* rows, Value* 
       Value* mask = llvm::ConstantVector::get(bits);
       Value* part_x[2];
       for (int side = 0; side < 2; ++side)
-        part_x[side] = b_.CreateMaskedLoad(
-            half, b_.CreateInBoundsGEP(f32, arrays_[op.x], xc[side]), llvm::Align(4), mask,
-            llvm::ConstantFP::get(half, 0.0));
+        part_x[side] = b_.CreateMaskedLoad(half, b_.CreateInBoundsGEP(f32, arrays_[op.x], xc[side]),
+                                           llvm::Align(4), mask, llvm::ConstantFP::get(half, 0.0));
       std::vector<int> both;
       for (int i = 0; i < 2 * w; ++i) both.push_back(i);
       xs = b_.CreateShuffleVector(part_x[0], part_x[1], both);
@@ -74,7 +73,8 @@ void SystemEmitter::spmv_pair(const VectorOp& op, Value* r, Value* rows, Value* 
     Value* part = nullptr;
     for (int j = 0; j < n; ++j) {
       llvm::LoadInst* column = b_.CreateLoad(
-          vec, b_.CreateInBoundsGEP(f32, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(2 * n * j))));
+          vec,
+          b_.CreateInBoundsGEP(f32, arrays_[op.values], b_.CreateAdd(blk, b_.getInt64(2 * n * j))));
       column->setAlignment(llvm::Align(4));
       Value* a = n == w ? static_cast<Value*>(column) : b_.CreateShuffleVector(column, spread);
       Value* term;
