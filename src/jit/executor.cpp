@@ -106,8 +106,9 @@ class ThreadedExecutor : public Executor {
   int32_t chunk_for(int32_t n) const override {
     const int64_t per = (static_cast<int64_t>(n) + pool_.threads() - 1) / pool_.threads();
     const int64_t c = std::clamp<int64_t>(per, min_chunk_, kChunkElements);
-    return min_chunk_ < kMinThreadChunk ? static_cast<int32_t>(c)
-                                        : static_cast<int32_t>((c + kLanes - 1) / kLanes * kLanes);
+    return min_chunk_ < kMinThreadChunk
+               ? static_cast<int32_t>(c)
+               : static_cast<int32_t>((c + kLanes32 - 1) / kLanes32 * kLanes32);
   }
   int32_t run_system(const Kernel& kernel, const SystemArgs& args) override {
     SystemArgs on_pool = args;

@@ -37,7 +37,7 @@ inline constexpr size_t kTileAbove = 144;
 inline constexpr int kMaxInlineDepth = 256;
 // Elements a kernel runs between two checks for an interrupt (Ctrl-C).
 inline constexpr int kChunkElements = 16384;
-// The smallest chunk of a map on threads (a multiple of kLanes): a chunk's call must cost far
+// The smallest chunk of a map on threads (a multiple of kLanes32): a chunk's call must cost far
 // more than handing it to a thread.
 inline constexpr int kMinThreadChunk = 256;
 // The test-only shuffled executor's chunks (jit/executor.h): a few elements, so that the
@@ -63,6 +63,10 @@ inline constexpr double kSpecialiseAtMost = 0.9;
 // Elements a map kernel computes at once, one per SIMD lane (4 binary64 lanes: AVX2); their
 // writes, branches and checks still run element by element (1 turns lanes off).
 inline constexpr int kLanes = 4;
+// Under --float32 a map kernel computes 8 elements at once: its binary32 operations then fill
+// an AVX2 register (8 binary32 lanes) where 4 elements used half of one; its binary64 ones
+// (det, inv, log: docs/arithmetic.md) take two registers per operation, as two groups of 4.
+inline constexpr int kLanes32 = 8;
 // Products by zeros known while tracing fold away (jit/zero_fold.h).
 inline constexpr bool kFoldZeros = true;
 

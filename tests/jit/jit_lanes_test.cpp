@@ -174,28 +174,41 @@ struct LaneRun {
   std::string stats, error;
 };
 
-LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1) {
+LaneRun run_lanes(ExecutorKind kind, const char* function, int zero_at = -1, bool float32 = false) {
   auto compiled = CompiledProgram::from_source("lanes.sim", kLanes);
   EXPECT_TRUE(compiled->ok());
   runtime::Set ps("ps"), ss("ss", {&ps, &ps});
   const int n = 12;
   ps.add_many(n);
-  ps.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, false});
+  // Under --float32 the fields are binary32 (as a scene binds them), their values rounded.
+  ps.add_field("x", runtime::FieldType{runtime::ComponentKind::Float, {3}, float32});
   ps.add_field("fixed", runtime::FieldType{runtime::ComponentKind::Bool, {}, false});
   for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) ps.field(0).at<double>(i)[k] = 0.3 + 0.71 * i - 0.13 * k * i;
+    for (int k = 0; k < 3; ++k) {
+      const double x = 0.3 + 0.71 * i - 0.13 * k * i;
+      if (float32)
+        ps.field(0).at<float>(i)[k] = static_cast<float>(x);
+      else
+        ps.field(0).at<double>(i)[k] = x;
+    }
     ps.field(1).at<bool>(i)[0] = i % 5 == 2;  // lanes of one group take different branches
   }
   std::vector<int32_t> ends;
   for (int i = 0; i + 1 < n; ++i) ends.insert(ends.end(), {i, (5 * i + 3) % n});
   ss.add_edges(ends);
-  ss.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, false});
-  for (int i = 0; i + 1 < n; ++i)
-    ss.field(0).at<double>(i)[0] = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
+  ss.add_field("k", runtime::FieldType{runtime::ComponentKind::Float, {}, float32});
+  for (int i = 0; i + 1 < n; ++i) {
+    const double k = i == zero_at ? 0.0 : 1.0 + 0.37 * i;
+    if (float32)
+      ss.field(0).at<float>(i)[0] = static_cast<float>(k);
+    else
+      ss.field(0).at<double>(i)[0] = k;
+  }
   EngineOptions o;
   o.executor.kind = kind;
   o.executor.threshold = 0;
   o.check_finite = zero_at >= 0;
+  o.float32 = float32;
   Engine engine(compiled, o);
   engine.bind_set(*compiled->find_extern("ps"), ps);
   engine.bind_set(*compiled->find_extern("ss"), ss);
@@ -224,6 +237,22 @@ TEST(Jit, MapKernelsComputeFourElementsAtOnceWithTheInterpretersBits) {
   EXPECT_NE(jit.stats.find("pull (line 33)"), std::string::npos) << jit.stats;
   EXPECT_NE(jit.stats.find("4 elements at once"), std::string::npos) << jit.stats;
   EXPECT_EQ(jit.stats.find("interpreted"), std::string::npos) << jit.stats;
+}
+
+// Under --float32 eight elements at once (kLanes32): one full group and one of three; `ratios`
+// calls log, four lanes at a time, twice per group.
+TEST(Jit, UnderFloat32MapKernelsComputeEightElementsAtOnceWithTheInterpretersBits) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  for (const char* function : {"both", "ratios"}) {
+    const LaneRun in = run_lanes(ExecutorKind::Interpreter, function, -1, true);
+    const LaneRun jit = run_lanes(ExecutorKind::Jit, function, -1, true);
+    ASSERT_EQ(in.results.size(), jit.results.size()) << function;
+    for (size_t r = 0; r < in.results.size(); ++r)
+      expect_same(in.results[r], jit.results[r], function);
+    EXPECT_NE(in.results[0].tensor().floats()[1], 0.0) << function;
+    EXPECT_NE(jit.stats.find("8 elements at once"), std::string::npos) << jit.stats;
+    EXPECT_EQ(jit.stats.find("interpreted"), std::string::npos) << jit.stats;
+  }
 }
 
 // A check that fails in one lane only (spring 6: lane 2 of the second group) stops the call

@@ -30,7 +30,8 @@ codegen::MapEntry CpuHooks::map_kernel(llvm::Module& m, const std::string& name)
 // for (e = begin; e < end; e += step) the element(s) at e; then return 0.
 void CpuHooks::elements(codegen::MapEmitter& k, const codegen::MapEntry& entry) {
   const bool in_lanes = lanes_fit(k.trace());
-  const codegen::LoopShape shape{"element", "body", "done", "e", in_lanes ? kLanes : 1};
+  const codegen::LoopShape shape{"element", "body", "done", "e",
+                                 in_lanes ? lanes_of(k.trace()) : 1};
   k.loop(
       entry.begin, entry.end,
       [&](llvm::Value* e) {
@@ -55,15 +56,25 @@ llvm::FunctionCallee CpuHooks::runtime_call(llvm::IRBuilder<>& b, const char* na
   return b.GetInsertBlock()->getModule()->getOrInsertFunction(name, type);
 }
 
-// atan2 and log of four lanes by one call of the runtime's simit_math_atan2_x4 and
-// simit_math_log_x4 (their lanes have the bits of simit_math_atan2 and simit_math_log),
-// through arrays on the kernel's stack: four elements at once take about a third of four
-// calls' time (docs/math.md), and they are the bend force's and the Neo-Hookean force's.
+// atan2 and log of four lanes (eight: two calls) by one call of the runtime's simit_math_atan2_x4
+// and simit_math_log_x4 (their lanes have the bits of simit_math_atan2 and simit_math_log), through
+// arrays on the kernel's stack: four elements at once take about a third of four calls' time
+// (docs/math.md), and they are the bend force's and the Neo-Hookean force's.
 llvm::Value* CpuHooks::math_lanes(llvm::IRBuilder<>& b, MathFn f,
                                   const std::vector<llvm::Value*>& args) {
   auto* lanes = llvm::dyn_cast<llvm::FixedVectorType>(args[0]->getType());
-  if ((f != MathFn::Atan2 && f != MathFn::Log) || !lanes || lanes->getNumElements() != 4)
-    return nullptr;
+  if ((f != MathFn::Atan2 && f != MathFn::Log) || !lanes) return nullptr;
+  if (lanes->getNumElements() == 8) {  // kLanes32: two calls of four lanes, joined
+    std::vector<llvm::Value*> low, high;
+    for (llvm::Value* a : args) {
+      low.push_back(b.CreateShuffleVector(a, {0, 1, 2, 3}));
+      high.push_back(b.CreateShuffleVector(a, {4, 5, 6, 7}));
+    }
+    llvm::Value* l = math_lanes(b, f, low);
+    llvm::Value* h = math_lanes(b, f, high);
+    return b.CreateShuffleVector(l, h, {0, 1, 2, 3, 4, 5, 6, 7});
+  }
+  if (lanes->getNumElements() != 4) return nullptr;
   llvm::Function* fn = b.GetInsertBlock()->getParent();
   llvm::IRBuilder<> entry(&fn->getEntryBlock(), fn->getEntryBlock().begin());
   std::vector<llvm::Value*> at;  // the arguments' arrays, then the result's

@@ -14,7 +14,10 @@ namespace simit::jit::cpu {
 // Whether a map kernel computes kLanes elements at once (jit/cpu/emit_lanes.cpp); when not,
 // *why_not (where given) says why in short words ("a local assigned in a branch").
 bool lanes_fit(const Trace& t, std::string* why_not = nullptr);
-// Elements first .. first + kLanes - 1 of a kernel that lanes_fit, not past `end` (i32s).
+// How many elements at once a kernel that lanes_fit computes: kLanes32 under --float32, else
+// kLanes.
+int lanes_of(const Trace& t);
+// Elements first .. first + lanes_of - 1 of a kernel that lanes_fit, not past `end` (i32s).
 void run_lanes(codegen::MapEmitter& k, llvm::Value* first, llvm::Value* end);
 
 // A map kernel is int32_t fn(void* const* arrays, const double* scalars, const int32_t*

@@ -1,4 +1,4 @@
-// Map kernels in SIMD lanes: every value for kLanes elements at once, then each element's
+// Map kernels in SIMD lanes: every value for lanes_of elements at once, then each element's
 // statements in order, reading those values back (jit/cpu/cpu_hooks.h, docs/jit.md "Four
 // elements at once").
 #include <functional>
@@ -14,7 +14,7 @@ namespace simit::jit::cpu {
 using llvm::IRBuilder;
 using llvm::Value;
 
-// Whether a map kernel can compute kLanes elements at once: every value is then an SSA local
+// Whether a map kernel can compute several elements at once: every value is then an SSA local
 // or an expression of them, evaluated for all lanes with the same IEEE operations lane by
 // lane (library calls once per lane), and everything that acts (the assembly writes, the
 // branches, the checks) runs afterwards element by element in order, so the results, the
@@ -50,6 +50,11 @@ bool lanes_fit(const Trace& t, std::string* why_not) {
   return true;
 }
 
+int lanes_of(const Trace& t) {
+  if (kLanes <= 1) return 1;
+  return t.float32 ? kLanes32 : kLanes;
+}
+
 namespace {
 
 // Values the element-by-element statements compute themselves rather than read back.
@@ -68,7 +73,8 @@ llvm::Type* root_type(IRBuilder<>& b, Ty t) {
 // emitted one element at a time, hands them the values computed for all lanes.
 class Lanes : public codegen::Precomputed {
  public:
-  explicit Lanes(codegen::MapEmitter& k) : k_(k), b_(k.builder()), t_(k.trace()) {}
+  explicit Lanes(codegen::MapEmitter& k)
+      : k_(k), b_(k.builder()), t_(k.trace()), n_(lanes_of(k.trace())) {}
   void run(Value* first, Value* end);
 
   Value* value(const Expr& e) override {
@@ -95,6 +101,7 @@ class Lanes : public codegen::Precomputed {
   codegen::MapEmitter& k_;
   IRBuilder<>& b_;
   const Trace& t_;
+  const int n_;  // elements at once (lanes_of)
   // Each expression's value for every lane (memoised by node: traces share nodes), the
   // locals', and each lane's element and endpoints.
   std::unordered_map<const Expr*, Value*> vmemo_;
@@ -143,13 +150,13 @@ void Lanes::allocate_roots() {
     if (root_rows_[t] == 0) continue;
     const int rows = ty == Ty::F64 ? static_cast<int>(root_stride_) : root_rows_[t];
     llvm::AllocaInst* a =
-        at_entry.CreateAlloca(root_type(b_, ty), b_.getInt32(static_cast<uint32_t>(rows * kLanes)));
+        at_entry.CreateAlloca(root_type(b_, ty), b_.getInt32(static_cast<uint32_t>(rows * n_)));
     a->setAlignment(llvm::Align(32));
     root_buffer_[t] = a;
   }
 }
 
-// Elements first .. first + kLanes - 1 (those past `end` compute element end - 1 again, and
+// Elements first .. first + n_ - 1 (those past `end` compute element end - 1 again, and
 // their statements do not run): every value for all lanes, then the statements lane by lane.
 void Lanes::run(Value* first, Value* end) {
   allocate_roots();
@@ -157,7 +164,7 @@ void Lanes::run(Value* first, Value* end) {
   Value* last = b_.CreateSub(end, b_.getInt32(1));
   element_lane_.clear();
   endpoint_lane_.assign(static_cast<size_t>(t_.arity), {});
-  for (int l = 0; l < kLanes; ++l) {
+  for (int l = 0; l < n_; ++l) {
     Value* e = b_.CreateAdd(first, b_.getInt32(static_cast<uint32_t>(l)));
     if (l > 0) e = b_.CreateSelect(b_.CreateICmpSLT(e, end), e, last);
     k_.visit(e);
@@ -171,8 +178,7 @@ void Lanes::run(Value* first, Value* end) {
   lanes_block(t_.body);
   if (!pending_.empty()) flush_pending(root_rows_[0] - static_cast<int>(pending_.size()));
   Value* left = b_.CreateSub(end, first);
-  Value* count =
-      b_.CreateSelect(b_.CreateICmpSLT(left, b_.getInt32(kLanes)), left, b_.getInt32(kLanes));
+  Value* count = b_.CreateSelect(b_.CreateICmpSLT(left, b_.getInt32(n_)), left, b_.getInt32(n_));
   k_.loop(llvm::ConstantInt::get(i32, 0), count, [&](Value* l) {
     lane_ = b_.CreateSExt(l, b_.getInt64Ty());
     k_.set_precomputed(this);
@@ -227,7 +233,7 @@ void Lanes::lanes_block(const std::vector<Stmt>& body) {
 }
 
 // A root's value for every lane goes to the buffer. Integers and truth values lie row by
-// row (row * kLanes + lane); floats lie lane by lane (lane * stride + row), so that one
+// row (row * n_ + lane); floats lie lane by lane (lane * stride + row), so that one
 // element's block is contiguous and its additions take four components at a time: each four
 // rows are transposed in registers before they are stored.
 void Lanes::spill(const Expr& e) {
@@ -236,18 +242,19 @@ void Lanes::spill(const Expr& e) {
   const int t = ty_index(e.ty);
   if (e.ty == Ty::F64) {
     pending_.push_back(v);
-    if (kLanes == 4 && pending_.size() == 4) flush_pending(roots_.at(&e) - 3);
+    if (n_ % 4 == 0 && pending_.size() == 4) flush_pending(roots_.at(&e) - 3);
     return;
   }
-  if (e.ty == Ty::Bool) v = b_.CreateZExt(v, llvm::FixedVectorType::get(b_.getInt8Ty(), kLanes));
+  if (e.ty == Ty::Bool)
+    v = b_.CreateZExt(v, llvm::FixedVectorType::get(b_.getInt8Ty(), static_cast<unsigned>(n_)));
   llvm::Type* elem = root_type(b_, e.ty);
   Value* at = b_.CreateConstInBoundsGEP1_64(elem, root_buffer_[t],
-                                            static_cast<uint64_t>(roots_.at(&e)) * kLanes);
+                                            static_cast<uint64_t>(roots_.at(&e)) * n_);
   b_.CreateAlignedStore(v, at, llvm::Align(8));
 }
 
 // Stores the pending float rows first, first + 1, ...: four of them transposed (one vector
-// per lane), fewer component by component.
+// per lane; with 8 lanes each half of the rows in turn), fewer component by component.
 void Lanes::flush_pending(int first) {
   llvm::Type* f64 = b_.getDoubleTy();
   auto at = [&](int lane, int row) {
@@ -255,19 +262,26 @@ void Lanes::flush_pending(int first) {
         f64, root_buffer_[0],
         static_cast<uint64_t>(lane) * root_stride_ + static_cast<uint64_t>(row));
   };
-  if (pending_.size() == 4 && kLanes == 4) {
-    Value *v0 = pending_[0], *v1 = pending_[1], *v2 = pending_[2], *v3 = pending_[3];
-    Value* a = b_.CreateShuffleVector(v0, v1, {0, 4, 2, 6});
-    Value* b = b_.CreateShuffleVector(v0, v1, {1, 5, 3, 7});
-    Value* c = b_.CreateShuffleVector(v2, v3, {0, 4, 2, 6});
-    Value* d = b_.CreateShuffleVector(v2, v3, {1, 5, 3, 7});
-    Value* lane[4] = {
-        b_.CreateShuffleVector(a, c, {0, 1, 4, 5}), b_.CreateShuffleVector(b, d, {0, 1, 4, 5}),
-        b_.CreateShuffleVector(a, c, {2, 3, 6, 7}), b_.CreateShuffleVector(b, d, {2, 3, 6, 7})};
-    for (int l = 0; l < 4; ++l) b_.CreateAlignedStore(lane[l], at(l, first), llvm::Align(8));
+  if (pending_.size() == 4 && n_ % 4 == 0) {
+    for (int base = 0; base < n_; base += 4) {
+      Value* v[4];
+      for (int r = 0; r < 4; ++r)
+        v[r] = n_ == 4 ? pending_[static_cast<size_t>(r)]
+                       : b_.CreateShuffleVector(pending_[static_cast<size_t>(r)],
+                                                {base, base + 1, base + 2, base + 3});
+      Value* a = b_.CreateShuffleVector(v[0], v[1], {0, 4, 2, 6});
+      Value* b = b_.CreateShuffleVector(v[0], v[1], {1, 5, 3, 7});
+      Value* c = b_.CreateShuffleVector(v[2], v[3], {0, 4, 2, 6});
+      Value* d = b_.CreateShuffleVector(v[2], v[3], {1, 5, 3, 7});
+      Value* lane[4] = {
+          b_.CreateShuffleVector(a, c, {0, 1, 4, 5}), b_.CreateShuffleVector(b, d, {0, 1, 4, 5}),
+          b_.CreateShuffleVector(a, c, {2, 3, 6, 7}), b_.CreateShuffleVector(b, d, {2, 3, 6, 7})};
+      for (int l = 0; l < 4; ++l)
+        b_.CreateAlignedStore(lane[l], at(base + l, first), llvm::Align(8));
+    }
   } else {
     for (size_t r = 0; r < pending_.size(); ++r)
-      for (int l = 0; l < kLanes; ++l)
+      for (int l = 0; l < n_; ++l)
         b_.CreateStore(b_.CreateExtractElement(pending_[r], static_cast<uint64_t>(l)),
                        at(l, first + static_cast<int>(r)));
   }
@@ -285,7 +299,7 @@ Value* Lanes::load_root(Ty t, int row) {
   llvm::Type* elem = root_type(b_, t);
   Value* at =
       b_.CreateInBoundsGEP(elem, root_buffer_[ty_index(t)],
-                           b_.CreateAdd(b_.getInt64(static_cast<uint64_t>(row) * kLanes), lane_));
+                           b_.CreateAdd(b_.getInt64(static_cast<uint64_t>(row) * n_), lane_));
   Value* v = b_.CreateLoad(elem, at);
   return t == Ty::Bool ? b_.CreateICmpNE(v, b_.getInt8(0)) : v;
 }
@@ -300,8 +314,9 @@ Value* Lanes::lanes(const Expr& e) {
 
 Value* Lanes::lanes_uncached(const Expr& e) {
   auto gather = [&](const std::vector<Value*>& per_lane) {
-    Value* v = llvm::PoisonValue::get(llvm::FixedVectorType::get(per_lane[0]->getType(), kLanes));
-    for (int l = 0; l < kLanes; ++l)
+    Value* v = llvm::PoisonValue::get(
+        llvm::FixedVectorType::get(per_lane[0]->getType(), static_cast<unsigned>(n_)));
+    for (int l = 0; l < n_; ++l)
       v = b_.CreateInsertElement(v, per_lane[static_cast<size_t>(l)], static_cast<uint64_t>(l));
     return v;
   };
@@ -312,9 +327,10 @@ Value* Lanes::lanes_uncached(const Expr& e) {
       // A binary32 value widened (a float argument under --float32): splatted as binary32
       // and widened as one vector, which in_binary32 sees.
       if (Value* narrow = codegen::widened_binary32(v))
-        return b_.CreateFPExt(b_.CreateVectorSplat(kLanes, narrow),
-                              llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
-      return b_.CreateVectorSplat(kLanes, v);
+        return b_.CreateFPExt(
+            b_.CreateVectorSplat(static_cast<unsigned>(n_), narrow),
+            llvm::FixedVectorType::get(b_.getDoubleTy(), static_cast<unsigned>(n_)));
+      return b_.CreateVectorSplat(static_cast<unsigned>(n_), v);
     }
     case ExprKind::Element: return gather(element_lane_);
     case ExprKind::Endpoint: return gather(endpoint_lane_[static_cast<size_t>(e.slot)]);
@@ -327,7 +343,7 @@ Value* Lanes::lanes_uncached(const Expr& e) {
         index = endpoint_lane_[static_cast<size_t>(at.slot)];
       } else {
         Value* v = lanes(at);
-        for (int l = 0; l < kLanes; ++l) index.push_back(b_.CreateExtractElement(v, l));
+        for (int l = 0; l < n_; ++l) index.push_back(b_.CreateExtractElement(v, l));
       }
       for (Value* i : index) values.push_back(k_.load(e, i));
       // A binary32 field's values are gathered as they are stored and widened as one vector:
@@ -337,7 +353,8 @@ Value* Lanes::lanes_uncached(const Expr& e) {
       for (Value* v : values)
         if (Value* n = codegen::widened_binary32(v)) narrow.push_back(n);
       if (narrow.size() == values.size())
-        return b_.CreateFPExt(gather(narrow), llvm::FixedVectorType::get(b_.getDoubleTy(), kLanes));
+        return b_.CreateFPExt(gather(narrow), llvm::FixedVectorType::get(
+                                                  b_.getDoubleTy(), static_cast<unsigned>(n_)));
       return gather(values);
     }
     case ExprKind::Local: return vlocal_[static_cast<size_t>(e.slot)];

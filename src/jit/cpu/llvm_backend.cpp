@@ -266,7 +266,7 @@ class CpuTarget : public Target {
                      return Emitter(trace, m, host_).run(name);
                    });
     if (k) {
-      k->lanes = lanes ? kLanes : 1;
+      k->lanes = lanes ? cpu::lanes_of(trace) : 1;
       k->simd.map = true;
       k->simd.lanes = k->lanes;
       k->simd.lanes_why_not = why_not;
@@ -305,12 +305,13 @@ class CpuTarget : public Target {
   // The cache key: the trace's key text and everything else that decides its object code.
   std::string digest_of(const std::string& trace_key, int level, bool fast) const {
     llvm::SHA256 sha;
-    const std::string head =
-        "simit kernel format " + std::to_string(kKernelFormatVersion) +
-        "\nsimit " SIMIT_VERSION "\nllvm " LLVM_VERSION_STRING "\ntriple " +
-        s_.target().getTargetTriple().str() + "\ncpu " + s_.target().getTargetCPU().str() +
-        "\nfeatures " + s_.target().getTargetFeatureString().str() + "\nopt " +
-        std::to_string(level) + (fast ? " fast" : "") + "\nlanes " + std::to_string(kLanes) + "\n";
+    const std::string head = "simit kernel format " + std::to_string(kKernelFormatVersion) +
+                             "\nsimit " SIMIT_VERSION "\nllvm " LLVM_VERSION_STRING "\ntriple " +
+                             s_.target().getTargetTriple().str() + "\ncpu " +
+                             s_.target().getTargetCPU().str() + "\nfeatures " +
+                             s_.target().getTargetFeatureString().str() + "\nopt " +
+                             std::to_string(level) + (fast ? " fast" : "") + "\nlanes " +
+                             std::to_string(kLanes) + " " + std::to_string(kLanes32) + "\n";
     sha.update(head);
     sha.update(trace_key);
     const std::array<uint8_t, 32> d = sha.final();
