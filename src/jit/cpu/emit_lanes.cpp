@@ -83,8 +83,12 @@ class Lanes : public codegen::Precomputed {
   }
   int side_by_side(const std::vector<Stmt>& body, size_t i) override;
   Value* side_by_side_values(const Stmt& s, int width) override {
+    const int row = roots_.at(s.value.get());
     auto* ty = llvm::FixedVectorType::get(b_.getDoubleTy(), static_cast<unsigned>(width));
-    return b_.CreateAlignedLoad(ty, root_address(roots_.at(s.value.get())), llvm::Align(8));
+    if (!narrow_row_[static_cast<size_t>(row)])
+      return b_.CreateAlignedLoad(ty, root_address(row), llvm::Align(8));
+    auto* ty32 = llvm::FixedVectorType::get(b_.getFloatTy(), static_cast<unsigned>(width));
+    return b_.CreateFPExt(b_.CreateAlignedLoad(ty32, root_address(row, true), llvm::Align(4)), ty);
   }
 
  private:
@@ -95,7 +99,7 @@ class Lanes : public codegen::Precomputed {
   void lanes_block(const std::vector<Stmt>& body);
   void spill(const Expr& e);
   void flush_pending(int first);
-  Value* root_address(int row);
+  Value* root_address(int row, bool narrow = false);
   Value* load_root(Ty t, int row);
 
   codegen::MapEmitter& k_;
@@ -116,6 +120,13 @@ class Lanes : public codegen::Precomputed {
   Value* lane_ = nullptr;        // the lane whose statements are being emitted (i64), or null
   uint64_t root_stride_ = 0;     // float rows per lane in the buffer (a multiple of 4)
   std::vector<Value*> pending_;  // float roots computed, not yet stored
+  // Float roots that hold binary32 values (--float32: a widened binary32 vector) lie in a
+  // buffer of binary32 values beside the binary64 one, at the same place: stored narrow, they
+  // need no widening for all lanes and move half the bytes; a statement widens the value it
+  // reads. narrow_row_ says which rows; the pending roots are all of one kind.
+  Value* root_buffer32_ = nullptr;
+  std::vector<bool> narrow_row_;
+  bool pending_narrow_ = false;
 };
 
 // The statements' roots, each given its row in its type's buffer.
@@ -145,6 +156,7 @@ void Lanes::allocate_roots() {
   llvm::BasicBlock& entry = k_.function()->getEntryBlock();
   llvm::IRBuilder<> at_entry(&entry, entry.begin());
   root_stride_ = static_cast<uint64_t>((root_rows_[0] + 3) / 4 * 4);
+  narrow_row_.assign(static_cast<size_t>(root_rows_[0]), false);
   for (Ty ty : {Ty::F64, Ty::I32, Ty::Bool}) {
     const int t = ty_index(ty);
     if (root_rows_[t] == 0) continue;
@@ -153,6 +165,12 @@ void Lanes::allocate_roots() {
         at_entry.CreateAlloca(root_type(b_, ty), b_.getInt32(static_cast<uint32_t>(rows * n_)));
     a->setAlignment(llvm::Align(32));
     root_buffer_[t] = a;
+    if (ty == Ty::F64 && t_.float32) {
+      llvm::AllocaInst* narrow =
+          at_entry.CreateAlloca(b_.getFloatTy(), b_.getInt32(static_cast<uint32_t>(rows * n_)));
+      narrow->setAlignment(llvm::Align(32));
+      root_buffer32_ = narrow;
+    }
   }
 }
 
@@ -207,7 +225,9 @@ int Lanes::side_by_side(const std::vector<Stmt>& body, size_t i) {
     const Stmt& s = body[i + static_cast<size_t>(n)];
     if (!same_place(s) || s.comp != first.comp + n || s.value->ty != Ty::F64) break;
     auto r = roots_.find(s.value.get());
-    if (r == roots_.end() || r->second != row + n) break;
+    if (r == roots_.end() || r->second != row + n ||
+        narrow_row_[static_cast<size_t>(r->second)] != narrow_row_[static_cast<size_t>(row)])
+      break;
     ++n;
   }
   return n;
@@ -241,8 +261,14 @@ void Lanes::spill(const Expr& e) {
   Value* v = lanes(e);
   const int t = ty_index(e.ty);
   if (e.ty == Ty::F64) {
-    pending_.push_back(v);
-    if (n_ % 4 == 0 && pending_.size() == 4) flush_pending(roots_.at(&e) - 3);
+    const int row = roots_.at(&e);
+    Value* narrow = root_buffer32_ ? codegen::widened_binary32(v) : nullptr;
+    if (!pending_.empty() && (narrow != nullptr) != pending_narrow_)
+      flush_pending(row - static_cast<int>(pending_.size()));
+    pending_narrow_ = narrow != nullptr;
+    narrow_row_[static_cast<size_t>(row)] = pending_narrow_;
+    pending_.push_back(narrow ? narrow : v);
+    if (n_ % 4 == 0 && pending_.size() == 4) flush_pending(row - 3);
     return;
   }
   if (e.ty == Ty::Bool)
@@ -256,11 +282,11 @@ void Lanes::spill(const Expr& e) {
 // Stores the pending float rows first, first + 1, ...: four of them transposed (one vector
 // per lane; with 8 lanes each half of the rows in turn), fewer component by component.
 void Lanes::flush_pending(int first) {
-  llvm::Type* f64 = b_.getDoubleTy();
+  llvm::Type* elem = pending_narrow_ ? b_.getFloatTy() : b_.getDoubleTy();
+  Value* buffer = pending_narrow_ ? root_buffer32_ : root_buffer_[0];
   auto at = [&](int lane, int row) {
     return b_.CreateConstInBoundsGEP1_64(
-        f64, root_buffer_[0],
-        static_cast<uint64_t>(lane) * root_stride_ + static_cast<uint64_t>(row));
+        elem, buffer, static_cast<uint64_t>(lane) * root_stride_ + static_cast<uint64_t>(row));
   };
   if (pending_.size() == 4 && n_ % 4 == 0) {
     for (int base = 0; base < n_; base += 4) {
@@ -277,7 +303,7 @@ void Lanes::flush_pending(int first) {
           b_.CreateShuffleVector(a, c, {0, 1, 4, 5}), b_.CreateShuffleVector(b, d, {0, 1, 4, 5}),
           b_.CreateShuffleVector(a, c, {2, 3, 6, 7}), b_.CreateShuffleVector(b, d, {2, 3, 6, 7})};
       for (int l = 0; l < 4; ++l)
-        b_.CreateAlignedStore(lane[l], at(base + l, first), llvm::Align(8));
+        b_.CreateAlignedStore(lane[l], at(base + l, first), llvm::Align(pending_narrow_ ? 4 : 8));
     }
   } else {
     for (size_t r = 0; r < pending_.size(); ++r)
@@ -288,14 +314,20 @@ void Lanes::flush_pending(int first) {
   pending_.clear();
 }
 
-Value* Lanes::root_address(int row) {
-  return b_.CreateInBoundsGEP(b_.getDoubleTy(), root_buffer_[0],
+Value* Lanes::root_address(int row, bool narrow) {
+  return b_.CreateInBoundsGEP(narrow ? b_.getFloatTy() : b_.getDoubleTy(),
+                              narrow ? root_buffer32_ : root_buffer_[0],
                               b_.CreateAdd(b_.CreateMul(lane_, b_.getInt64(root_stride_)),
                                            b_.getInt64(static_cast<uint64_t>(row))));
 }
 
 Value* Lanes::load_root(Ty t, int row) {
-  if (t == Ty::F64) return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
+  if (t == Ty::F64) {
+    if (narrow_row_[static_cast<size_t>(row)])
+      return b_.CreateFPExt(b_.CreateLoad(b_.getFloatTy(), root_address(row, true)),
+                            b_.getDoubleTy());
+    return b_.CreateLoad(b_.getDoubleTy(), root_address(row));
+  }
   llvm::Type* elem = root_type(b_, t);
   Value* at =
       b_.CreateInBoundsGEP(elem, root_buffer_[ty_index(t)],
