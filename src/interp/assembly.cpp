@@ -59,8 +59,9 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
     // Writes stored blocks of blocks level by level, as the dense block values are laid out.
     if (ctx.is_matrix[i] && out.back().matrix())
       runtime::unnest_blocks(*out.back().matrix(), ctx.blocks[i]);
-    // --float32: an assembled sum is one operation's, rounded once when it is complete
-    // (docs/arithmetic.md). The results are the map's own.
+    // --float32: every value of a result is a binary32 value (docs/arithmetic.md). Its sums
+    // are already (each addition rounds); a value a map writes as it read it (a binary64
+    // field's) is rounded here. The results are the map's own.
     if (options_.float32) {
       Value& r = out.back();
       if (r.kind() == Value::Kind::Matrix && r.matrix())

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 
 #include "runtime/sparse_convert.h"
 #include "runtime_fixtures.h"
@@ -53,6 +54,40 @@ TEST_F(TetMatrices, MatrixVectorProductBlocked) {
   std::vector<double> y(m.scalar_rows());
   multiply(m, x, y);
   EXPECT_LT((as_eigen(y) - dense * as_eigen(x)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// round_to_float32 rounds every value, in chunks that hold binary32 values already or not:
+// each value ends as static_cast<float> of what it was (NaNs stay NaNs).
+TEST(RoundToFloat32, RoundsEveryValueOfEveryChunk) {
+  // A block-tridiagonal matrix of 400 rows of 3 x 3 blocks: 10,782 values, several chunks of
+  // the rounding's pass.
+  std::vector<int32_t> row_ptr{0}, cols;
+  for (int r = 0; r < 400; ++r) {
+    for (int c = std::max(0, r - 1); c <= std::min(399, r + 1); ++c) cols.push_back(c);
+    row_ptr.push_back(static_cast<int32_t>(cols.size()));
+  }
+  SystemMatrix m(MatrixPattern::from_csr(400, 400, row_ptr, cols), 3, 3);
+  for (size_t i = 0; i < m.value_count(); ++i)
+    m.values()[i] = std::sin(0.37 * static_cast<double>(i));
+  ASSERT_GT(m.value_count(), 3u * 2048);
+  // Chunk 0 binary32 values already but one, chunk 1 all binary32, the rest as they are.
+  for (size_t i = 0; i < 2 * 2048; ++i) m.values()[i] = static_cast<float>(m.values()[i]);
+  m.values()[1000] = 0.1;
+  m.values()[3000] = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> before(m.values(), m.values() + m.value_count());
+  round_to_float32(m);
+  size_t changed = 0;
+  for (size_t i = 0; i < before.size(); ++i) {
+    const double want = static_cast<float>(before[i]);
+    if (std::isnan(want)) {
+      EXPECT_TRUE(std::isnan(m.values()[i])) << i;
+      continue;
+    }
+    EXPECT_EQ(m.values()[i], want) << i;
+    changed += m.values()[i] != before[i] ? 1 : 0;
+  }
+  EXPECT_EQ(m.values()[1000], static_cast<double>(0.1f));
+  EXPECT_GT(changed, before.size() / 2);  // the values past chunk 1 were binary64 values
 }
 
 // --float32: each row block's part and the row's sum in binary32 steps (docs/arithmetic.md),
