@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <span>
 
 #include "runtime/sparse_convert.h"
 #include "runtime_fixtures.h"
@@ -58,6 +60,25 @@ TEST_F(TetMatrices, MatrixVectorProductBlocked) {
 
 // round_to_float32 rounds every value, in chunks that hold binary32 values already or not:
 // each value ends as static_cast<float> of what it was (NaNs stay NaNs).
+// is_binary32 of values, chunk by chunk: binary32 values (infinities and NaNs whatever their
+// payload included) are; one binary64 value anywhere is not.
+TEST(IsBinary32, EveryValueOfEveryChunkOrNot) {
+  std::vector<double> v(5000);
+  for (size_t i = 0; i < v.size(); ++i)
+    v[i] = static_cast<float>(std::sin(0.37 * static_cast<double>(i)));
+  v[10] = std::numeric_limits<double>::infinity();
+  // A NaN with payload bits a binary32 NaN cannot hold: the rounding changes its bits.
+  v[2100] = std::bit_cast<double>(uint64_t{0x7ff8000000000001});
+  EXPECT_NE(std::bit_cast<uint64_t>(static_cast<double>(static_cast<float>(v[2100]))),
+            std::bit_cast<uint64_t>(v[2100]));
+  EXPECT_TRUE(is_binary32(std::span<const double>(v)));
+  for (size_t at : {size_t{0}, size_t{2047}, size_t{2048}, size_t{4999}}) {
+    std::vector<double> w = v;
+    w[at] = 0.1;
+    EXPECT_FALSE(is_binary32(std::span<const double>(w))) << at;
+  }
+}
+
 TEST(RoundToFloat32, RoundsEveryValueOfEveryChunk) {
   // A block-tridiagonal matrix of 400 rows of 3 x 3 blocks: 10,782 values, several chunks of
   // the rounding's pass.
