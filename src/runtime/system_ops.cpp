@@ -467,19 +467,27 @@ void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, doubl
   });
 }
 
+// Whether rounding v[0 .. n-1] to binary32 leaves every bit as it is: a comparison of bits,
+// which vectorises (a comparison of doubles with its NaN case runs value by value). A NaN
+// whose payload the rounding changes fails it, though it counts as a binary32 value. The
+// binary32 checks run it over chunks of kBitsChunk values.
+constexpr size_t kBitsChunk = 2048;
+bool same_bits_as_binary32(const double* v, size_t n) {
+  uint64_t differ = 0;
+  for (size_t i = 0; i < n; ++i)
+    differ |= std::bit_cast<uint64_t>(static_cast<double>(static_cast<float>(v[i]))) ^
+              std::bit_cast<uint64_t>(v[i]);
+  return differ == 0;
+}
+
 template <class T>
 bool binary32_values(const T* v, size_t n) {
   if constexpr (std::is_same_v<T, double>) {
     // Chunk by chunk, first by bits, which vectorises; a chunk whose bits the rounding changes
     // value by value (a NaN counts as a binary32 value whatever its payload).
-    constexpr size_t kChunk = 2048;
-    for (size_t at = 0; at < n; at += kChunk) {
-      const size_t end = std::min(n, at + kChunk);
-      uint64_t differ = 0;
-      for (size_t i = at; i < end; ++i)
-        differ |= std::bit_cast<uint64_t>(static_cast<double>(static_cast<float>(v[i]))) ^
-                  std::bit_cast<uint64_t>(v[i]);
-      if (differ == 0) continue;
+    for (size_t at = 0; at < n; at += kBitsChunk) {
+      const size_t end = std::min(n, at + kBitsChunk);
+      if (same_bits_as_binary32(v + at, end - at)) continue;
       for (size_t i = at; i < end; ++i)
         if (!is_binary32(v[i])) return false;
     }
@@ -518,17 +526,10 @@ void round_to_float32(SystemMatrix& m) {
     double* v = m.values();
     // Chunk by chunk, a chunk whose values are binary32 values already (a map's sums, each
     // addition rounded) only read: on fem dragon160k's 31 MB stiffness the pass then writes
-    // nothing. The test compares bits, which vectorises (a comparison of doubles with its
-    // NaN case did not, and took longer than the writes it saved): a NaN whose bits the
-    // rounding changes is rounded, as before.
-    constexpr size_t kChunk = 2048;
-    for (size_t at = 0; at < n; at += kChunk) {
-      const size_t end = std::min(n, at + kChunk);
-      uint64_t differ = 0;
-      for (size_t i = at; i < end; ++i)
-        differ |= std::bit_cast<uint64_t>(static_cast<double>(static_cast<float>(v[i]))) ^
-                  std::bit_cast<uint64_t>(v[i]);
-      if (differ != 0)
+    // nothing (a NaN whose bits the rounding changes is rounded, as before).
+    for (size_t at = 0; at < n; at += kBitsChunk) {
+      const size_t end = std::min(n, at + kBitsChunk);
+      if (!same_bits_as_binary32(v + at, end - at))
         for (size_t i = at; i < end; ++i) v[i] = static_cast<float>(v[i]);
     }
   } else if (m.kind() == ComponentKind::Complex) {
