@@ -61,8 +61,9 @@ std::vector<Value> Interpreter::eval_map(const ast::Map& m) {
       runtime::unnest_blocks(*out.back().matrix(), ctx.blocks[i]);
     // --float32: every value of a result is a binary32 value (docs/arithmetic.md). Its sums
     // are already (each addition rounds); a value a map writes as it read it (a binary64
-    // field's) is rounded here. The results are the map's own.
-    if (options_.float32) {
+    // field's) is rounded here, unless the hook that ran the map vouches for every value.
+    // The results are the map's own.
+    if (options_.float32 && !ctx.results_binary32) {
       Value& r = out.back();
       if (r.kind() == Value::Kind::Matrix && r.matrix())
         runtime::round_to_float32(*r.matrix());
@@ -190,8 +191,9 @@ void Interpreter::run_assembly(const ast::Assembly& a, const ast::Variable* thro
     }
     --depth_;
     ++plan.runs;
-    SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at};
+    SiteCall call{plan, partial, ctx->values, *ctx->target->set, *this, at, false};
     if (offer && options_.sites->run_site(call)) {
+      ctx->results_binary32 = call.results_binary32 && !ctx->grid;
       map_ = saved;
       map_depth_ = saved_depth;
       return;

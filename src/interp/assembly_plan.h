@@ -66,6 +66,10 @@ struct SiteCall {
   runtime::Set& target;                    // plan.target, writable (apply writes its fields)
   const ExecState& interpreter;            // globals, the trap (Ctrl-C)
   const frontend::SourceSpan& at;          // the map expression or apply statement
+  // Set by a hook that ran the site when every value of its results is a binary32 value
+  // already (--float32: a compiled reduction rounds each addition), so that the map's final
+  // rounding, a pass over every value, is left out.
+  bool results_binary32 = false;
 };
 
 class SiteHook {

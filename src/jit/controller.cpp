@@ -233,6 +233,11 @@ bool TraceController::run_site(interp::SiteCall& call) {
   CallTimer timer(e->stats);
   const bool done = run_kernel(*e, call);
   timer.done();
+  // Under --float32 a reduction's every addition rounds (in place, in DeferredPlan::finish,
+  // in the device's gathers) and the results start at zero: the map's final rounding would
+  // only read them (on fem dragon160k 13.7 MB of stiffness, 1.3% of a frame).
+  const Trace& t = *e->traced.trace;
+  call.results_binary32 = done && t.float32 && t.reduce;
   return done;
 }
 

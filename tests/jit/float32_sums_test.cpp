@@ -66,6 +66,11 @@ export func solve() -> (x : vector[points](vector[3](float)), f : vector[points]
     iterations = iterations + 1;
   end
 end
+
+export func assemble() -> (K : matrix[points,points](matrix[3,3](float)),
+                           f : vector[points](vector[3](float)))
+  K, f = map stiffness to springs reduce +;
+end
 )";
 
 struct Solved {
@@ -74,7 +79,7 @@ struct Solved {
 };
 
 // A chain of 40 points with three springs each (i to i + 1, i + 2, i + 3); binary32 fields.
-Solved solve(ExecutorKind kind, int threads, bool check) {
+Solved solve(ExecutorKind kind, int threads, bool check, const char* func = "solve") {
   auto compiled = CompiledProgram::from_source("float32_sums.sim", kProgram);
   EXPECT_TRUE(compiled->ok());
   runtime::Set points("points");
@@ -112,7 +117,7 @@ Solved solve(ExecutorKind kind, int threads, bool check) {
   engine.bind_set(*compiled->find_extern("points"), points);
   engine.bind_set(*compiled->find_extern("springs"), springs);
   Solved out;
-  for (int call = 0; call < 2; ++call) out.results = engine.call(*compiled->find_func("solve"), {});
+  for (int call = 0; call < 2; ++call) out.results = engine.call(*compiled->find_func(func), {});
   std::ostringstream os;
   engine.print_jit_stats(os);
   out.stats = os.str();
@@ -149,6 +154,28 @@ TEST(Float32Sums, CompiledMapsAndLoopsGiveTheInterpretersBits) {
   const runtime::Tensor& x = in.results[0].tensor();
   for (size_t i = 0; i < x.size(); ++i)
     EXPECT_EQ(static_cast<double>(static_cast<float>(x.floats()[i])), x.floats()[i]) << i;
+}
+
+// A compiled reduction's results come out as the kernel assembled them: the map's final
+// binary32 rounding is left out (SiteCall::results_binary32), so each sum must have rounded
+// at every addition, in place or as the later chunks' contributions join (3 threads).
+TEST(Float32Sums, ACompiledReductionsResultsAreBinary32Values) {
+  if (!api::jit_available()) GTEST_SKIP() << "this build has no JIT (SIMIT_WITH_LLVM=OFF)";
+  const Solved in = solve(ExecutorKind::Interpreter, 1, false, "assemble");
+  ASSERT_EQ(in.results.size(), 2u);
+  const runtime::SystemMatrix& k_in = *in.results[0].matrix();
+  for (int threads : {1, 3}) {
+    const Solved jit = solve(ExecutorKind::Jit, threads, false, "assemble");
+    ASSERT_EQ(jit.results.size(), 2u);
+    EXPECT_NE(jit.stats.find("stiffness (line 51)"), std::string::npos) << jit.stats;
+    const runtime::SystemMatrix& k = *jit.results[0].matrix();
+    ASSERT_EQ(k.value_count(), k_in.value_count()) << threads;
+    EXPECT_EQ(std::memcmp(k.values(), k_in.values(), k.value_count() * sizeof(double)), 0)
+        << threads;
+    EXPECT_TRUE(same_bits(in.results[1].tensor(), jit.results[1].tensor())) << threads;
+    for (size_t i = 0; i < k.value_count(); ++i)
+      ASSERT_EQ(static_cast<double>(static_cast<float>(k.values()[i])), k.values()[i]) << i;
+  }
 }
 
 // A map's float argument: the kernel reads it as a binary32 value, so a host-bound one that
