@@ -15,7 +15,7 @@ struct Interpreter::MapContext {
   SetBinding* target = nullptr;
   int element = 0;
   bool reduce = false;
-  SetBinding* grid = nullptr;  // `through G`
+  SetBinding* grid = nullptr;     // `through G`
   bool results_binary32 = false;  // SiteCall::results_binary32 of the hook that ran it
   // The global results; for stencil matrices, `values` holds a placeholder and `stencil`
   // one dense block array per offset (one block per point), built into a matrix at the end.
