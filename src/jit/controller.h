@@ -14,6 +14,7 @@
 #include "jit/executor.h"
 #include "jit/lower.h"
 #include "jit/matrix_sum.h"
+#include "jit/pending_sums.h"
 #include "jit/system_trace.h"
 #include "jit/target.h"
 #include "jit/trace_site.h"
@@ -135,6 +136,8 @@ class TraceController : public interp::SiteHook {
   // `--executor gpu`: the GPU's target (null when emulated: the CPU's compiles) and executor.
   std::unique_ptr<Target> device_target_;
   std::unique_ptr<Executor> device_executor_;
+  // Fused sums that a solver loop's copy sums as it reads them (jit/pending_sums.h).
+  PendingSums pending_sums_;
   std::map<const void*, std::unique_ptr<SiteState>> sites_;
   std::map<const void*, std::unique_ptr<LoopState>> loops_;  // by while loop
   std::map<const void*, std::unique_ptr<LoopState>> runs_;   // by a run's first statement
@@ -154,7 +157,22 @@ class TraceController : public interp::SiteHook {
   const FusedSums& fused_sums(const interp::ExecState& in);
   struct SumState {
     long runs = 0;
+    long pending = 0;  // calls left pending (jit/pending_sums.h)
     TraceStats stats;
+    // runtime::fits_into(m, k), for the last patterns it was asked of (a walk over both).
+    runtime::PatternPtr fits_m, fits_k;
+    bool fitted = false;
+    bool fits(const runtime::SystemMatrix& m, const runtime::SystemMatrix& k) {
+      if (!m.is_float() || !k.is_float() || m.block_rows() != k.block_rows() ||
+          m.block_cols() != k.block_cols())
+        return false;
+      if (fits_m != m.shared_pattern() || fits_k != k.shared_pattern()) {
+        fitted = runtime::fits_into(m, k);
+        fits_m = m.shared_pattern();
+        fits_k = k.shared_pattern();
+      }
+      return fitted;
+    }
   };
   std::map<const frontend::ast::Stmt*, SumState> sums_;
   bool run_fused_sum(const frontend::ast::Stmt& stmt, const FusedSum& sum, interp::ExecState& in);

@@ -151,8 +151,18 @@ std::vector<TraceStats> TraceController::stats() const {
         out.push_back(e->stats);
         if (e->kernel->simd.reported) out.back().note += "; " + e->kernel->simd.summary();
       }
-  for (const auto& [at, s] : sums_)
-    if (!s.stats.status.empty()) out.push_back(s.stats);
+  for (const auto& [at, s] : sums_) {
+    if (s.stats.status.empty()) continue;
+    out.push_back(s.stats);
+    // Sums left pending (jit/pending_sums.h): how many a read outside a loop's copy wrote.
+    if (s.pending > 0)
+      out.back().note += "; " + std::to_string(s.pending) +
+                         " calls summed where a solver loop's binary32 copy reads them (of all "
+                         "fused sums, " +
+                         std::to_string(pending_sums_.written()) + " of " +
+                         std::to_string(pending_sums_.held()) +
+                         " written whole for another reader)";
+  }
   std::stable_sort(out.begin(), out.end(), [](const TraceStats& a, const TraceStats& b) {
     return a.line != b.line ? a.line < b.line : a.site < b.site;
   });

@@ -147,12 +147,13 @@ bool TraceController::run_loop_kernel(LoopEntry& entry, interp::ExecState& in) {
       const double before = thread_cpu_ms();
       PrunedMatrix& p = e->pruned[b.arrays[i].var];
       const runtime::SystemMatrix& m = *in.variable(*b.arrays[i].var).matrix();
+      // A fused sum left pending in m's values is summed as the copy reads it.
       const bool exact = p.assign(
           m, t.arrays[i].single,
           [this](int64_t tasks, const std::function<void(int64_t)>& task) {
             executor_->for_each(tasks, task);
           },
-          rows_in_pairs(t, t.arrays[i], m.block_rows()));
+          rows_in_pairs(t, t.arrays[i], m.block_rows()), pending_sums_.find(m.raw_values()));
       e->prune_cpu_ms += thread_cpu_ms() - before;
       if (!exact) return leave_wide(*b.arrays[i].var);
       e->kept += p.kept;

@@ -54,6 +54,31 @@ void fit(std::vector<T>& v, size_t n) {
 // thread, and its solve on 2 threads took 3.5% longer (median of 6 interleaved runs).
 constexpr size_t kRowsPerTask = 512;
 
+// A matrix's blocks row by row, as stored: f(k, block) for each block k of row r (N x N
+// blocks, N 0 when known only at run time).
+struct StoredBlocks {
+  static constexpr bool kBinary32 = false;  // whether every value is known to be binary32
+  const int32_t* rp;
+  const double* v;
+  size_t bs;
+  template <int N, class F>
+  void row(size_t r, F&& f) const {
+    for (int32_t k = rp[r]; k < rp[r + 1]; ++k) f(k, v + static_cast<size_t>(k) * bs);
+  }
+};
+
+// A pending fused sum's blocks (runtime::LazySum), each summed as it is read. A float32 sum
+// rounds every value to binary32 (Binary32 true): the copy's check of each is left out.
+template <bool Binary32>
+struct SummedBlocks {
+  static constexpr bool kBinary32 = Binary32;
+  const runtime::LazySum* sum;
+  template <int N, class F>
+  void row(size_t r, F&& f) const {
+    sum->row<N * N>(static_cast<int32_t>(r), f);
+  }
+};
+
 // Runs tasks 0 .. tasks-1, on the executor's threads when there are several.
 void run_tasks(size_t tasks, const runtime::ForEachTask& for_each,
                const std::function<void(int64_t)>& task) {
@@ -64,9 +89,9 @@ void run_tasks(size_t tasks, const runtime::ForEachTask& for_each,
   }
 }
 
-template <int N, class T>
+template <int N, class T, class Src>
 bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int32_t* ci,
-           const double* v, size_t rows, int n, const runtime::ForEachTask& for_each) {
+           const Src& src, size_t rows, int n, const runtime::ForEachTask& for_each) {
   const int m = N ? N : n;
   const int bs = m * m;
   const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
@@ -75,8 +100,9 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
   run([&](int64_t t) {
     int32_t kept = 0;
     const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
-    for (int32_t k = rp[static_cast<size_t>(t) * kRowsPerTask]; k < rp[end]; ++k)
-      kept += zero_block<N>(v + static_cast<size_t>(k) * bs, bs) ? 0 : 1;
+    for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; ++r)
+      src.template row<N>(
+          r, [&](int32_t, const double* blk) { kept += zero_block<N>(blk, bs) ? 0 : 1; });
     first[static_cast<size_t>(t) + 1] = kept;
   });
   for (size_t t = 0; t < tasks; ++t) first[t + 1] += first[t];
@@ -94,10 +120,9 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
     bool all = true;
     const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
     for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; ++r) {
-      for (int32_t k = rp[r]; k < rp[r + 1]; ++k) {
-        const double* blk = v + static_cast<size_t>(k) * bs;
+      src.template row<N>(r, [&](int32_t k, const double* blk) {
         p.slot[static_cast<size_t>(k)] = -1;
-        if (zero_block<N>(blk, bs)) continue;
+        if (zero_block<N>(blk, bs)) return;
         p.slot[static_cast<size_t>(k)] = at;
         T* o = out + static_cast<size_t>(at) * bs;
         for (int j = 0; j < m; ++j)
@@ -106,10 +131,11 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
             o[j * m + i] = static_cast<T>(x);
             // A NaN stays a NaN (its payload is not the interpreter's concern).
             // (`&`, not `&&`: no branch per value, which kept the loop from vectorising.)
-            if constexpr (std::is_same_v<T, float>) all = all & runtime::is_binary32(x);
+            if constexpr (std::is_same_v<T, float> && !Src::kBinary32)
+              all = all & runtime::is_binary32(x);
           }
         cols[at++] = ci[k];
-      }
+      });
       p.row_ptr[r + 1] = at;
     }
     exact[static_cast<size_t>(t)] = all;
@@ -120,9 +146,9 @@ bool prune(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const int
 
 // Rows in pairs, as binary32 (PrunedMatrix::pairs); N x N blocks, 2 <= N <= 4. The same two
 // passes over tasks of kRowsPerTask rows (an even number, so that a task holds whole pairs).
-template <int N>
-bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const double* v,
-                 size_t rows, const runtime::ForEachTask& for_each) {
+template <int N, class Src>
+bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const Src& src, size_t rows,
+                 const runtime::ForEachTask& for_each) {
   constexpr int bs = N * N;
   static_assert(kRowsPerTask % 2 == 0);
   const size_t pairs = (rows + 1) / 2;
@@ -131,8 +157,8 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
   auto kept_in = [&](size_t r) {
     int32_t n = 0;
     if (r < rows)
-      for (int32_t k = rp[r]; k < rp[r + 1]; ++k)
-        n += zero_block<N>(v + static_cast<size_t>(k) * bs, bs) ? 0 : 1;
+      src.template row<N>(r,
+                          [&](int32_t, const double* blk) { n += zero_block<N>(blk, bs) ? 0 : 1; });
     return n;
   };
   std::vector<int32_t> first(tasks + 1, 0);  // each task's first block pair
@@ -174,21 +200,20 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
       for (int side = 0; side < 2 && r + static_cast<size_t>(side) < rows; ++side) {
         const size_t row = r + static_cast<size_t>(side);
         int32_t s = at;
-        for (int32_t k = rp[row]; k < rp[row + 1]; ++k) {
-          const double* blk = v + static_cast<size_t>(k) * bs;
+        src.template row<N>(row, [&](int32_t k, const double* blk) {
           p.slot[static_cast<size_t>(k)] = -1;
-          if (zero_block<N>(blk, bs)) continue;
+          if (zero_block<N>(blk, bs)) return;
           p.slot[static_cast<size_t>(k)] = 2 * s + side;
           float* o = values + static_cast<size_t>(s) * 2 * bs + side * N;
           for (int j = 0; j < N; ++j)
             for (int i = 0; i < N; ++i) {
               const double x = blk[i * N + j];
               o[j * 2 * N + i] = static_cast<float>(x);
-              all = all & runtime::is_binary32(x);
+              if constexpr (!Src::kBinary32) all = all & runtime::is_binary32(x);
             }
           cols[2 * static_cast<size_t>(s) + static_cast<size_t>(side)] = ci[k];
           ++s;
-        }
+        });
         length[side] = s - at;
       }
       const int32_t pairs_here = std::max(length[0], length[1]);
@@ -214,15 +239,15 @@ bool prune_pairs(PrunedMatrix& p, const int32_t* rp, const int32_t* ci, const do
   return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
 }
 
-template <int N>
-bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* ci, const double* v,
+template <int N, class Src>
+bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* ci, const Src& src,
                 size_t rows, int n, const runtime::ForEachTask& for_each) {
   if (single) {
     std::vector<double>().swap(p.values);
-    return prune<N>(p, p.values32, rp, ci, v, rows, n, for_each);
+    return prune<N>(p, p.values32, rp, ci, src, rows, n, for_each);
   }
   std::vector<float>().swap(p.values32);
-  return prune<N>(p, p.values, rp, ci, v, rows, n, for_each);
+  return prune<N>(p, p.values, rp, ci, src, rows, n, for_each);
 }
 
 // The values of `v` into the layout the last build made (PrunedMatrix::slot), in one pass: a
@@ -230,9 +255,9 @@ bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* 
 // block does), and a block it dropped must still be zero. False in `still` when one is not
 // (the layout must be rebuilt); the result says whether every value is a binary32 value, as
 // for a build.
-template <int N, class T, bool Pairs>
-bool refresh(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const double* v,
-             size_t rows, int n, const runtime::ForEachTask& for_each, bool& still) {
+template <int N, class T, bool Pairs, class Src>
+bool refresh(PrunedMatrix& p, std::vector<T>& values, const Src& src, size_t rows, int n,
+             const runtime::ForEachTask& for_each, bool& still) {
   const int m = N ? N : n;
   const int bs = m * m;
   const size_t tasks = (rows + kRowsPerTask - 1) / kRowsPerTask;
@@ -242,24 +267,25 @@ bool refresh(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const d
   run_tasks(tasks, for_each, [&](int64_t t) {
     bool all = true, same = true;
     const size_t end = std::min(rows, (static_cast<size_t>(t) + 1) * kRowsPerTask);
-    for (int32_t k = rp[static_cast<size_t>(t) * kRowsPerTask]; k < rp[end]; ++k) {
-      const double* blk = v + static_cast<size_t>(k) * bs;
-      const int32_t s = slot[k];
-      if (s < 0) {
-        same = same && zero_block<N>(blk, bs);
-        continue;
-      }
-      // Pairs: slot 2 q + side, the block's column j at 2 bs q + 2 m j + m side.
-      T* o = Pairs ? out + static_cast<size_t>(s / 2) * 2 * bs + (s % 2) * m
-                   : out + static_cast<size_t>(s) * bs;
-      const int stride = Pairs ? 2 * m : m;
-      for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) {
-          const double x = blk[i * m + j];
-          o[j * stride + i] = static_cast<T>(x);
-          if constexpr (std::is_same_v<T, float>) all = all & runtime::is_binary32(x);
+    for (size_t r = static_cast<size_t>(t) * kRowsPerTask; r < end; ++r)
+      src.template row<N>(r, [&](int32_t k, const double* blk) {
+        const int32_t s = slot[k];
+        if (s < 0) {
+          same = same && zero_block<N>(blk, bs);
+          return;
         }
-    }
+        // Pairs: slot 2 q + side, the block's column j at 2 bs q + 2 m j + m side.
+        T* o = Pairs ? out + static_cast<size_t>(s / 2) * 2 * bs + (s % 2) * m
+                     : out + static_cast<size_t>(s) * bs;
+        const int stride = Pairs ? 2 * m : m;
+        for (int j = 0; j < m; ++j)
+          for (int i = 0; i < m; ++i) {
+            const double x = blk[i * m + j];
+            o[j * stride + i] = static_cast<T>(x);
+            if constexpr (std::is_same_v<T, float> && !Src::kBinary32)
+              all = all & runtime::is_binary32(x);
+          }
+      });
     exact[static_cast<size_t>(t)] = all;
     kept[static_cast<size_t>(t)] = same;
   });
@@ -267,64 +293,75 @@ bool refresh(PrunedMatrix& p, std::vector<T>& values, const int32_t* rp, const d
   return std::all_of(exact.begin(), exact.end(), [](uint8_t e) { return e != 0; });
 }
 
-template <int N>
-bool refresh_into(PrunedMatrix& p, const int32_t* rp, const double* v, size_t rows, int n,
+template <int N, class Src>
+bool refresh_into(PrunedMatrix& p, const Src& src, size_t rows, int n,
                   const runtime::ForEachTask& for_each, bool& still) {
-  if (p.pairs) return refresh<N, float, true>(p, p.values32, rp, v, rows, n, for_each, still);
-  if (p.single) return refresh<N, float, false>(p, p.values32, rp, v, rows, n, for_each, still);
-  return refresh<N, double, false>(p, p.values, rp, v, rows, n, for_each, still);
+  if (p.pairs) return refresh<N, float, true>(p, p.values32, src, rows, n, for_each, still);
+  if (p.single) return refresh<N, float, false>(p, p.values32, src, rows, n, for_each, still);
+  return refresh<N, double, false>(p, p.values, src, rows, n, for_each, still);
+}
+
+// PrunedMatrix::assign from `src`, the blocks of a matrix on `pattern` with n x n blocks.
+template <class Src>
+bool assign_from(PrunedMatrix& p, const runtime::PatternPtr& pattern, int n, bool single,
+                 bool want_pairs, const Src& src, const runtime::ForEachTask& for_each) {
+  const auto& rp = pattern->row_ptr();
+  const int32_t* ci = pattern->col_idx().data();
+  const size_t rows = rp.size() - 1;
+  // The same pattern, block and layout as the last build: one pass over the values.
+  if (p.built_for == pattern && p.built_block == n && p.single == single && p.pairs == want_pairs &&
+      !p.slot.empty()) {
+    bool still = true, exact = true;
+    switch (n) {
+      case 1: exact = refresh_into<1>(p, src, rows, n, for_each, still); break;
+      case 2: exact = refresh_into<2>(p, src, rows, n, for_each, still); break;
+      case 3: exact = refresh_into<3>(p, src, rows, n, for_each, still); break;
+      default: exact = refresh_into<0>(p, src, rows, n, for_each, still);
+    }
+    if (still) {
+      ++p.refreshed;
+      return exact;
+    }
+  }
+  p.built_for = pattern;
+  p.built_block = n;
+  p.single = single;
+  p.pairs = want_pairs;
+  if (p.pairs) {
+    std::vector<double>().swap(p.values);
+    switch (n) {
+      case 2: return prune_pairs<2>(p, rp.data(), ci, src, rows, for_each);
+      case 3: return prune_pairs<3>(p, rp.data(), ci, src, rows, for_each);
+      default: return prune_pairs<4>(p, rp.data(), ci, src, rows, for_each);
+    }
+  }
+  p.row_ptr.resize(rp.size());
+  switch (n) {
+    case 1: return prune_into<1>(p, single, rp.data(), ci, src, rows, n, for_each);
+    case 2: return prune_into<2>(p, single, rp.data(), ci, src, rows, n, for_each);
+    case 3: return prune_into<3>(p, single, rp.data(), ci, src, rows, n, for_each);
+    default: return prune_into<0>(p, single, rp.data(), ci, src, rows, n, for_each);
+  }
 }
 
 }  // namespace
 
 bool PrunedMatrix::assign(const runtime::SystemMatrix& m, bool single,
-                          const runtime::ForEachTask& for_each, bool in_pairs) {
-  const auto& rp = m.pattern().row_ptr();
-  const int32_t* ci = m.pattern().col_idx().data();
-  const size_t rows = rp.size() - 1;
+                          const runtime::ForEachTask& for_each, bool in_pairs,
+                          const runtime::LazySum* sum) {
   total = m.pattern().nnz();
   const int n = m.block_rows();
   const bool want_pairs = single && in_pairs && n >= 2 && n <= 4 && m.block_cols() == n;
-  // The same pattern, block and layout as the last build: one pass over the values.
-  if (built_for == m.shared_pattern() && built_block == n && this->single == single &&
-      pairs == want_pairs && !slot.empty()) {
-    bool still = true, exact = true;
-    switch (n) {
-      case 1:
-        exact = refresh_into<1>(*this, rp.data(), m.values(), rows, n, for_each, still);
-        break;
-      case 2:
-        exact = refresh_into<2>(*this, rp.data(), m.values(), rows, n, for_each, still);
-        break;
-      case 3:
-        exact = refresh_into<3>(*this, rp.data(), m.values(), rows, n, for_each, still);
-        break;
-      default: exact = refresh_into<0>(*this, rp.data(), m.values(), rows, n, for_each, still);
-    }
-    if (still) {
-      ++refreshed;
-      return exact;
-    }
-  }
-  built_for = m.shared_pattern();
-  built_block = n;
-  this->single = single;
-  pairs = want_pairs;
-  if (pairs) {
-    std::vector<double>().swap(values);
-    switch (n) {
-      case 2: return prune_pairs<2>(*this, rp.data(), ci, m.values(), rows, for_each);
-      case 3: return prune_pairs<3>(*this, rp.data(), ci, m.values(), rows, for_each);
-      default: return prune_pairs<4>(*this, rp.data(), ci, m.values(), rows, for_each);
-    }
-  }
-  row_ptr.resize(rp.size());
-  switch (n) {
-    case 1: return prune_into<1>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
-    case 2: return prune_into<2>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
-    case 3: return prune_into<3>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
-    default: return prune_into<0>(*this, single, rp.data(), ci, m.values(), rows, n, for_each);
-  }
+  // A pending sum's values are read through it: m.values() would write the sum into them.
+  if (sum && sum->float32())
+    return assign_from(*this, m.shared_pattern(), n, single, want_pairs, SummedBlocks<true>{sum},
+                       for_each);
+  if (sum)
+    return assign_from(*this, m.shared_pattern(), n, single, want_pairs, SummedBlocks<false>{sum},
+                       for_each);
+  const StoredBlocks stored{m.pattern().row_ptr().data(), m.values(),
+                            static_cast<size_t>(m.block_size())};
+  return assign_from(*this, m.shared_pattern(), n, single, want_pairs, stored, for_each);
 }
 
 }  // namespace simit::jit

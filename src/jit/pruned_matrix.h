@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "jit/loop_ir.h"
+#include "runtime/lazy_sum.h"
 #include "runtime/system_matrix.h"
 #include "runtime/system_ops.h"
 
@@ -57,9 +58,12 @@ struct PrunedMatrix {
   // `single`, with 2 to 4 rows a block). False (and the arrays not to be used) when `single`
   // and some value of `m` is not a binary32 value (a matrix the host bound with binary64
   // values), which a binary32 copy would change.
-  // `for_each` runs the passes' tasks (ranges of rows) on the executor's threads.
+  // `for_each` runs the passes' tasks (ranges of rows) on the executor's threads. With `sum`
+  // (a fused sum pending in m's values: jit/pending_sums.h) the values are the sum's, each
+  // block summed as it is copied, and m's own are not read.
   bool assign(const runtime::SystemMatrix& m, bool single = false,
-              const runtime::ForEachTask& for_each = {}, bool pairs = false);
+              const runtime::ForEachTask& for_each = {}, bool pairs = false,
+              const runtime::LazySum* sum = nullptr);
 };
 
 }  // namespace simit::jit

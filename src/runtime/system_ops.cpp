@@ -8,6 +8,7 @@
 
 #include "runtime/blocked_sum.h"
 #include "runtime/dense_linalg.h"
+#include "runtime/lazy_sum.h"
 #include "runtime/sum_rounding.h"
 
 namespace simit::runtime {
@@ -388,38 +389,6 @@ SystemMatrix add(const SystemMatrix& a, const SystemMatrix& b, double alpha, dou
 
 namespace {
 
-// Whether every block of a lies in b's pattern (both canonical: ascending columns per row).
-bool blocks_within(const MatrixPattern& a, const MatrixPattern& b) {
-  if (!a.canonical() || !b.canonical() || a.rows() != b.rows() || a.cols() != b.cols())
-    return false;
-  const int32_t *ar = a.row_ptr().data(), *ac = a.col_idx().data();
-  const int32_t *br = b.row_ptr().data(), *bc = b.col_idx().data();
-  for (int r = 0; r < a.rows(); ++r) {
-    int32_t k = br[r];
-    for (int32_t i = ar[r]; i < ar[r + 1]; ++i) {
-      while (k < br[r + 1] && bc[k] < ac[i]) ++k;
-      if (k == br[r + 1] || bc[k] != ac[i]) return false;
-    }
-  }
-  return true;
-}
-
-}  // namespace
-
-namespace {
-
-// add_into's arithmetic for one component: x + beta * o, with x the A part of the union's
-// sum (0.0 + alpha a, or alpha a where the patterns are one); under --float32 the product and
-// the sum are each rounded to binary32, as the interpreter rounds `beta * B` and the sum.
-template <bool F32>
-double sum_component(double x, double beta, double o) {
-  if constexpr (F32) {
-    return static_cast<float>(x + static_cast<double>(static_cast<float>(beta * o)));
-  } else {
-    return x + beta * o;
-  }
-}
-
 template <bool F32>
 void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
                      const ForEachTask& for_each) {
@@ -469,11 +438,7 @@ void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, doubl
 
 bool add_into(const SystemMatrix& a, double alpha, SystemMatrix& b, double beta,
               const ForEachTask& for_each, bool float32) {
-  if (!a.is_float() || !b.is_float() || a.block_rows() != b.block_rows() ||
-      a.block_cols() != b.block_cols())
-    return false;
-  if (a.shared_pattern() != b.shared_pattern() && !blocks_within(a.pattern(), b.pattern()))
-    return false;
+  if (!fits_into(a, b)) return false;
   if (float32)
     add_into_values<true>(a, alpha, b, beta, for_each);
   else

@@ -5,10 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <memory>
 
 #include "jit/pruned_matrix.h"
 #include "jit/thread_pool.h"
+#include "runtime/lazy_sum.h"
 
 namespace simit::jit {
 namespace {
@@ -241,6 +244,54 @@ TEST(PrunedMatrix, ALaterCopyOfThePatternReusesTheLayoutWhileTheDroppedBlocksSta
     EXPECT_FALSE(p.assign(k, true, {}, in_pairs));
     EXPECT_EQ(p.refreshed, 3);
   }
+}
+
+// A fused sum left pending (jit/pending_sums.h): the copy sums each block as it reads it and
+// is the copy of the sum written out, built and then refreshed, in pairs, in single rows and
+// in binary64, on a pool of threads; the matrix's own values are not written.
+TEST(PrunedMatrix, APendingSumIsCopiedAsTheSumWrittenOut) {
+  ThreadPool pool(3);
+  const auto on_pool = [&pool](int64_t tasks, const std::function<void(int64_t)>& task) {
+    pool.run(tasks, task);
+  };
+  std::vector<int32_t> diag_ptr{0}, diag_idx;
+  for (int r = 0; r < 3001; ++r) {
+    diag_idx.push_back(r);
+    diag_ptr.push_back(r + 1);
+  }
+  auto m = std::make_shared<runtime::SystemMatrix>(
+      runtime::MatrixPattern::from_csr(3001, 3001, diag_ptr, diag_idx), 3, 3);
+  for (size_t i = 0; i < m->value_count(); ++i)
+    m->values()[i] = static_cast<float>(1.0 + 0.01 * static_cast<double>(i % 17));
+  for (const int layout : {0, 1, 2}) {  // pairs, single rows, binary64
+    const bool single = layout < 2, in_pairs = layout == 0;
+    runtime::SystemMatrix k = tridiagonal(3001, true);
+    PrunedMatrix lazy, eager;
+    for (int call = 0; call < 2; ++call) {
+      runtime::SystemMatrix want = k;
+      ASSERT_TRUE(runtime::add_into(*m, 1.0, want, -0.01, {}, single));
+      const runtime::SystemMatrix before = k;
+      const runtime::LazySum sum(m, 1.0, k.shared_pattern(), k.raw_values(), 9, -0.01, single);
+      ASSERT_TRUE(eager.assign(want, single, {}, in_pairs)) << layout;
+      ASSERT_TRUE(lazy.assign(k, single, on_pool, in_pairs, &sum)) << layout;
+      EXPECT_EQ(lazy.refreshed, call) << layout;
+      EXPECT_EQ(lazy.pairs, in_pairs);
+      EXPECT_EQ(lazy.kept, eager.kept) << layout;
+      EXPECT_EQ(lazy.row_ptr, eager.row_ptr) << layout;
+      EXPECT_EQ(lazy.cols, eager.cols) << layout;
+      EXPECT_EQ(lazy.values, eager.values) << layout;
+      EXPECT_EQ(lazy.values32, eager.values32) << layout;
+      EXPECT_EQ(std::memcmp(k.values(), before.values(), k.value_count() * sizeof(double)), 0);
+      // New values for the second call, the same zero blocks.
+      for (size_t i = 0; i < k.value_count(); ++i)
+        if (k.values()[i] != 0.0) k.values()[i] = static_cast<float>(k.values()[i] * 0.5 - 0.125);
+    }
+  }
+  // A binary64 sum into a binary32 copy: its values are checked, and are not binary32 values.
+  runtime::SystemMatrix k = tridiagonal(3001, true);
+  const runtime::LazySum wide(m, 1.0, k.shared_pattern(), k.raw_values(), 9, -0.01, false);
+  PrunedMatrix p;
+  EXPECT_FALSE(p.assign(k, true, {}, true, &wide));
 }
 
 // On a pool of threads (ThreadSanitizer runs this: scripts/sanitize.sh --thread).
