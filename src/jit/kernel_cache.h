@@ -16,7 +16,7 @@ namespace simit::jit {
 
 // Bumped whenever the code generated for the same trace changes (the emitter, the pipeline,
 // the calling convention), so that no run loads the code of an older generator.
-inline constexpr int kKernelFormatVersion = 13;
+inline constexpr int kKernelFormatVersion = 14;
 // The cache folder's size limit: a store that takes it above this removes the entries used
 // least recently (a load marks an entry used) until the folder holds three quarters of it.
 inline constexpr uint64_t kKernelCacheMaxBytes = uint64_t{256} << 20;

@@ -154,6 +154,19 @@ TEST(MathLanes, EveryLogLaneHasTheBitsOfLog) {
   EXPECT_EQ(log_lanes_that_differ(xs), 0);
 }
 
+// Eight lanes (a --float32 kernel's) in one call: each lane the one-value function's bits.
+TEST(MathLanes, EightLanesInOneCallHaveTheBitsOfEachValue) {
+  const double y[8] = {1.0, -2.0, 0.5, 1e-300, -0.0, 3.0, 1e300, -7.25};
+  const double x[8] = {2.0, 3.0, -0.25, -1.0, 0.75, 1.0 + 0x1p-52, 0x1p-1074, 1.5};
+  double a[8], c[8];
+  simit_math_atan2_x8(y, x, a);
+  simit_math_log_x8(x, c);
+  for (int l = 0; l < 8; ++l) {
+    EXPECT_EQ(bits(a[l]), bits(atan2(y[l], x[l]))) << l;
+    EXPECT_EQ(bits(c[l]), bits(log(x[l]))) << l;
+  }
+}
+
 // The C names that compiled kernels call compute the same.
 TEST(MathLanes, TheCNamesAreTheSameFunctions) {
   const double y[4] = {1.0, -2.0, 0.5, 1e-300}, x[4] = {2.0, 3.0, -0.25, -1.0};

@@ -56,25 +56,17 @@ llvm::FunctionCallee CpuHooks::runtime_call(llvm::IRBuilder<>& b, const char* na
   return b.GetInsertBlock()->getModule()->getOrInsertFunction(name, type);
 }
 
-// atan2 and log of four lanes (eight: two calls) by one call of the runtime's simit_math_atan2_x4
-// and simit_math_log_x4 (their lanes have the bits of simit_math_atan2 and simit_math_log), through
-// arrays on the kernel's stack: four elements at once take about a third of four calls' time
-// (docs/math.md), and they are the bend force's and the Neo-Hookean force's.
+// atan2 and log of four lanes (or eight, a --float32 kernel's) by one call of the runtime's
+// simit_math_atan2_x4 and simit_math_log_x4 (_x8: two groups of four; their lanes have the
+// bits of simit_math_atan2 and simit_math_log), through arrays on the kernel's stack: four
+// elements at once take about a third of four calls' time (docs/math.md), and they are the
+// bend force's and the Neo-Hookean force's.
 llvm::Value* CpuHooks::math_lanes(llvm::IRBuilder<>& b, MathFn f,
                                   const std::vector<llvm::Value*>& args) {
   auto* lanes = llvm::dyn_cast<llvm::FixedVectorType>(args[0]->getType());
   if ((f != MathFn::Atan2 && f != MathFn::Log) || !lanes) return nullptr;
-  if (lanes->getNumElements() == 8) {  // kLanes32: two calls of four lanes, joined
-    std::vector<llvm::Value*> low, high;
-    for (llvm::Value* a : args) {
-      low.push_back(b.CreateShuffleVector(a, {0, 1, 2, 3}));
-      high.push_back(b.CreateShuffleVector(a, {4, 5, 6, 7}));
-    }
-    llvm::Value* l = math_lanes(b, f, low);
-    llvm::Value* h = math_lanes(b, f, high);
-    return b.CreateShuffleVector(l, h, {0, 1, 2, 3, 4, 5, 6, 7});
-  }
-  if (lanes->getNumElements() != 4) return nullptr;
+  const unsigned count = lanes->getNumElements();
+  if (count != 4 && count != 8) return nullptr;
   llvm::Function* fn = b.GetInsertBlock()->getParent();
   llvm::IRBuilder<> entry(&fn->getEntryBlock(), fn->getEntryBlock().begin());
   std::vector<llvm::Value*> at;  // the arguments' arrays, then the result's
@@ -87,7 +79,10 @@ llvm::Value* CpuHooks::math_lanes(llvm::IRBuilder<>& b, MathFn f,
   auto* ft = llvm::FunctionType::get(b.getVoidTy(),
                                      std::vector<llvm::Type*>(at.size(), b.getPtrTy()), false);
   llvm::FunctionCallee callee =
-      runtime_call(b, f == MathFn::Atan2 ? "simit_math_atan2_x4" : "simit_math_log_x4", ft);
+      runtime_call(b,
+                   f == MathFn::Atan2 ? (count == 8 ? "simit_math_atan2_x8" : "simit_math_atan2_x4")
+                                      : (count == 8 ? "simit_math_log_x8" : "simit_math_log_x4"),
+                   ft);
   if (auto* callee_fn = llvm::dyn_cast<llvm::Function>(callee.getCallee())) {
     callee_fn->setDoesNotThrow();
     callee_fn->setWillReturn();

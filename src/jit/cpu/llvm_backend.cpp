@@ -65,6 +65,8 @@ const MathSymbol kMathSymbols[] = {
     {"simit_math_cbrt", reinterpret_cast<void*>(&simit_math_cbrt)},
     {"simit_math_atan2_x4", reinterpret_cast<void*>(&simit_math_atan2_x4)},
     {"simit_math_log_x4", reinterpret_cast<void*>(&simit_math_log_x4)},
+    {"simit_math_atan2_x8", reinterpret_cast<void*>(&simit_math_atan2_x8)},
+    {"simit_math_log_x8", reinterpret_cast<void*>(&simit_math_log_x8)},
 };
 
 // The C library's names of those functions, which kernels compiled by earlier versions

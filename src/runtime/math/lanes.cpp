@@ -1,7 +1,8 @@
-// atan2 and log of four arguments at once, for compiled map kernels that compute four
-// elements in SIMD lanes: the arithmetic of runtime/math/atan_fast.h and log_core.h lane by
-// lane, and the one-value function for each lane outside it (special values, subnormals, a
-// result atan2's fast path cannot round). Every lane gets the one-value function's bits.
+// atan2 and log of four arguments at once (or eight, as two groups of four), for compiled map
+// kernels that compute four or eight elements in SIMD lanes: the arithmetic of
+// runtime/math/atan_fast.h and log_core.h lane by lane, and the one-value function for each lane
+// outside it (special values, subnormals, a result atan2's fast path cannot round). Every lane gets
+// the one-value function's bits.
 #include <cstdint>
 
 #include "runtime/math/atan_fast.h"
@@ -103,4 +104,14 @@ void simit_math_atan2_x4(const double* y, const double* x, double* out) {
   simit::math::atan2_x4(y, x, out);
 }
 void simit_math_log_x4(const double* x, double* out) { simit::math::log_x4(x, out); }
+// Eight lanes (a --float32 kernel's: jit/tunables.h, kLanes32) as two groups of four in one
+// call, which saves the kernel a call and the spills of its lanes around it.
+void simit_math_atan2_x8(const double* y, const double* x, double* out) {
+  simit::math::atan2_x4(y, x, out);
+  simit::math::atan2_x4(y + 4, x + 4, out + 4);
+}
+void simit_math_log_x8(const double* x, double* out) {
+  simit::math::log_x4(x, out);
+  simit::math::log_x4(x + 4, out + 4);
+}
 }

@@ -37,4 +37,6 @@ double simit_math_atan2(double y, double x);
 double simit_math_cbrt(double x);
 void simit_math_atan2_x4(const double* y, const double* x, double* out);
 void simit_math_log_x4(const double* x, double* out);
+void simit_math_atan2_x8(const double* y, const double* x, double* out);
+void simit_math_log_x8(const double* x, double* out);
 }
