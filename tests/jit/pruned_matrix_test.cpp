@@ -4,6 +4,7 @@
 // when a value is not a binary32 value.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -110,6 +111,30 @@ TEST(PrunedMatrix, TheBinary32CopyHoldsTheValuesOrSaysItCannot) {
   const runtime::SystemMatrix w = tridiagonal(10000, false);
   PrunedMatrix refused;
   EXPECT_FALSE(refused.assign(w, true, backwards));
+}
+
+// A NaN counts as a binary32 value whatever its payload: one whose payload the rounding
+// changes sends its task to the value-by-value check, which finds a binary64 value beside it
+// too; in a build and in a refresh, in single rows and in pairs.
+TEST(PrunedMatrix, ANaNWhosePayloadRoundingChangesIsStillABinary32Value) {
+  const double nan = std::bit_cast<double>(uint64_t{0x7ff8000000000001});
+  ASSERT_NE(std::bit_cast<uint64_t>(static_cast<double>(static_cast<float>(nan))),
+            std::bit_cast<uint64_t>(nan));
+  for (const bool in_pairs : {false, true}) {
+    runtime::SystemMatrix k = tridiagonal(3001, true);
+    PrunedMatrix p;
+    ASSERT_TRUE(p.assign(k, true, {}, in_pairs));
+    k.block(4)[2] = nan;  // a kept block
+    EXPECT_TRUE(p.assign(k, true, {}, in_pairs)) << in_pairs;
+    EXPECT_EQ(p.refreshed, 1);
+    PrunedMatrix built;
+    EXPECT_TRUE(built.assign(k, true, backwards, in_pairs)) << in_pairs;
+    k.block(5)[1] = 0.1;
+    EXPECT_FALSE(p.assign(k, true, {}, in_pairs)) << in_pairs;
+    EXPECT_EQ(p.refreshed, 2);
+    PrunedMatrix again;
+    EXPECT_FALSE(again.assign(k, true, backwards, in_pairs)) << in_pairs;
+  }
 }
 
 // In pairs of rows (binary32): rows 2q and 2q + 1 side by side, each block pair's column j
