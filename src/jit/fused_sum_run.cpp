@@ -75,8 +75,9 @@ bool TraceController::run_fused_sum(const ast::Stmt& stmt, const FusedSum& sum,
   if (on_device) {
     s.stats.note = options_.gpu_emulated ? "; on the GPU (emulated)" : "; on the GPU";
   } else if (pending) {
-    pending_sums_.hold(k->values(), runtime::LazySum(m, 1.0, k->shared_pattern(), k->raw_values(),
-                                                     k->block_size(), beta, true));
+    double* host = k->values();  // home first (as add_into would read them)
+    pending_sums_.hold(
+        host, runtime::LazySum(m, 1.0, k->shared_pattern(), host, k->block_size(), beta, true));
     ++s.pending;
   } else if (!runtime::add_into(
                  *m, 1.0, *k, beta,

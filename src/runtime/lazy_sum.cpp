@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 namespace simit::runtime {
 
@@ -43,7 +45,12 @@ LazySum::LazySum(std::shared_ptr<const SystemMatrix> a, double alpha, PatternPtr
       bs_(block_size),
       beta_(beta),
       float32_(float32),
-      same_(a_->shared_pattern() == pb_) {}
+      same_(a_->shared_pattern() == pb_) {
+  // Its blocks are summed in a stack array of kMaxBlock values (callers test the size first).
+  if (bs_ < 1 || bs_ > kMaxBlock)
+    throw std::invalid_argument("LazySum: blocks of 1 to " + std::to_string(kMaxBlock) +
+                                " values, not " + std::to_string(bs_));
+}
 
 void LazySum::write(double* out) const {
   const size_t bs = static_cast<size_t>(bs_);

@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "runtime/system_ops.h"
@@ -94,6 +96,14 @@ TEST(LazySum, SumsAMatrixIntoItself) {
                   0.25, true);
   s.write(b.band->values());
   EXPECT_TRUE(same_bits(b.band->values(), want.values(), want.value_count()));
+}
+
+// Blocks larger than its stack array are refused, not summed past it.
+TEST(LazySum, RefusesBlocksLargerThanItSums) {
+  Band b = band(4, 9);  // 81 values a block
+  EXPECT_THROW(
+      LazySum(b.diagonal, 1.0, b.band->shared_pattern(), b.band->raw_values(), 81, 0.5, true),
+      std::invalid_argument);
 }
 
 TEST(LazySum, FitsOnlyWhereAddIntoSums) {
