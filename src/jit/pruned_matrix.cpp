@@ -283,7 +283,7 @@ bool prune_into(PrunedMatrix& p, bool single, const int32_t* rp, const int32_t* 
   return prune<N>(p, p.values, rp, ci, src, rows, n, for_each);
 }
 
-// The values of `v` into the layout the last build made (PrunedMatrix::slot), in one pass: a
+// The values of `src` into the layout the last build made (PrunedMatrix::slot), in one pass: a
 // block the build kept is copied to its slot (zero or not: a zero block adds +-0, as a padding
 // block does), and a block it dropped must still be zero. False in `still` when one is not
 // (the layout must be rebuilt); the result says whether every value is a binary32 value, as
