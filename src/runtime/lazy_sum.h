@@ -22,6 +22,46 @@ inline double sum_component(double x, double beta, double o) {
   }
 }
 
+// Row r of add_into(a, alpha, b, beta)'s sum, the one arithmetic of add_into and LazySum (so
+// that a sum read block by block has the bits of the sum written out): for each of b's blocks
+// k in order, its values into dest(k), which may be b's own block (each value reads only its
+// own), then done(k, dest(k)). a's values va lie on pa (`same`: b's pattern pb), b's are vb;
+// blocks of BS values (0: bs, known at run time). Over the union, whose blocks are b's: 0.0 +
+// alpha a where a has the block (+0.0 where it has none), then + beta b; on one pattern alpha
+// a + beta b (add()'s combine, without the zero).
+template <bool F32, int BS, class Dest, class Done>
+void sum_row(const MatrixPattern& pa, const double* va, double alpha, const MatrixPattern& pb,
+             const double* vb, double beta, int bs_now, bool same, int32_t r, Dest&& dest,
+             Done&& done) {
+  const size_t bs = BS ? static_cast<size_t>(BS) : static_cast<size_t>(bs_now);
+  const int32_t* rpb = pb.row_ptr().data();
+  if (same) {
+    for (int32_t k = rpb[r]; k < rpb[r + 1]; ++k) {
+      const double* x = va + static_cast<size_t>(k) * bs;
+      const double* y = vb + static_cast<size_t>(k) * bs;
+      double* o = dest(k);
+      for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(alpha * x[c], beta, y[c]);
+      done(k, static_cast<const double*>(o));
+    }
+    return;
+  }
+  int32_t i = pa.row_ptr()[static_cast<size_t>(r)];
+  const int32_t a_end = pa.row_ptr()[static_cast<size_t>(r) + 1];
+  const int32_t* ca = pa.col_idx().data();
+  const int32_t* cb = pb.col_idx().data();
+  for (int32_t k = rpb[r]; k < rpb[r + 1]; ++k) {
+    const double* y = vb + static_cast<size_t>(k) * bs;
+    double* o = dest(k);
+    if (i < a_end && ca[i] == cb[k]) {
+      const double* x = va + static_cast<size_t>(i++) * bs;
+      for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0 + alpha * x[c], beta, y[c]);
+    } else {
+      for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0, beta, y[c]);
+    }
+    done(k, static_cast<const double*>(o));
+  }
+}
+
 // Whether add_into(a, alpha, b, beta) can sum a into b's storage: float components, the same
 // blocks, and every block of a within b's pattern. (A LazySum needs blocks of at most
 // LazySum::kMaxBlock values too.)
@@ -62,34 +102,9 @@ class LazySum {
   template <bool F32, int BS, class F>
   void row_in(int32_t r, F& f) const {
     double o[BS ? BS : kMaxBlock];
-    const int32_t* rpb = pb_->row_ptr().data();
-    const size_t bs = BS ? static_cast<size_t>(BS) : static_cast<size_t>(bs_);
-    if (same_) {  // add_into's combine: one pattern, alpha a + beta b
-      for (int32_t k = rpb[r]; k < rpb[r + 1]; ++k) {
-        const double* x = va_ + static_cast<size_t>(k) * bs;
-        const double* y = vb_ + static_cast<size_t>(k) * bs;
-        for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(alpha_ * x[c], beta_, y[c]);
-        f(k, static_cast<const double*>(o));
-      }
-      return;
-    }
-    // The sum over the union, whose blocks are b's: 0.0 + alpha a where a has the block (+0.0
-    // where it has none), then + beta b.
-    const MatrixPattern& pa = a_->pattern();
-    int32_t i = pa.row_ptr()[static_cast<size_t>(r)];
-    const int32_t a_end = pa.row_ptr()[static_cast<size_t>(r) + 1];
-    const int32_t* ca = pa.col_idx().data();
-    const int32_t* cb = pb_->col_idx().data();
-    for (int32_t k = rpb[r]; k < rpb[r + 1]; ++k) {
-      const double* y = vb_ + static_cast<size_t>(k) * bs;
-      if (i < a_end && ca[i] == cb[k]) {
-        const double* x = va_ + static_cast<size_t>(i++) * bs;
-        for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0 + alpha_ * x[c], beta_, y[c]);
-      } else {
-        for (size_t c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0, beta_, y[c]);
-      }
-      f(k, static_cast<const double*>(o));
-    }
+    sum_row<F32, BS>(
+        a_->pattern(), va_, alpha_, *pb_, vb_, beta_, bs_, same_, r, [&o](int32_t) { return o; },
+        f);
   }
 
   std::shared_ptr<const SystemMatrix> a_;

@@ -413,24 +413,16 @@ void add_into_values(const SystemMatrix& a, double alpha, SystemMatrix& b, doubl
     });
     return;
   }
-  // add()'s sum over the union, whose blocks are b's: 0.0 + alpha a where a has the block
-  // (+0.0 where it has none), then + beta b.
+  // add()'s sum over the union, whose blocks are b's (runtime::sum_row), in place.
   const MatrixPattern &pa = a.pattern(), &pb = b.pattern();
   const int64_t rows = pb.rows();
   run((rows + kRowsPerTask - 1) / kRowsPerTask, [&](int64_t t) {
     const int end = static_cast<int>(std::min(rows, (t + 1) * kRowsPerTask));
-    for (int r = static_cast<int>(t * kRowsPerTask); r < end; ++r) {
-      int32_t i = pa.row_ptr()[r];
-      for (int32_t k = pb.row_ptr()[r]; k < pb.row_ptr()[r + 1]; ++k) {
-        double* o = vb + static_cast<size_t>(k) * bs;
-        if (i < pa.row_ptr()[r + 1] && pa.col_idx()[i] == pb.col_idx()[k]) {
-          const double* x = va + static_cast<size_t>(i++) * bs;
-          for (int c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0 + alpha * x[c], beta, o[c]);
-        } else {
-          for (int c = 0; c < bs; ++c) o[c] = sum_component<F32>(0.0, beta, o[c]);
-        }
-      }
-    }
+    for (int r = static_cast<int>(t * kRowsPerTask); r < end; ++r)
+      sum_row<F32, 0>(
+          pa, va, alpha, pb, vb, beta, bs, false, r,
+          [&](int32_t k) { return vb + static_cast<size_t>(k) * bs; },
+          [](int32_t, const double*) {});
   });
 }
 
